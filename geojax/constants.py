@@ -1,0 +1,26 @@
+"""Physical constants, SI units.
+
+Sources: IERS Conventions (2010) Table 1.1 for GM_earth, the Earth's rotation
+rate and the astronomical unit; EGM2008 for J2, C22 and S22 (un-normalised);
+DE430 for GM_sun and GM_moon.
+"""
+
+MU_EARTH_M3_S2 = 3.986004418e14
+R_EARTH_M = 6378136.3
+J2 = 1.0826261738522e-3  # sqrt(5) * 4.84165143790815e-4
+# EGM2008 normalised C22 = 2.43914352e-6, S22 = -1.40016683e-6, times
+# N22 = sqrt(5 * 2 / 4!) to un-normalise.
+C22 = 1.5744604e-6
+S22 = -9.0380380e-7
+OMEGA_EARTH_RAD_S = 7.292115146706979e-5
+
+MU_SUN_M3_S2 = 1.32712440041e20
+MU_MOON_M3_S2 = 4.902800066e12
+AU_M = 1.495978707e11
+R_SUN_M = 6.957e8
+
+G0_MPS2 = 9.80665
+SIDEREAL_DAY_S = 86164.0905
+SECONDS_PER_DAY = 86400.0
+DAYS_PER_JULIAN_CENTURY = 36525.0
+JD_J2000 = 2451545.0

@@ -1,0 +1,72 @@
+"""Reference frames: ECI (mean equator and equinox of the scenario epoch), ECEF, RSW.
+
+ECEF is the ECI frame turned about its z axis by the Earth rotation angle; polar
+motion and the pole's precession within a run are neglected (see
+``geojax.ephemeris`` for the ECI definition and the size of what is left out).
+RSW is (radial, along-track, cross-track): R = r/|r|, W = (r x v)/|r x v|,
+S = W x R (Li 2022, Fig. 1).
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+from geojax.ephemeris import general_precession_rad, mean_obliquity_rad
+from geojax.time import gmst_rad, julian_centuries_tt
+
+
+def earth_rotation_angle_rad(t_tt_s, frame_epoch_tt_s, tt_minus_ut1_s):
+    """Angle from the ECI x axis to the Greenwich meridian, radians.
+
+    GMST is measured from the mean equinox of date; the ECI x axis is the
+    equinox of the frame epoch.  The precession of the equinox along the
+    equator since the frame epoch (general precession times cos(obliquity),
+    46"/yr) is subtracted so that longitudes are right to 1e-5 deg over a year.
+    """
+    t = julian_centuries_tt(t_tt_s)
+    t0 = julian_centuries_tt(frame_epoch_tt_s)
+    equinox_shift = (general_precession_rad(t) - general_precession_rad(t0)) * jnp.cos(mean_obliquity_rad(t0))
+    return gmst_rad(t_tt_s, tt_minus_ut1_s) - equinox_shift
+
+
+def rotate_z(vector, angle_rad):
+    """Components of ``vector`` [..., 3] in a frame turned by ``angle_rad`` about z (passive rotation)."""
+    c, s = jnp.cos(angle_rad), jnp.sin(angle_rad)
+    x, y, z = vector[..., 0], vector[..., 1], vector[..., 2]
+    return jnp.stack([c * x + s * y, -s * x + c * y, z], axis=-1)
+
+
+def eci_to_ecef(r_eci, earth_angle_rad):
+    """Position [..., 3] from ECI to ECEF."""
+    return rotate_z(r_eci, earth_angle_rad)
+
+
+def ecef_to_eci(r_ecef, earth_angle_rad):
+    """Position [..., 3] from ECEF to ECI."""
+    return rotate_z(r_ecef, -earth_angle_rad)
+
+
+def rsw_basis(r_eci, v_eci):
+    """Rows R, S, W [..., 3, 3] of the RSW frame from position and velocity."""
+    r_hat = r_eci / jnp.linalg.norm(r_eci, axis=-1, keepdims=True)
+    h = jnp.cross(r_eci, v_eci)
+    w_hat = h / jnp.linalg.norm(h, axis=-1, keepdims=True)
+    s_hat = jnp.cross(w_hat, r_hat)
+    return jnp.stack([r_hat, s_hat, w_hat], axis=-2)
+
+
+def eci_to_rsw(vector_eci, r_eci, v_eci):
+    """Components [..., 3] of an ECI vector along R, S, W."""
+    return jnp.einsum("...ij,...j->...i", rsw_basis(r_eci, v_eci), vector_eci)
+
+
+def rsw_to_eci(vector_rsw, r_eci, v_eci):
+    """ECI components [..., 3] of a vector given along R, S, W."""
+    return jnp.einsum("...ji,...j->...i", rsw_basis(r_eci, v_eci), vector_rsw)
+
+
+def subsatellite_lon_lat_rad(r_ecef):
+    """Geocentric longitude and latitude (radians) of an ECEF position."""
+    lon = jnp.arctan2(r_ecef[..., 1], r_ecef[..., 0])
+    lat = jnp.arctan2(r_ecef[..., 2], jnp.hypot(r_ecef[..., 0], r_ecef[..., 1]))
+    return lon, lat
