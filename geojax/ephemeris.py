@@ -32,7 +32,7 @@ from geojax.time import julian_centuries_tt
 
 # Meeus Table 47.A: multiples of (D, M, M', F), then sum_l [1e-6 deg] and
 # sum_r [1e-3 km].
-_MOON_LR = np.array([
+MOON_LR_TERMS = np.array([
     [0, 0, 1, 0, 6288774, -20905355], [2, 0, -1, 0, 1274027, -3699111],
     [2, 0, 0, 0, 658314, -2955968], [0, 0, 2, 0, 213618, -569925],
     [0, 1, 0, 0, -185116, 48888], [0, 0, 0, 2, -114332, -3149],
@@ -66,7 +66,7 @@ _MOON_LR = np.array([
 ], dtype=np.float64)
 
 # Meeus Table 47.B: multiples of (D, M, M', F), then sum_b [1e-6 deg].
-_MOON_B = np.array([
+MOON_B_TERMS = np.array([
     [0, 0, 0, 1, 5128122], [0, 0, 1, 1, 280602], [0, 0, 1, -1, 277693],
     [2, 0, 0, -1, 173237], [2, 0, -1, 1, 55413], [2, 0, -1, -1, 46271],
     [2, 0, 0, 1, 32573], [0, 0, 2, 1, 17198], [2, 0, 1, -1, 9266],
@@ -145,10 +145,10 @@ def moon_ecliptic_of_date(t):
         scale = ecc[..., None] ** np.abs(table[:, 1])
         return jnp.sum(table[:, column] * scale * trig(argument), axis=-1)
 
-    sum_l = series(_MOON_LR, 4, jnp.sin) + 3958 * jnp.sin(a1) + 1962 * jnp.sin(lp - f) + 318 * jnp.sin(a2)
-    sum_r = series(_MOON_LR, 5, jnp.cos)
+    sum_l = series(MOON_LR_TERMS, 4, jnp.sin) + 3958 * jnp.sin(a1) + 1962 * jnp.sin(lp - f) + 318 * jnp.sin(a2)
+    sum_r = series(MOON_LR_TERMS, 5, jnp.cos)
     sum_b = (
-        series(_MOON_B, 4, jnp.sin)
+        series(MOON_B_TERMS, 4, jnp.sin)
         - 2235 * jnp.sin(lp) + 382 * jnp.sin(a3) + 175 * jnp.sin(a1 - f)
         + 175 * jnp.sin(a1 + f) + 127 * jnp.sin(lp - mp) - 115 * jnp.sin(lp + mp)
     )

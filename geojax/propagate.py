@@ -70,14 +70,14 @@ def environment_at(t_tt_s, frame_epoch_tt_s, tt_minus_ut1_s) -> Environment:
     )
 
 
-@partial(jax.jit, static_argnums=(3, 4))
-def environment_grid(epoch_tt_s, tt_minus_ut1_s, step_s, n_cycles: int, n_steps: int) -> Environment:
-    """Environment at the RK4 stage times of every step: leaves [n_cycles, n_steps, 3, ...].
+@partial(jax.jit, static_argnums=(4, 5))
+def environment_grid(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cycles: int, n_steps: int) -> Environment:
+    """Environment at the RK4 stage times of every step from ``start_tt_s``: leaves [n_cycles, n_steps, 3, ...].
 
     Evaluated once per scenario (and per step size), shared by every sample of a batch.
     """
     half_steps = jnp.arange(2 * n_cycles * n_steps + 1)
-    env = environment_at(epoch_tt_s + half_steps * (step_s / 2), epoch_tt_s, tt_minus_ut1_s)
+    env = environment_at(start_tt_s + half_steps * (step_s / 2), frame_epoch_tt_s, tt_minus_ut1_s)
     index = 2 * jnp.arange(n_cycles * n_steps)[:, None] + jnp.arange(3)[None, :]
     return jax.tree_util.tree_map(lambda x: x[index].reshape((n_cycles, n_steps, 3) + x.shape[1:]), env)
 

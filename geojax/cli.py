@@ -1,0 +1,148 @@
+"""The ``geojax`` command line.
+
+    geojax demo [--out DIR]
+    geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5]
+    geojax plot FILE.h5 [--out DIR]
+    geojax scenarios
+
+Bad input (an unknown scenario, a field of the wrong type or out of range)
+prints one line naming the field and what is allowed, and exits with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+EXIT_BAD_INPUT = 2
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    if not hasattr(args, "func"):
+        parser.print_help()
+        return EXIT_BAD_INPUT
+    try:
+        return args.func(args) or 0
+    except ValueError as err:
+        print(f"geojax {args.command}: error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print(f"geojax {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="geojax",
+        description="Closed-loop station keeping of electric-propulsion GEO satellites in JAX.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    demo = sub.add_parser("demo", help="one-year uncontrolled li2022 propagation: summary and figure")
+    demo.add_argument("--out", default="geojax-demo", help="folder for the figure and HDF5 file (default: geojax-demo)")
+    demo.set_defaults(func=_demo)
+
+    prop = sub.add_parser("propagate", help="uncontrolled propagation; one-cycle mean elements per sidereal day")
+    prop.add_argument("scenario", help="a shipped scenario name (see 'geojax scenarios') or a .toml path")
+    prop.add_argument("--days", type=float, help="duration in days (default: the scenario's)")
+    prop.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
+    prop.add_argument("--out", help="write the per-cycle mean elements to this HDF5 file")
+    prop.add_argument("--quiet", action="store_true", help="no progress bar")
+    prop.set_defaults(func=_propagate)
+
+    plot = sub.add_parser("plot", help="draw the figures of a results file")
+    plot.add_argument("file", help="an HDF5 file written by geojax")
+    plot.add_argument("--out", help="folder for the figures (default: next to the file)")
+    plot.set_defaults(func=_plot)
+
+    scen = sub.add_parser("scenarios", help="list the shipped scenarios")
+    scen.set_defaults(func=_scenarios)
+    return parser
+
+
+def _overrides(args) -> dict:
+    overrides = {}
+    if args.days is not None:
+        overrides["duration.days"] = args.days
+    if args.step is not None:
+        overrides["integration.step_s"] = args.step
+    return overrides
+
+
+def _propagate(args) -> int:
+    from geojax import run, scenario, store
+
+    sc = scenario.load(args.scenario, _overrides(args))
+    result = run.propagate_scenario(sc, progress=None if not args.quiet else False)
+    summary = run.drift_summary(result.cycles)
+    _print_summary(sc, result, summary)
+    if args.out:
+        path = store.write_h5(
+            args.out,
+            {"cycles": run.cycles_table(result.cycles)},
+            scenario.to_toml(sc.config),
+            result.wall_s,
+            attrs={"kind": "propagate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s, "step_s": result.step_s},
+        )
+        print(f"wrote {path}")
+    return 0
+
+
+def _print_summary(sc, result, summary) -> None:
+    print(f"{sc.name}: {len(result.cycles.t_s)} sidereal-day cycles, step {result.step_s:.2f} s, "
+          f"{sc.dynamics.upper()} RK4, {result.wall_s:.1f} s wall")
+    print(f"  mean inclination       {summary.i_start_deg:.4f} deg -> {summary.i_end_deg:.4f} deg")
+    print(f"  inclination-vector change  {summary.di_deg:.4f} deg towards {summary.di_direction_deg:.1f} deg "
+          f"over {summary.elapsed_days:.1f} days")
+    print(f"  mean longitude drift   {summary.dlon_deg:+.4f} deg")
+    print(f"  largest |e - e0|       {summary.de_max:.3e}")
+
+
+def _demo(args) -> int:
+    from geojax import plots, run, scenario, store
+
+    out = Path(args.out)
+    sc = scenario.load("li2022")
+    print("geojax demo: one year of li2022 without station keeping (Li 2022 initial state, J2 + Sun + Moon + SRP)")
+    result = run.propagate_scenario(sc)
+    summary = run.drift_summary(result.cycles)
+    _print_summary(sc, result, summary)
+    table = run.cycles_table(result.cycles)
+    h5 = store.write_h5(out / "li2022-uncontrolled.h5", {"cycles": table}, scenario.to_toml(sc.config), result.wall_s,
+                        attrs={"kind": "propagate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s, "step_s": result.step_s})
+    figure = plots.plot_cycles(table, out / "li2022-uncontrolled.png", title="li2022, no control, one year")
+    print(f"wrote {h5} and {figure}")
+    return 0
+
+
+def _plot(args) -> int:
+    from geojax import plots, store
+
+    path = Path(args.file)
+    if not path.is_file():
+        raise ValueError(f"file {str(path)!r}: no such file")
+    try:
+        groups, attrs = store.read_h5(path)
+    except OSError:
+        raise ValueError(f"file {str(path)!r}: not an HDF5 file") from None
+    if "cycles" not in groups:
+        raise ValueError(f"file {str(path)!r}: no /cycles group to plot")
+    out = Path(args.out) if args.out else path.parent
+    figure = plots.plot_cycles(groups["cycles"], out / f"{path.stem}.png", title=str(attrs.get("scenario", path.stem)))
+    print(f"wrote {figure}")
+    return 0
+
+
+def _scenarios(args) -> int:
+    from geojax import scenario
+
+    for name in scenario.available():
+        print(f"{name:12s} {scenario.load(name).config['description']}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
