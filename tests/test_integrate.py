@@ -1,0 +1,65 @@
+"""Thrust windows inside fixed steps: exact Delta-V and mass, second-order orbit error."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from geojax import constants as c
+from geojax.dynamics import SpacecraftState
+from geojax.forces import ForceModel
+from geojax.integrate import ThrustWindow, overlap_fraction, window_thrust
+from geojax.propagate import MEE, environment_grid, propagate_cycles
+
+MU = c.MU_EARTH_M3_S2
+TWO_BODY = ForceModel(j2_on=0.0, sun_on=0.0, moon_on=0.0, srp_on=0.0)
+M0, THRUST, ISP = 5000.0, 0.5, 2250.0
+GEO = jnp.array([42164e3, 0.0, 0.0, 0.0, 0.0, 0.0])
+
+
+def burn(steps_per_day, start_s, duration_s, direction=(0.0, 1.0, 0.0)):
+    h = c.SIDEREAL_DAY_S / steps_per_day
+    env = environment_grid(0.0, 0.0, 69.0, h, 1, steps_per_day)
+    window = ThrustWindow(jnp.asarray(start_s), jnp.asarray(start_s + duration_s), jnp.asarray(direction),
+                          jnp.asarray(THRUST), jnp.asarray(ISP))
+    state = SpacecraftState(GEO, jnp.asarray(M0), jnp.asarray(0.0))
+    final, _ = jax.jit(lambda s: propagate_cycles(MEE, s, env, TWO_BODY, h, lambda t, hh: window_thrust(window, t, hh)))(state)
+    return final
+
+
+def test_overlap_fraction():
+    assert float(overlap_fraction(0.0, 100.0, 30.0, 60.0)) == pytest.approx(0.3)
+    assert float(overlap_fraction(0.0, 100.0, -50.0, 250.0)) == 1.0
+    assert float(overlap_fraction(100.0, 100.0, 30.0, 60.0)) == 0.0
+
+
+@pytest.mark.parametrize("start_s, duration_s", [(1000.3, 6120.7), (450.0, 30.0), (897.5426, 897.5426)])
+def test_window_delivers_rocket_equation_delta_v(start_s, duration_s):
+    # Closed forms: m1 = m0 - F/(Isp g0) T, and the delivered Delta-V = Isp g0 ln(m0/m1),
+    # which is F/m0 T to first order in the mass spent.  Windows start and end inside steps.
+    final = burn(96, start_s, duration_s)
+    m1 = M0 - THRUST / (ISP * c.G0_MPS2) * duration_s
+    assert float(final.mass_kg) == pytest.approx(m1, abs=1e-10)
+    assert float(final.dv_mps) == pytest.approx(ISP * c.G0_MPS2 * np.log(M0 / m1), rel=1e-12)
+    assert float(final.dv_mps) == pytest.approx(THRUST / M0 * duration_s, rel=duration_s * THRUST / (ISP * c.G0_MPS2 * M0))
+
+
+@pytest.mark.parametrize("direction", [(0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, 1.0)])
+def test_orbit_error_of_a_window_inside_steps_is_second_order(direction):
+    # Second method: a 64x finer step.  Spreading the partial steps at the window
+    # edges over whole steps shifts the burn centroid by ~tau (h - tau) / (2 T),
+    # an error that falls as h^2.  Measured at 96 steps/day: 6e-8 of the change
+    # in p and 2.5e-4 of the change in the e and i vectors; 7x smaller at 384 steps/day.
+    start, duration = 1000.3, 6120.7
+    reference = np.asarray(burn(96 * 64, start, duration, direction).orbit)
+
+    def groups(orbit):  # p, the e vector (f, g), the i vector (h, k)
+        return [orbit[..., :1], orbit[..., 1:3], orbit[..., 3:5]]
+
+    changes = [np.linalg.norm(x) for x in groups(reference - np.asarray(GEO))]
+    errors = [[np.linalg.norm(x) for x in groups(np.asarray(burn(n, start, duration, direction).orbit) - reference)]
+              for n in (96, 384)]
+    for change, coarse, fine in zip(changes, *errors):
+        if change > 1e-12:
+            assert coarse < 1e-3 * change
+            assert fine < coarse / 4
