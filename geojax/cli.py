@@ -77,7 +77,7 @@ def _propagate(args) -> int:
 
     sc = scenario.load(args.scenario, _overrides(args))
     result = run.propagate_scenario(sc, progress=None if not args.quiet else False)
-    summary = run.drift_summary(result.cycles)
+    summary = run.drift_summary(result.cycles, sc.days)
     _print_summary(sc, result, summary)
     if args.out:
         path = store.write_h5(
@@ -108,7 +108,7 @@ def _demo(args) -> int:
     sc = scenario.load("li2022")
     print("geojax demo: one year of li2022 without station keeping (Li 2022 initial state, J2 + Sun + Moon + SRP)")
     result = run.propagate_scenario(sc)
-    summary = run.drift_summary(result.cycles)
+    summary = run.drift_summary(result.cycles, sc.days)
     _print_summary(sc, result, summary)
     table = run.cycles_table(result.cycles)
     h5 = store.write_h5(out / "li2022-uncontrolled.h5", {"cycles": table}, scenario.to_toml(sc.config), result.wall_s,

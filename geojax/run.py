@@ -27,11 +27,11 @@ def cycle_count(days: float) -> int:
     """Cycles for a run of ``days`` solar days.
 
     Cycle means refer to mid-cycle times, so the first and last means are
-    ``n - 1`` cycles apart: n = round(days / sidereal day) + 1 makes the change
-    from first to last mean span ``days`` (365.25 days -> 367 cycles, 365.24 d
-    between the first and last mean).
+    ``n - 1`` cycles apart; n = ceil(days / sidereal day) + 1 makes that span
+    at least ``days`` (365.25 days -> 368 cycles), so the change over exactly
+    ``days`` can be read off by interpolation (``drift_summary``).
     """
-    return max(1, round(days * SECONDS_PER_DAY / SIDEREAL_DAY_S) + 1)
+    return max(1, math.ceil(days * SECONDS_PER_DAY / SIDEREAL_DAY_S - 1e-9) + 1)
 
 
 def initial_state(scenario: Scenario) -> SpacecraftState:
@@ -104,17 +104,29 @@ def inclination_vector_deg(ix, iy):
     return np.stack([ix * scale, iy * scale], -1)
 
 
-def drift_summary(cycles: CycleMeans) -> DriftSummary:
+def drift_summary(cycles: CycleMeans, span_days: float | None = None) -> DriftSummary:
+    """Changes of the mean elements from the first cycle mean to ``span_days`` later.
+
+    The end values are interpolated linearly between the two cycle means that
+    bracket the end time (mean elements vary little within a day); without
+    ``span_days`` the last cycle is the end.
+    """
+    t = np.asarray(cycles.t_s)
+    t_end = t[-1] if span_days is None else t[0] + span_days * SECONDS_PER_DAY
+    if t_end > t[-1] + 1e-6:
+        raise ValueError(f"span_days: the run covers {(t[-1] - t[0]) / SECONDS_PER_DAY:.2f} days, not {span_days}")
     ivec = inclination_vector_deg(np.asarray(cycles.ix), np.asarray(cycles.iy))
-    di = ivec[-1] - ivec[0]
-    de = np.hypot(cycles.ex - cycles.ex[0], cycles.ey - cycles.ey[0])
-    dlon = np.degrees(np.unwrap(cycles.lon_rad))
+    i_end = np.array([np.interp(t_end, t, ivec[:, j]) for j in range(2)])
+    di = i_end - ivec[0]
+    lon = np.degrees(np.unwrap(cycles.lon_rad))
+    within = t <= t_end + 1e-6
+    de = np.hypot(cycles.ex[within] - cycles.ex[0], cycles.ey[within] - cycles.ey[0])
     return DriftSummary(
         di_deg=float(np.hypot(*di)),
         di_direction_deg=float(np.degrees(np.arctan2(di[1], di[0]))),
         i_start_deg=float(np.hypot(*ivec[0])),
-        i_end_deg=float(np.hypot(*ivec[-1])),
+        i_end_deg=float(np.hypot(*i_end)),
         de_max=float(de.max()),
-        dlon_deg=float(dlon[-1] - dlon[0]),
-        elapsed_days=float((cycles.t_s[-1] - cycles.t_s[0]) / SECONDS_PER_DAY),
+        dlon_deg=float(np.interp(t_end, t, lon) - lon[0]),
+        elapsed_days=float((t_end - t[0]) / SECONDS_PER_DAY),
     )

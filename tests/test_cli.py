@@ -1,0 +1,41 @@
+"""The command line: propagate, plot, HDF5 contract, exit status 2 on bad input."""
+
+import h5py
+import numpy as np
+import pytest
+
+from geojax import cli
+
+
+def test_propagate_writes_the_hdf5_contract(tmp_path, capsys):
+    out = tmp_path / "run.h5"
+    assert cli.main(["propagate", "li2022", "--days", "3", "--step", "1800", "--out", str(out), "--quiet"]) == 0
+    assert "inclination-vector change" in capsys.readouterr().out
+    with h5py.File(out) as f:
+        for name in ("t_s", "lon_deg", "drift_deg_per_day", "ex", "ey", "ix", "iy", "a_m"):
+            assert f[f"cycles/{name}"].shape == (5,)  # ceil(3 d / sidereal day) + 1
+        for attr in ("geojax_version", "config_toml", "created_utc", "wall_s", "device"):
+            assert attr in f.attrs
+        assert 'name = "li2022"' in f.attrs["config_toml"]
+        assert "days = 3.0" in f.attrs["config_toml"]
+        # One-cycle means around 96 deg E, a near the synchronous radius.
+        assert np.all(np.abs(f["cycles/lon_deg"][()] - 96.0) < 0.1)
+        assert np.all(np.abs(f["cycles/a_m"][()] - 42166.7e3) < 1e3)
+    assert cli.main(["plot", str(out), "--out", str(tmp_path / "fig")]) == 0
+    assert (tmp_path / "fig" / "run.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["propagate", "nowhere"], "scenario 'nowhere': unknown"),
+        (["propagate", "li2022", "--step", "0"], "integration.step_s: must be > 0"),
+        (["propagate", "li2022", "--days", "-1"], "duration.days: must be > 0"),
+        (["plot", "missing.h5"], "file 'missing.h5': no such file"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line(argv, message, capsys):
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err
+    assert err.count("\n") == 1 and "Traceback" not in err

@@ -1,0 +1,85 @@
+"""Scenario loading and validation: every bad input gives one ValueError naming the field."""
+
+import math
+
+import numpy as np
+import pytest
+
+from geojax import constants as c
+from geojax import scenario
+from geojax.elements import mee_to_cartesian
+from geojax.frames import eci_to_ecef, earth_rotation_angle_rad
+
+
+def test_shipped_scenarios_load():
+    assert {"li2022", "katz2025"} <= set(scenario.available())
+    li = scenario.load("li2022")
+    np.testing.assert_array_equal(li.initial_mee, [42167e3, 0.0, 1e-4, 0.0, 5e-5, 0.289893])
+    assert li.force_model.c22_on == 0.0 and li.force_model.srp_on == 1.0
+    assert scenario.load("katz2025").force_model.c22_on == 1.0
+
+
+def test_li2022_initial_longitude_is_96_deg_east():
+    # Li 2022, eqs. (43)-(44): the initial true longitude L = 0.289893 rad sits at the
+    # 96 deg E target in the frame of date (0.26 deg off in EME2000).
+    li = scenario.load("li2022")
+    r, _ = mee_to_cartesian(li.initial_mee, c.MU_EARTH_M3_S2)
+    angle = earth_rotation_angle_rad(li.epoch_tt_s, li.epoch_tt_s, li.tt_minus_ut1_s)
+    r_ecef = np.asarray(eci_to_ecef(r, angle))
+    assert math.degrees(math.atan2(r_ecef[1], r_ecef[0])) == pytest.approx(96.0, abs=0.02)
+
+
+def test_katz2025_starts_2_km_off_station_on_each_ecef_axis():
+    k = scenario.load("katz2025")
+    r, v = mee_to_cartesian(k.initial_mee, c.MU_EARTH_M3_S2)
+    angle = earth_rotation_angle_rad(k.epoch_tt_s, k.epoch_tt_s, k.tt_minus_ut1_s)
+    station = 42164.16e3 * np.array([math.cos(math.radians(10)), math.sin(math.radians(10)), 0.0])
+    np.testing.assert_allclose(np.asarray(eci_to_ecef(r, angle)) - station, [2e3, 2e3, 2e3], atol=1e-6)
+    assert float(np.linalg.norm(v)) == pytest.approx(c.OMEGA_EARTH_RAD_S * 42164.16e3, rel=1e-12)
+
+
+def test_overrides_and_path(tmp_path):
+    li = scenario.load("li2022", {"duration.days": 30, "integration.step_s": 1800})
+    assert li.days == 30.0 and li.step_s == 1800.0
+    path = tmp_path / "mine.toml"
+    path.write_text(scenario.to_toml(li.config))
+    again = scenario.load(path)
+    assert again.config == li.config
+
+
+@pytest.mark.parametrize(
+    "overrides, message",
+    [
+        ({"spacecraft.masss": 1.0}, "spacecraft.masss: unknown key; allowed: mass_kg, srp_area_m2, reflectivity"),
+        ({"spacecraft.mass_kg": -5.0}, "spacecraft.mass_kg: must be > 0, got -5.0"),
+        ({"spacecraft.mass_kg": "heavy"}, "spacecraft.mass_kg: must be a number, got str 'heavy'"),
+        ({"thrusters.thrust_n": -0.5}, "thrusters.thrust_n: must be > 0, got -0.5"),
+        ({"thrusters.thrust_n": True}, "thrusters.thrust_n: must be a number, got True"),
+        ({"integration.step_s": 0.0}, "integration.step_s: must be > 0"),
+        ({"integration.step_s": -10.0}, "integration.step_s: must be > 0"),
+        ({"integration.dynamics": "rk45"}, "integration.dynamics: must be one of 'mee', 'cartesian', got 'rk45'"),
+        ({"orbit.g": 1.2}, "orbit.f, orbit.g: eccentricity sqrt(f^2 + g^2) must be < 1"),
+        ({"orbit.a_km": 42164.0}, "orbit.a_km: not used when orbit.elements = 'mee'"),
+        ({"forces.sun": 1}, "forces.sun: must be true or false, got int 1"),
+        ({"epoch.utc": "yesterday"}, "epoch.utc: 'yesterday' is not an ISO 8601 date-time"),
+        ({"bogus.x": 1}, "bogus: unknown table; allowed: epoch, orbit"),
+    ],
+)
+def test_bad_input_names_the_field(overrides, message):
+    with pytest.raises(ValueError) as err:
+        scenario.load("li2022", overrides)
+    assert message in str(err.value)
+    assert "\n" not in str(err.value)
+
+
+def test_kepler_eccentricity_of_one_is_refused():
+    config = scenario.load("li2022").config
+    config["orbit"] = {"elements": "kepler", "a_km": 42164.0, "e": 1.0, "i_deg": 0.1, "raan_deg": 0.0,
+                       "argp_deg": 0.0, "true_anomaly_deg": 0.0}
+    with pytest.raises(ValueError, match=r"orbit.e: must be >= 0 and < 1, got 1.0"):
+        scenario.from_dict(config)
+
+
+def test_unknown_scenario_lists_the_names():
+    with pytest.raises(ValueError, match="scenario 'li2021': unknown; named scenarios: katz2025, li2022"):
+        scenario.load("li2021")
