@@ -22,7 +22,7 @@ one-year inclination change is reported from geojax.
 
 Batch samples: sample 0 is the scenario's initial state, the others perturb p
 by up to +-1 km and L by up to +-0.01 rad (uniform, seeded).  "One year" is
-``geojax.run.cycle_count(365.25)`` = 367 sidereal days.
+``geojax.run.cycle_count(365.25)`` sidereal days (cycles), for every implementation.
 
 Accuracy: the one-year change of the mean inclination vector
 i (cos Omega, sin Omega) [deg] from the first to the last one-cycle mean
@@ -106,13 +106,29 @@ class Problem(NamedTuple):
 class Timing(NamedTuple):
     wall_s: float
     cpu_s: float  # process CPU time (all threads)
+    system_busy_s: float  # CPU time of the whole machine (all processes), NaN if unknown
+
+
+def _system_busy_s() -> float:
+    """Busy CPU seconds of the machine since boot, from /proc/stat (NaN where unavailable)."""
+    try:
+        with open("/proc/stat") as f:
+            fields = [int(x) for x in f.readline().split()[1:]]
+    except (OSError, ValueError):
+        return float("nan")
+    idle = fields[3] + (fields[4] if len(fields) > 4 else 0)  # idle + iowait
+    return (sum(fields[:8]) - idle) / os.sysconf("SC_CLK_TCK")
 
 
 def timed(fn: Callable, *args, **kwargs):
     """(result, Timing) of one call."""
-    wall, cpu = time.perf_counter(), time.process_time()
+    wall, cpu, busy = time.perf_counter(), time.process_time(), _system_busy_s()
     result = fn(*args, **kwargs)
-    return result, Timing(time.perf_counter() - wall, time.process_time() - cpu)
+    return result, Timing(time.perf_counter() - wall, time.process_time() - cpu, _system_busy_s() - busy)
+
+
+def add_timings(a: Timing, b: Timing) -> Timing:
+    return Timing(*(x + y for x, y in zip(a, b)))
 
 
 def throughput_row(implementation, setting, batch, compile_s, timing: Timing, **extra):
@@ -125,6 +141,8 @@ def throughput_row(implementation, setting, batch, compile_s, timing: Timing, **
         "run_s": timing.wall_s,
         "orbits_per_s": batch / timing.wall_s,
         "cores_busy": timing.cpu_s / timing.wall_s,
+        # CPU used by other processes meanwhile, in cores: > 0.2 means the timing was disturbed.
+        "other_load_cores": max(0.0, (timing.system_busy_s - timing.cpu_s) / timing.wall_s),
         **extra,
     }
 
@@ -176,6 +194,7 @@ def machine_facts() -> dict:
         "heyoka": hy.__version__,
         "heyoka_simd_size": hy.recommended_simd_size(),
         "geojax": geojax.__version__,
+        "load_average_at_start": os.getloadavg(),
     }
 
 
@@ -407,7 +426,7 @@ def heyoka_inclination_change(ta, problem: Problem) -> np.ndarray:
 def bench_scipy(problem: Problem, config: Config) -> tuple[dict, np.ndarray]:
     """Throughput row (one orbit at a time, so batch-independent) and the Δi of the unperturbed state."""
     times = cycle_sample_times(problem.n_cycles)
-    total = Timing(0.0, 0.0)
+    total = Timing(0.0, 0.0, 0.0)
     nfev = 0
     delta_i = None
     for j in range(config.scipy_orbits):
@@ -418,7 +437,7 @@ def bench_scipy(problem: Problem, config: Config) -> tuple[dict, np.ndarray]:
             raise RuntimeError(f"solve_ivp failed: {sol.message}")
         if j == 0:
             delta_i = mean_inclination_change_deg(sol.y.T.reshape(2, -1, 6), problem.force_model.mu_m3_s2)
-        total = Timing(total.wall_s + timing.wall_s, total.cpu_s + timing.cpu_s)
+        total = add_timings(total, timing)
         nfev += sol.nfev
         log(f"  scipy orbit {j + 1}/{config.scipy_orbits}: {timing.wall_s:.1f} s, {sol.nfev} RHS evaluations")
     row = throughput_row(
@@ -529,14 +548,14 @@ def markdown(results: dict) -> str:
         "",
         "## Throughput",
         "",
-        "| implementation | setting | batch | compile s | run s | orbits/s | cores busy |",
-        "|---|---|---:|---:|---:|---:|---:|",
+        "| implementation | setting | batch | compile s | run s | orbits/s | cores busy | other load |",
+        "|---|---|---:|---:|---:|---:|---:|---:|",
     ]
     for r in results["throughput"]:
         batch = "any (1 at a time)" if r["implementation"] == "numpy+scipy" else r["batch"]
         lines.append(
             f"| {r['implementation']} | {r['setting']} | {batch} | {r['compile_s']:.1f} | {r['run_s']:.2f} | "
-            f"{r['orbits_per_s']:.3g} | {r['cores_busy']:.2f} |"
+            f"{r['orbits_per_s']:.3g} | {r['cores_busy']:.2f} | {r['other_load_cores']:.2f} |"
         )
     lines += ["", f"Ratios at batch {c['ratio_batch']} (orbits/s of geojax over the peer, same run):", ""]
     lines += ["| geojax | / heyoka | / numpy+scipy |", "|---|---:|---:|"]
@@ -567,7 +586,8 @@ def markdown(results: dict) -> str:
         "once per step and is not in 'run s': " + ", ".join(
             f"{r['step_s']:.0f} s step: {r['environment_grid_s']:.2f} s" for r in results["throughput"]
             if r["implementation"] == "geojax" and r["batch"] == 1) + " (including its jit).",
-        "- 'cores busy' = process CPU time / wall time. geojax is one XLA CPU executable; heyoka runs the SIMD "
+        "- 'cores busy' = this process's CPU time / wall time; 'other load' = CPU time of all other processes on "
+        "the machine during the measurement / wall time (from /proc/stat; near 0 = undisturbed). geojax is one XLA CPU executable; heyoka runs the SIMD "
         "batch integrator on one thread per core; SciPy is serial (one orbit per core, so two processes could at "
         "most double its figure, which is batch-independent).",
         "- heyoka batch 1 uses the scalar integrator, larger batches the SIMD batch integrator (same tolerance); "
@@ -604,6 +624,7 @@ def main(argv=None) -> None:
     # heyoka keeps compiled integrators in ~/.cache/heyoka; off, so compile times are cold.
     hy.llvm_state.set_diskcache_enabled(False)
     start = time.perf_counter()
+    machine = machine_facts()
     max_batch = max(config.geojax_batches + config.heyoka_batches + (config.scipy_orbits,))
     problem = make_problem(config.days, max_batch, config.seed)
     log(f"li2022, {problem.n_cycles} cycles ({config.days} d), shadow off; {os.cpu_count()} CPUs")
@@ -635,7 +656,7 @@ def main(argv=None) -> None:
     ratio_batch = max(config.geojax_batches)
     results = {
         "date_utc": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-        "machine": machine_facts(),
+        "machine": machine,
         "config": {**config._asdict(), "quick": args.quick, "n_cycles": problem.n_cycles,
                    "t_end_s": problem.t_end_s, "shadow": "off in all implementations",
                    "heyoka_tol": HEYOKA_TOL, "scipy_rtol": SCIPY_RTOL, "scipy_atol": SCIPY_ATOL,
@@ -646,6 +667,7 @@ def main(argv=None) -> None:
         "model_agreement": agreement,
     }
     results["total_wall_s"] = time.perf_counter() - start
+    results["machine"]["load_average_at_end"] = os.getloadavg()
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "propagate.json").write_text(json.dumps(results, indent=2) + "\n")
     text = markdown(results)

@@ -39,3 +39,11 @@ def test_bad_input_exits_2_with_one_line(argv, message, capsys):
     err = capsys.readouterr().err
     assert message in err
     assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_demo_writes_its_figure(tmp_path, capsys):
+    assert cli.main(["demo", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "inclination-vector change" in out and "mean longitude drift" in out
+    assert (tmp_path / "li2022-uncontrolled.png").is_file()
+    assert (tmp_path / "li2022-uncontrolled.h5").is_file()
