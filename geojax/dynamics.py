@@ -15,9 +15,9 @@ from typing import NamedTuple
 import jax.numpy as jnp
 
 from geojax.constants import G0_MPS2
-from geojax.elements import mee_to_cartesian
+from geojax.elements import mee_radius_m, mee_rsw_basis
 from geojax.forces import Environment, ForceModel, perturbing_acceleration, point_mass
-from geojax.frames import eci_to_rsw, rsw_to_eci
+from geojax.frames import rsw_to_eci
 
 
 class SpacecraftState(NamedTuple):
@@ -73,10 +73,16 @@ def _thrust_rates(state, thrust: Thrust):
 
 
 def mee_rhs(state: SpacecraftState, env: Environment, fm: ForceModel, thrust: Thrust) -> SpacecraftState:
-    """Time derivative of a MEE spacecraft state."""
-    r_eci, v_eci = mee_to_cartesian(state.orbit, fm.mu_m3_s2)
+    """Time derivative of a MEE spacecraft state.
+
+    The perturbations depend on position only, so the RSW basis comes straight
+    from the elements (no velocity, no cross products).
+    """
+    basis = mee_rsw_basis(state.orbit)
+    r_eci = mee_radius_m(state.orbit)[..., None] * basis[..., 0, :]
     a_thrust_rsw, mass_rate, accel = _thrust_rates(state, thrust)
-    a_rsw = eci_to_rsw(perturbing_acceleration(r_eci, state.mass_kg, env, fm), r_eci, v_eci) + a_thrust_rsw
+    a_pert_eci = perturbing_acceleration(r_eci, state.mass_kg, env, fm)
+    a_rsw = jnp.einsum("...ij,...j->...i", basis, a_pert_eci) + a_thrust_rsw
     return SpacecraftState(mee_gauss_rates(state.orbit, a_rsw, fm.mu_m3_s2), mass_rate, accel)
 
 

@@ -91,27 +91,46 @@ def mee_to_kepler(mee):
     return p / (1 - e**2), e, i, raan, argp, nu
 
 
-def mee_to_cartesian(mee, mu):
-    """MEE [..., 6] to ECI position and velocity [..., 3] (Walker et al. 1985)."""
-    p, f, g, h, k, true_lon = (mee[..., j] for j in range(6))
+def mee_rsw_basis(mee):
+    """Rows R, S, W [..., 3, 3] of the RSW frame of a MEE state, in ECI, without v.
+
+    R = r / |r|, W = the orbit normal, S = W x R (Walker, Ireland & Owens 1985):
+    R = (cos L (1 + a2) + 2hk sin L, sin L (1 - a2) + 2hk cos L, 2 (h sin L - k cos L)) / s2,
+    S = (-sin L (1 + a2) + 2hk cos L, cos L (1 - a2) - 2hk sin L, 2 (h cos L + k sin L)) / s2,
+    W = (2k, -2h, 1 - h^2 - k^2) / s2, with a2 = h^2 - k^2 and s2 = 1 + h^2 + k^2.
+    """
+    h, k, true_lon = mee[..., H], mee[..., K], mee[..., L]
     cos_l, sin_l = jnp.cos(true_lon), jnp.sin(true_lon)
-    alpha2 = h**2 - k**2
-    s2 = 1 + h**2 + k**2
+    a2 = h**2 - k**2
+    hk2 = 2 * h * k
+    rows = [
+        [cos_l * (1 + a2) + hk2 * sin_l, sin_l * (1 - a2) + hk2 * cos_l, 2 * (h * sin_l - k * cos_l)],
+        [-sin_l * (1 + a2) + hk2 * cos_l, cos_l * (1 - a2) - hk2 * sin_l, 2 * (h * cos_l + k * sin_l)],
+        [2 * k, -2 * h, 1 - h**2 - k**2],
+    ]
+    s2 = (1 + h**2 + k**2)[..., None, None]
+    return jnp.stack([jnp.stack(jnp.broadcast_arrays(*row), -1) for row in rows], -2) / s2
+
+
+def mee_radius_m(mee):
+    """|r| = p / w, w = 1 + f cos L + g sin L (Li 2022, eq. (7))."""
+    true_lon = mee[..., L]
+    return mee[..., P] / (1 + mee[..., F] * jnp.cos(true_lon) + mee[..., G] * jnp.sin(true_lon))
+
+
+def mee_to_cartesian(mee, mu):
+    """MEE [..., 6] to ECI position and velocity [..., 3].
+
+    r = (p / w) R and v = sqrt(mu / p) ((f sin L - g cos L) R + w S) in the RSW
+    basis of ``mee_rsw_basis``.
+    """
+    p, f, g, true_lon = mee[..., P], mee[..., F], mee[..., G], mee[..., L]
+    cos_l, sin_l = jnp.cos(true_lon), jnp.sin(true_lon)
     w = 1 + f * cos_l + g * sin_l
-    r = p / w
-    r_eci = (r / s2)[..., None] * jnp.stack(
-        [cos_l + alpha2 * cos_l + 2 * h * k * sin_l, sin_l - alpha2 * sin_l + 2 * h * k * cos_l, 2 * (h * sin_l - k * cos_l)],
-        -1,
-    )
-    scale = -jnp.sqrt(mu / p) / s2
-    v_eci = scale[..., None] * jnp.stack(
-        [
-            sin_l + alpha2 * sin_l - 2 * h * k * cos_l + g - 2 * f * h * k + alpha2 * g,
-            -cos_l + alpha2 * cos_l + 2 * h * k * sin_l - f + 2 * g * h * k + alpha2 * f,
-            -2 * (h * cos_l + k * sin_l + f * h + g * k),
-        ],
-        -1,
-    )
+    basis = mee_rsw_basis(mee)
+    speed = jnp.sqrt(mu / p)
+    r_eci = (p / w)[..., None] * basis[..., 0, :]
+    v_eci = (speed * (f * sin_l - g * cos_l))[..., None] * basis[..., 0, :] + (speed * w)[..., None] * basis[..., 1, :]
     return r_eci, v_eci
 
 

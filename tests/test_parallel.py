@@ -1,0 +1,43 @@
+"""Sharding a batch over two simulated host devices gives the same numbers as one device."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+
+SCRIPT = textwrap.dedent(
+    """
+    import sys, numpy as np, jax, jax.numpy as jnp
+    import geojax
+    from geojax import constants as c
+    from geojax.dynamics import SpacecraftState
+    from geojax.forces import ForceModel
+    from geojax.parallel import replicate, shard_batch
+    from geojax.propagate import MEE, environment_grid, propagate_cycles, steps_per_cycle
+    n = steps_per_cycle(3600.0); h = c.SIDEREAL_DAY_S / n
+    env = environment_grid(0.0, 0.0, 69.0, h, 2, n)
+    mee = jnp.array([42164e3, 1e-4, 0.0, 1e-3, 0.0, 0.0]) + jnp.arange(4)[:, None] * jnp.array([1e3, 0, 0, 0, 0, 0.5])
+    states = SpacecraftState(mee, jnp.full(4, 3000.0), jnp.zeros(4))
+    if len(jax.devices()) > 1:
+        states, env = shard_batch(states), replicate(env)
+    run = jax.jit(jax.vmap(lambda s: propagate_cycles(MEE, s, env, ForceModel(srp_area_m2=20.0), h)))
+    final, means = run(states)
+    np.save(sys.argv[1], np.concatenate([np.asarray(final.orbit).ravel(), np.asarray(means.lon_rad).ravel()]))
+    print(len(jax.devices()))
+    """
+)
+
+
+def run_with_devices(count, path):
+    env = dict(os.environ, XLA_FLAGS=f"--xla_force_host_platform_device_count={count}")
+    out = subprocess.run([sys.executable, "-c", SCRIPT, str(path)], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == str(count)
+    return np.load(path)
+
+
+def test_two_devices_match_one(tmp_path):
+    one = run_with_devices(1, tmp_path / "one.npy")
+    two = run_with_devices(2, tmp_path / "two.npy")
+    np.testing.assert_allclose(two, one, rtol=1e-14, atol=0)
