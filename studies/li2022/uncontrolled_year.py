@@ -15,7 +15,7 @@ from pathlib import Path
 
 from geojax import plots, run, scenario
 
-CASES = [("mee", 3600.0), ("mee", 1800.0), ("mee", 900.0), ("mee", 300.0), ("cartesian", 30.0)]
+CASES = [("mee", 7200.0), ("mee", 3600.0), ("mee", 1800.0), ("mee", 900.0), ("mee", 300.0), ("cartesian", 30.0)]
 
 
 def main() -> None:
