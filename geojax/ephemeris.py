@@ -90,6 +90,20 @@ MOON_B_TERMS = np.array([
 ], dtype=np.float64)
 
 
+# Meeus eqs. (47.1)-(47.5) and p. 338: polynomials in Julian centuries TT, degrees,
+# lowest degree first: L' (mean longitude), D, M, M', F, and the arguments A1, A2, A3.
+MOON_ARGUMENTS_DEG = {
+    "mean_longitude": (218.3164477, 481267.88123421, -0.0015786, 1 / 538841.0, -1 / 65194000.0),
+    "elongation": (297.8501921, 445267.1114034, -0.0018819, 1 / 545868.0, -1 / 113065000.0),
+    "sun_anomaly": (357.5291092, 35999.0502909, -0.0001536, 1 / 24490000.0),
+    "moon_anomaly": (134.9633964, 477198.8675055, 0.0087414, 1 / 69699.0, -1 / 14712000.0),
+    "latitude_argument": (93.2720950, 483202.0175233, -0.0036539, -1 / 3526000.0, 1 / 863310000.0),
+    "a1": (119.75, 131.849),
+    "a2": (53.09, 479264.290),
+    "a3": (313.45, 481266.484),
+}
+
+
 def _poly_deg(coefficients, t):
     """Polynomial in Julian centuries t, coefficients from degree 0 up; radians."""
     value = jnp.zeros_like(t)
@@ -127,14 +141,7 @@ def sun_ecliptic_of_date(t):
 def moon_ecliptic_of_date(t):
     """Geometric Moon longitude, latitude [rad] and distance [m], mean ecliptic and equinox of date (Meeus ch. 47)."""
     t = jnp.asarray(t, dtype=jnp.float64)
-    lp = _poly_deg((218.3164477, 481267.88123421, -0.0015786, 1 / 538841.0, -1 / 65194000.0), t)
-    d = _poly_deg((297.8501921, 445267.1114034, -0.0018819, 1 / 545868.0, -1 / 113065000.0), t)
-    m = _poly_deg((357.5291092, 35999.0502909, -0.0001536, 1 / 24490000.0), t)
-    mp = _poly_deg((134.9633964, 477198.8675055, 0.0087414, 1 / 69699.0, -1 / 14712000.0), t)
-    f = _poly_deg((93.2720950, 483202.0175233, -0.0036539, -1 / 3526000.0, 1 / 863310000.0), t)
-    a1 = _poly_deg((119.75, 131.849), t)
-    a2 = _poly_deg((53.09, 479264.290), t)
-    a3 = _poly_deg((313.45, 481266.484), t)
+    lp, d, m, mp, f, a1, a2, a3 = (_poly_deg(c, t) for c in MOON_ARGUMENTS_DEG.values())
     ecc = 1 - 0.002516 * t - 0.0000074 * t**2
 
     fundamental = jnp.stack([d, m, mp, f], axis=-1)  # [..., 4]

@@ -23,7 +23,7 @@ import heyoka as hy
 import numpy as np
 
 from geojax import constants as c
-from geojax.ephemeris import MOON_B_TERMS, MOON_LR_TERMS
+from geojax.ephemeris import MOON_ARGUMENTS_DEG, MOON_B_TERMS, MOON_LR_TERMS
 
 from .numpy_model import Model
 
@@ -100,14 +100,7 @@ def _moon_series(table, column, trig, fundamental, ecc):
 
 def moon_position(t, frame_t):
     """Geocentric Moon position (Meeus ch. 47), list of 3 expressions in metres."""
-    lp = _poly_rad((218.3164477, 481267.88123421, -0.0015786, 1 / 538841.0, -1 / 65194000.0), t)
-    d = _poly_rad((297.8501921, 445267.1114034, -0.0018819, 1 / 545868.0, -1 / 113065000.0), t)
-    m = _poly_rad((357.5291092, 35999.0502909, -0.0001536, 1 / 24490000.0), t)
-    mp = _poly_rad((134.9633964, 477198.8675055, 0.0087414, 1 / 69699.0, -1 / 14712000.0), t)
-    f = _poly_rad((93.2720950, 483202.0175233, -0.0036539, -1 / 3526000.0, 1 / 863310000.0), t)
-    a1 = _poly_rad((119.75, 131.849), t)
-    a2 = _poly_rad((53.09, 479264.290), t)
-    a3 = _poly_rad((313.45, 481266.484), t)
+    lp, d, m, mp, f, a1, a2, a3 = (_poly_rad(c, t) for c in MOON_ARGUMENTS_DEG.values())
     ecc = 1.0 - 0.002516 * t - 0.0000074 * t**2
     fundamental = (d, m, mp, f)
 
