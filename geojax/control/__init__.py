@@ -1,0 +1,1 @@
+"""Station-keeping controllers (DESIGN.md layer 4); one module per idea."""
