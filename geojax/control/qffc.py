@@ -51,15 +51,19 @@ def default_vdt_raises(max_raise_mps: float = 0.2, count: int = 101):
     return jnp.linspace(0.0, max_raise_mps, count)
 
 
-def solve(delta_x, l_start_rad, limits: ArmLimits, vdt_raises_mps=None, n_split: int = 33) -> BurnPair:
-    """Two burns that cancel the predictive deviation ``delta_x`` [6] (see module docstring)."""
+def solve(delta_x, l_start_rad, limits: ArmLimits, vdt_raises_mps=None, n_split: int = 33, coast_offset_s=0.0) -> BurnPair:
+    """Two burns that cancel the predictive deviation ``delta_x`` [6] (see module docstring).
+
+    ``coast_offset_s`` is added to the coast T_i of eq. (20) when the deviation
+    refers to a time after the end of the cycle (a mean over the next cycle).
+    """
     vdt_raises_mps = default_vdt_raises() if vdt_raises_mps is None else vdt_raises_mps
     d_lon, d_drift, dex, dey, dix, diy = (delta_x[j] for j in range(6))
     v_s, r_s = V_SYNC_MPS, R_SYNC_M
 
     l2 = jnp.arctan2(diy, dix)  # eq. (31)
     l1 = l2 - jnp.pi
-    coast = jnp.stack([cycle_coast_s(l1, l_start_rad), cycle_coast_s(l2, l_start_rad)])
+    coast = jnp.stack([cycle_coast_s(l1, l_start_rad), cycle_coast_s(l2, l_start_rad)]) + coast_offset_s
 
     v_r_diff = v_s * (dex * jnp.sin(l1) - dey * jnp.cos(l1))
     v_t_diff = 0.5 * v_s * (dex * jnp.cos(l1) + dey * jnp.sin(l1))
@@ -105,9 +109,9 @@ def solve(delta_x, l_start_rad, limits: ArmLimits, vdt_raises_mps=None, n_split:
     )
 
 
-def effect(burns: BurnPair, l_start_rad):
+def effect(burns: BurnPair, l_start_rad, coast_offset_s=0.0):
     """B_1 v_1 + B_2 v_2 (eq. (29)) of a solution, for checking it."""
-    coast = cycle_coast_s(burns.l_rad, l_start_rad)
+    coast = cycle_coast_s(burns.l_rad, l_start_rad) + coast_offset_s
     matrices = effect_matrix(burns.l_rad, coast)  # [2, 6, 3]
     return jnp.einsum("nij,nj->i", matrices, burns.dv_rsw_mps)
 
