@@ -1,0 +1,89 @@
+"""State predictor (Li 2022, Sec. 4.1, eqs. (24)-(27)) and the mean-element estimate it starts from.
+
+One uncontrolled propagation from the initial state, done once per scenario
+and shared by a batch, gives at every cycle boundary the osculating elements
+and the mean elements (eq. (9)).  From it:
+
+* the natural drift of the mean elements over a cycle, Delta x_d (eq. (26)),
+  is the change of the reference's boundary means;
+* the controller's estimate of the mean elements at a boundary is the
+  osculating elements of the (measured) state less the reference's
+  short-period offset (osculating minus mean) at that boundary.  The offsets
+  come from the Sun, Moon, J2 and SRP and hardly depend on the small
+  differences between the controlled orbit and the reference, as long as the
+  eccentricity term is taken out of the longitude first (``boundary_elements``).
+
+Boundary means are the average of the two cycle means around a boundary
+(the cycle means refer to mid-cycle times).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from geojax.elements import semi_major_axis_m, wrap_angle
+from geojax.integrate import propagate_steps
+from geojax.propagate import MEE, cycle_means
+
+
+class Reference(NamedTuple):
+    """Uncontrolled reference at cycle boundaries, leading axis = boundary."""
+
+    osc: jnp.ndarray  # [n, 6] osculating (lon, a, f, g, h, k), lon as in ``boundary_elements``
+    mean: jnp.ndarray  # [n, 7] mean (lon, drift rad/s, a, f, g, h, k)
+
+
+def boundary_elements(mee, earth_angle_rad):
+    """(lon, a, f, g, h, k) of an osculating MEE state [6].
+
+    lon is the mean longitude less the Earth angle; the mean longitude removes
+    the state's own eccentricity term from the true longitude,
+    l = L - 2 f sin L + 2 g cos L + O(e^2).
+    """
+    true_lon = mee[5]
+    lon = wrap_angle(true_lon - 2 * mee[1] * jnp.sin(true_lon) + 2 * mee[2] * jnp.cos(true_lon) - earth_angle_rad)
+    return jnp.stack([lon, semi_major_axis_m(mee), mee[1], mee[2], mee[3], mee[4]])
+
+
+def reference(state, env_grid, fm, step_s) -> Reference:
+    """Propagate without control over ``env_grid``; elements at each of its cycle boundaries but the last."""
+    n_steps = env_grid.earth_angle_rad.shape[1]
+    cycle_s = n_steps * step_s
+    mu = fm.mu_m3_s2
+
+    def one_cycle(carry, xs):
+        k, env_steps = xs
+        osc = boundary_elements(carry.orbit, env_steps.earth_angle_rad[0, 0])
+        final, starts = propagate_steps(MEE.rhs, carry, env_steps, fm, step_s, k * cycle_s)
+        orbits = jnp.concatenate([starts.orbit, final.orbit[None]], axis=0)
+        angles = jnp.concatenate([env_steps.earth_angle_rad[:, 0], env_steps.earth_angle_rad[-1:, 2]])
+        m = cycle_means(orbits, angles, mu, cycle_s, 0.0)
+        return final, (osc, jnp.stack([m.lon_rad, m.drift_rad_s, m.a_m, m.ex, m.ey, m.ix, m.iy]))
+
+    n_cycles = env_grid.earth_angle_rad.shape[0]
+    _, (osc, mid) = jax.lax.scan(one_cycle, state, (jnp.arange(n_cycles), env_grid))
+    mid = mid.at[:, 0].set(jnp.unwrap(mid[:, 0]))
+    first = 1.5 * mid[0] - 0.5 * mid[1]
+    boundary = jnp.concatenate([first[None], 0.5 * (mid[:-1] + mid[1:])], 0)
+    return Reference(osc, boundary.at[:, 0].set(wrap_angle(boundary[:, 0])))
+
+
+def estimate_mean(osc, osc_ref, mean_ref, mu):
+    """Mean (lon, drift, e_x, e_y, i_x, i_y) at a boundary from osculating (lon, a, f, g, h, k).
+
+    The drift follows the mean semi-major axis: d(lambda_dot)/da = -3/2 n / a.
+    """
+    lon = wrap_angle(osc[0] - (osc_ref[0] - mean_ref[0]))
+    a = osc[1] - (osc_ref[1] - mean_ref[2])
+    drift = mean_ref[1] - 1.5 * jnp.sqrt(mu / a**3) / a * (a - mean_ref[2])
+    return jnp.concatenate([jnp.stack([lon, drift]), osc[2:] - (osc_ref[2:] - mean_ref[3:])])
+
+
+def predict_next(estimate, mean_ref, mean_ref_next, cycle_s):
+    """Eq. (25) without burns: the estimate plus the natural drift of one cycle (eqs. (26)-(27))."""
+    d_drift = mean_ref_next[1] - mean_ref[1]
+    lon = estimate[0] + cycle_s * (estimate[1] + 0.5 * d_drift)
+    return jnp.concatenate([jnp.stack([lon, estimate[1] + d_drift]), estimate[2:] + (mean_ref_next[3:] - mean_ref[3:])])

@@ -1,0 +1,86 @@
+"""Closed-loop station keeping with the QFFC (Li 2022, Secs. 3-4): one pure rollout.
+
+An outer ``lax.scan`` over control cycles (one sidereal day each).  At the
+start of a cycle the controller estimates the mean elements from the state
+(``control.predictor``), predicts them one cycle ahead with the natural drift
+of the shared reference, solves the QFFC for two burns (``control.qffc``),
+and the cycle is integrated with the burns as thrust windows centred on their
+right ascensions.  A burn shorter than the minimum (30 s) is not fired.
+
+Not yet modelled here (issue 3): burns suspended in Earth shadow, orbit
+determination and attitude errors, the FOMPC.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from geojax.control import qffc
+from geojax.control.predictor import Reference, boundary_elements, estimate_mean, predict_next
+from geojax.dynamics import Thrust
+from geojax.elements import wrap_angle
+from geojax.integrate import overlap_fraction, propagate_steps
+from geojax.propagate import MEE, CycleMeans, cycle_means
+from geojax.propulsion import ArmLimits, delta_v_direction_rsw
+
+
+class LoopParams(NamedTuple):
+    """What a sweep can vary in a QFFC closed loop (array leaves)."""
+
+    limits: ArmLimits
+    thrust_n: jnp.ndarray
+    isp_s: jnp.ndarray
+    min_burn_s: jnp.ndarray
+    target: jnp.ndarray  # [6] (lon rad, drift rad/s, e_x, e_y, i_x, i_y), Li 2022 eq. (10)
+
+
+class CycleRecord(NamedTuple):
+    means: CycleMeans  # mean elements over the cycle
+    burns: qffc.BurnPair  # the planned solution
+    burn_s: jnp.ndarray  # [2] firing time of each thruster
+    prediction: jnp.ndarray  # [6] predicted mean elements at the end of the cycle, without burns
+
+
+def rollout(state, env_grid, fm, step_s, ref: Reference, params: LoopParams):
+    """Closed loop over the cycles of ``env_grid``; ``ref`` holds the reference at the same boundaries.
+
+    Returns (final state, CycleRecord with a leading cycle axis).
+    """
+    n_steps = env_grid.earth_angle_rad.shape[1]
+    cycle_s = n_steps * step_s
+    mu = fm.mu_m3_s2
+
+    def one_cycle(state, xs):
+        k, env_steps, osc_ref, mean_ref, mean_ref_next = xs
+        t0 = k * cycle_s
+        estimate = estimate_mean(boundary_elements(state.orbit, env_steps.earth_angle_rad[0, 0]), osc_ref, mean_ref, mu)
+        prediction = predict_next(estimate, mean_ref, mean_ref_next, cycle_s)
+        deviation = params.target - prediction  # eq. (28)
+        deviation = deviation.at[0].set(wrap_angle(deviation[0]))
+        l_start = state.orbit[5]
+        burns = qffc.solve(deviation, l_start, params.limits)
+        # Burn mid-points at the right ascensions l_1, l_2: the orbit turns 2 pi per cycle.
+        t_mid = jnp.mod(burns.l_rad - l_start, 2 * jnp.pi) / (2 * jnp.pi) * cycle_s
+        burn_s = burns.v_mps * state.mass_kg / params.thrust_n  # eq. (13)
+        burn_s = jnp.where((burn_s >= params.min_burn_s) & burns.feasible, burn_s, 0.0)
+        start = jnp.clip(t_mid - burn_s / 2, 0.0, cycle_s - burn_s)
+        directions = delta_v_direction_rsw(burns.alpha_rad, burns.beta_rad)
+
+        def thrust_fn(t, h):
+            # The burns are half a cycle apart, so a step meets at most one of them.
+            fraction = overlap_fraction(t - t0, h, start, start + burn_s)
+            direction = jnp.where(fraction[0] > 0, directions[0], directions[1])
+            return Thrust(direction, params.thrust_n, params.isp_s, jnp.sum(fraction))
+
+        final, starts = propagate_steps(MEE.rhs, state, env_steps, fm, step_s, t0, thrust_fn)
+        orbits = jnp.concatenate([starts.orbit, final.orbit[None]], axis=0)
+        angles = jnp.concatenate([env_steps.earth_angle_rad[:, 0], env_steps.earth_angle_rad[-1:, 2]])
+        means = cycle_means(orbits, angles, mu, cycle_s, t0 + cycle_s / 2)
+        return final, CycleRecord(means, burns, burn_s, prediction)
+
+    n_cycles = env_grid.earth_angle_rad.shape[0]
+    xs = (jnp.arange(n_cycles), env_grid, ref.osc[:n_cycles], ref.mean[:n_cycles], ref.mean[1 : n_cycles + 1])
+    return jax.lax.scan(one_cycle, state, xs)

@@ -1,0 +1,54 @@
+"""Closed loop with the QFFC on li2022 (normal limits): 20 days stay in the box."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from geojax import constants as c
+from geojax import run, scenario
+from geojax.control.predictor import reference
+from geojax.propagate import environment_grid, steps_per_cycle
+from geojax.propulsion import PRESETS_DEG, arm_limits_deg
+from geojax.simulate import LoopParams, rollout
+
+DAYS = 20
+
+
+@pytest.fixture(scope="module")
+def loop():
+    sc = scenario.load("li2022")
+    n = steps_per_cycle(sc.step_s)
+    h = c.SIDEREAL_DAY_S / n
+    env = environment_grid(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s, h, DAYS + 1, n)
+    state = run.initial_state(sc)
+    ref = jax.jit(lambda s, e: reference(s, e, sc.force_model, h))(state, env)
+    params = LoopParams(arm_limits_deg(*PRESETS_DEG["normal"]), jnp.asarray(0.5), jnp.asarray(2250.0),
+                        jnp.asarray(30.0), jnp.array([np.radians(96.0), 0.0, 0.0, 1e-4, 0.0, 3e-5]))
+    cycles = jax.tree_util.tree_map(lambda x: x[:DAYS], env)
+    final, records = jax.jit(lambda s, e, p: rollout(s, e, sc.force_model, h, ref, p))(state, cycles, params)
+    return sc, final, records
+
+
+def test_twenty_days_stay_in_the_box(loop):
+    _, _, records = loop
+    m = records.means
+    # Li 2022 Sec. 5.1 holds the mean longitude within +-0.013 deg; the +-0.02 deg of issue 3 is the bound.
+    assert np.max(np.abs(np.degrees(m.lon_rad) - 96.0)) < 0.02
+    assert np.max(np.hypot(m.ex - 0.0, m.ey - 1e-4)) < 5e-5
+    # The inclination vector starts 2e-5 off target (eq. (43) vs (44)) and is brought in.
+    assert np.max(np.hypot(m.ix[1:] - 0.0, m.iy[1:] - 3e-5)) < 2e-5
+    assert bool(jnp.all(records.burns.feasible))
+
+
+def test_burns_follow_the_operational_constraints(loop):
+    sc, final, records = loop
+    # Constraint 5: each thruster fires at most once per cycle; here about once.
+    fired = np.asarray(records.burn_s) > 0
+    assert 0.9 <= fired.mean() <= 1.0
+    # Constraint 7: no burn shorter than 30 s; burns half a cycle apart never overlap.
+    assert np.all((np.asarray(records.burn_s) == 0) | (np.asarray(records.burn_s) >= 30.0))
+    # The delivered Delta-V equals the planned firing times at 500 mN (mass falls by < 0.1 %).
+    planned = float(jnp.sum(records.burn_s)) * 0.5 / sc.mass_kg
+    assert float(final.dv_mps) == pytest.approx(planned, rel=2e-3)
+    assert float(final.mass_kg) == pytest.approx(sc.mass_kg - 0.5 / (2250 * c.G0_MPS2) * float(jnp.sum(records.burn_s)), rel=1e-12)
