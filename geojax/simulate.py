@@ -5,10 +5,15 @@ start of a cycle the controller estimates the mean elements from the state
 (``control.predictor``), predicts them one cycle ahead with the natural drift
 of the shared reference, solves the QFFC for two burns (``control.qffc``),
 and the cycle is integrated with the burns as thrust windows centred on their
-right ascensions.  A burn shorter than the minimum (30 s) is not fired.
+right ascensions.  A burn shorter than the minimum (30 s) is not fired.  A
+burn that meets the Earth's shadow is suspended and resumed until it has fired
+its full time (Li 2022, Sec. 3.2, constraint 6): it runs on a clock that only
+advances in sunlight (``propulsion.sunlit_clock``), with the shadow taken at
+the station's nominal position (within +-0.05 deg of the satellite, a few
+seconds of eclipse timing).  A suspended burn that would run past the end of
+the cycle is cut there.
 
-Not yet modelled here (issue 3): burns suspended in Earth shadow, orbit
-determination and attitude errors, the FOMPC.
+Not yet modelled here (issue 3): orbit determination and attitude errors, the FOMPC.
 """
 
 from __future__ import annotations
@@ -19,12 +24,14 @@ import jax
 import jax.numpy as jnp
 
 from geojax.control import qffc
+from geojax.control.effects import R_SYNC_M
 from geojax.control.predictor import Reference, boundary_elements, estimate_mean, predict_next
 from geojax.dynamics import Thrust
 from geojax.elements import wrap_angle
-from geojax.integrate import overlap_fraction, propagate_steps
+from geojax.forces import shadow_fraction
+from geojax.integrate import propagate_steps
 from geojax.propagate import MEE, CycleMeans, cycle_means
-from geojax.propulsion import ArmLimits, delta_v_direction_rsw
+from geojax.propulsion import ArmLimits, delta_v_direction_rsw, firing_fraction, sunlit_clock
 
 
 class LoopParams(NamedTuple):
@@ -40,7 +47,7 @@ class LoopParams(NamedTuple):
 class CycleRecord(NamedTuple):
     means: CycleMeans  # mean elements over the cycle
     burns: qffc.BurnPair  # the planned solution
-    burn_s: jnp.ndarray  # [2] firing time of each thruster
+    burn_s: jnp.ndarray  # [2] firing time of each thruster (after any cut at the cycle end)
     prediction: jnp.ndarray  # [6] predicted mean elements at the end of the cycle, without burns
 
 
@@ -68,10 +75,13 @@ def rollout(state, env_grid, fm, step_s, ref: Reference, params: LoopParams):
         burn_s = jnp.where((burn_s >= params.min_burn_s) & burns.feasible, burn_s, 0.0)
         start = jnp.clip(t_mid - burn_s / 2, 0.0, cycle_s - burn_s)
         directions = delta_v_direction_rsw(burns.alpha_rad, burns.beta_rad)
+        clock = sunlit_clock(sunlit_fraction(env_steps, params.target[0], fm), step_s)  # [n_steps + 1]
+        clock_start = jnp.interp(start, jnp.arange(n_steps + 1) * step_s, clock)
 
         def thrust_fn(t, h):
             # The burns are half a cycle apart, so a step meets at most one of them.
-            fraction = overlap_fraction(t - t0, h, start, start + burn_s)
+            j = jnp.round((t - t0) / h).astype(int)
+            fraction = firing_fraction(clock[j], clock[j + 1], clock_start, burn_s, h)
             direction = jnp.where(fraction[0] > 0, directions[0], directions[1])
             return Thrust(direction, params.thrust_n, params.isp_s, jnp.sum(fraction))
 
@@ -79,8 +89,17 @@ def rollout(state, env_grid, fm, step_s, ref: Reference, params: LoopParams):
         orbits = jnp.concatenate([starts.orbit, final.orbit[None]], axis=0)
         angles = jnp.concatenate([env_steps.earth_angle_rad[:, 0], env_steps.earth_angle_rad[-1:, 2]])
         means = cycle_means(orbits, angles, mu, cycle_s, t0 + cycle_s / 2)
-        return final, CycleRecord(means, burns, burn_s, prediction)
+        fired_s = jnp.stack([jnp.minimum(burn_s[i], clock[-1] - clock_start[i]) for i in range(2)])
+        return final, CycleRecord(means, burns, jnp.maximum(fired_s, 0.0), prediction)
 
     n_cycles = env_grid.earth_angle_rad.shape[0]
     xs = (jnp.arange(n_cycles), env_grid, ref.osc[:n_cycles], ref.mean[:n_cycles], ref.mean[1 : n_cycles + 1])
     return jax.lax.scan(one_cycle, state, xs)
+
+
+def sunlit_fraction(env_steps, station_lon_rad, fm):
+    """Sunlit fraction [n_steps] at the mid-step of each step, at the station's nominal position."""
+    angle = env_steps.earth_angle_rad[:, 1] + station_lon_rad
+    r_station = R_SYNC_M * jnp.stack([jnp.cos(angle), jnp.sin(angle), jnp.zeros_like(angle)], -1)
+    lit = shadow_fraction(r_station, env_steps.r_sun_eci_m[:, 1], fm.r_earth_m)
+    return 1.0 - fm.shadow_on * (1.0 - lit)

@@ -52,3 +52,21 @@ def test_burns_follow_the_operational_constraints(loop):
     planned = float(jnp.sum(records.burn_s)) * 0.5 / sc.mass_kg
     assert float(final.dv_mps) == pytest.approx(planned, rel=2e-3)
     assert float(final.mass_kg) == pytest.approx(sc.mass_kg - 0.5 / (2250 * c.G0_MPS2) * float(jnp.sum(records.burn_s)), rel=1e-12)
+
+
+@pytest.mark.parametrize("utc, shadow_s", [("2020-03-20T00:00:00", (4000.0, 4400.0)), ("2020-01-05T00:00:00", (0.0, 0.0))])
+def test_station_shadow_per_cycle(utc, shadow_s):
+    # Closed form: at an equinox a GEO satellite crosses a shadow of angular width
+    # 2 asin(R_E / r) = 17.4 deg, 2 asin(R_E/r) / omega = 4170 s plus ~2 min of penumbra;
+    # weeks from an equinox the Sun's declination keeps the orbit out of the shadow.
+    from geojax.forces import ForceModel
+    from geojax.simulate import sunlit_fraction
+    from geojax.time import parse_utc, tt_seconds_from_utc
+
+    t0 = tt_seconds_from_utc(parse_utc(utc))
+    n = 960
+    h = c.SIDEREAL_DAY_S / n
+    env = environment_grid(t0, t0, 69.2, h, 1, n)
+    lit = sunlit_fraction(jax.tree_util.tree_map(lambda x: x[0], env), np.radians(96.0), ForceModel())
+    dark_s = float(jnp.sum(1.0 - lit)) * h
+    assert shadow_s[0] <= dark_s <= shadow_s[1] + 1e-9
