@@ -52,6 +52,7 @@ class CycleMeans(NamedTuple):
     ix: jnp.ndarray
     iy: jnp.ndarray
     a_m: jnp.ndarray
+    max_abs_lat_rad: jnp.ndarray  # largest |sub-satellite latitude| sampled in the cycle (not a mean)
 
 
 def steps_per_cycle(step_s: float) -> int:
@@ -84,7 +85,7 @@ def environment_grid(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cyc
 
 def cycle_means(mee_samples, earth_angle_rad, mu, cycle_s, t_mid_s) -> CycleMeans:
     """Mean elements from [n + 1] MEE samples equally spaced over one cycle, both ends included."""
-    lon, _ = subsatellite_point_rad(mee_samples, earth_angle_rad, mu)
+    lon, lat = subsatellite_point_rad(mee_samples, earth_angle_rad, mu)
     dlon = wrap_angle(lon - lon[0])
     # Unwrap relative to the first sample; the longitude moves < pi per cycle.
     dlon = jnp.concatenate([jnp.zeros(1), jnp.cumsum(wrap_angle(jnp.diff(dlon)))])
@@ -98,6 +99,7 @@ def cycle_means(mee_samples, earth_angle_rad, mu, cycle_s, t_mid_s) -> CycleMean
         ix=mean[3],
         iy=mean[4],
         a_m=cycle_mean(semi_major_axis_m(mee_samples)),
+        max_abs_lat_rad=jnp.max(jnp.abs(lat)),
     )
 
 

@@ -13,6 +13,7 @@ import numpy as np
 from geojax.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.dynamics import SpacecraftState
 from geojax.progress import Progress
+from geojax.elements import wrap_angle
 from geojax.propagate import DYNAMICS, CycleMeans, environment_grid, propagate_cycles, steps_per_cycle
 from geojax.scenario import Scenario
 
@@ -130,3 +131,84 @@ def drift_summary(cycles: CycleMeans, span_days: float | None = None) -> DriftSu
         dlon_deg=float(np.interp(t_end, t, lon) - lon[0]),
         elapsed_days=float((t_end - t[0]) / SECONDS_PER_DAY),
     )
+
+
+class SimulationResult(NamedTuple):
+    cycles: dict[str, np.ndarray]  # the /cycles datasets
+    metrics: dict[str, float]  # the /metrics datasets
+    wall_s: float
+
+
+def simulate_scenario(scenario: Scenario) -> SimulationResult:
+    """Closed-loop QFFC run of a scenario (``controller.kind = "qffc"``): per-cycle records and metrics."""
+    from geojax.control.predictor import reference
+    from geojax.propulsion import arm_limits_deg
+    from geojax.simulate import LoopParams, rollout
+
+    if scenario.controller != "qffc":
+        raise ValueError(f"controller.kind: 'geojax simulate' needs 'qffc', got {scenario.controller!r}")
+    start = time.perf_counter()
+    cfg = scenario.config
+    n_steps = steps_per_cycle(scenario.step_s)
+    step_s = SIDEREAL_DAY_S / n_steps
+    n_cycles = max(1, round(scenario.days * SECONDS_PER_DAY / SIDEREAL_DAY_S))
+    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, n_cycles + 1, n_steps)
+    state = initial_state(scenario)
+    fm = scenario.force_model
+    ref = jax.jit(lambda s, e: reference(s, e, fm, step_s))(state, env)
+    t, st = cfg["thrusters"], cfg["station"]
+    target = np.array([np.radians(st["lon_deg"]), 0.0, st["ex"], st["ey"], st["ix"], st["iy"]])
+    params = LoopParams(
+        arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"]),
+        jnp.asarray(t["thrust_n"]), jnp.asarray(t["isp_s"]), jnp.asarray(t["min_burn_s"]), jnp.asarray(target),
+    )
+    cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
+    final, rec = jax.jit(lambda s, e, p: rollout(s, e, fm, step_s, ref, p))(state, cycles_env, params)
+    rec, final = jax.tree_util.tree_map(np.asarray, (rec, final))
+    wall_s = time.perf_counter() - start
+    return SimulationResult(_cycle_records(rec), _metrics(rec, final, target, n_cycles, wall_s), wall_s)
+
+
+def _cycle_records(rec) -> dict[str, np.ndarray]:
+    table = cycles_table(rec.means)
+    dv = rec.burns.dv_rsw_mps  # [n, 2, 3]
+    fired = rec.burn_s > 0
+    table.update({
+        "max_abs_lat_deg": np.degrees(rec.means.max_abs_lat_rad),
+        "v1_mps": np.where(fired[:, 0], rec.burns.v_mps[:, 0], 0.0),
+        "v2_mps": np.where(fired[:, 1], rec.burns.v_mps[:, 1], 0.0),
+        "alpha1_deg": np.degrees(rec.burns.alpha_rad[:, 0]),
+        "beta1_deg": np.degrees(rec.burns.beta_rad[:, 0]),
+        "alpha2_deg": np.degrees(rec.burns.alpha_rad[:, 1]),
+        "beta2_deg": np.degrees(rec.burns.beta_rad[:, 1]),
+        "l1_deg": np.degrees(np.mod(rec.burns.l_rad[:, 0], 2 * np.pi)),
+        # Li 2022, eq. (45).
+        "dv_ns_mps": np.sum(np.where(fired, np.abs(dv[..., 2]), 0.0), axis=1),
+        "burn1_s": rec.burn_s[:, 0],
+        "burn2_s": rec.burn_s[:, 1],
+        "status": np.where(rec.burns.feasible, 0, 1).astype(np.int8),
+    })
+    return table
+
+
+def _metrics(rec, final, target, n_cycles: int, wall_s: float) -> dict[str, float]:
+    m = rec.means
+    after = slice(1, None) if n_cycles > 1 else slice(None)  # the first cycle is acquisition
+    fired = rec.burn_s > 0
+    v = np.where(fired, rec.burns.v_mps, 0.0)
+    dv_ns = np.sum(np.where(fired, np.abs(rec.burns.dv_rsw_mps[..., 2]), 0.0), axis=1)
+    with_burns = v.sum(axis=1) > 0
+    # Li 2022, eq. (46), averaged over the cycles that burn.
+    mean_beta = np.degrees(np.arcsin(np.clip(dv_ns[with_burns] / v.sum(axis=1)[with_burns], 0, 1))).mean() if with_burns.any() else 0.0
+    return {
+        "dv_per_year_mps": float(final.dv_mps) * 365.25 * SECONDS_PER_DAY / (n_cycles * SIDEREAL_DAY_S),
+        "burns_total": float(fired.sum()),
+        "burns_per_thruster_per_orbit": float(fired.sum() / (2 * n_cycles)),
+        "max_abs_dlon_deg": float(np.max(np.abs(np.degrees(np.asarray(wrap_angle(m.lon_rad[after] - target[0])))))),
+        "max_abs_dlat_deg": float(np.max(np.degrees(m.max_abs_lat_rad[after]))),
+        "max_abs_de": float(np.max(np.hypot(m.ex[after] - target[2], m.ey[after] - target[3]))),
+        "max_abs_di": float(np.max(np.hypot(m.ix[after] - target[4], m.iy[after] - target[5]))),
+        "mean_beta_deg": float(mean_beta),
+        "cycles_without_solution": float(np.sum(~rec.burns.feasible)),
+        "cpu_s_per_orbit": wall_s / n_cycles,
+    }

@@ -23,6 +23,7 @@ from geojax import constants as c
 from geojax.elements import cartesian_to_mee, kepler_to_mee
 from geojax.forces import ForceModel
 from geojax.frames import ecef_to_eci, earth_rotation_angle_rad
+from geojax.propulsion import arm_limits_deg
 from geojax.time import TT_MINUS_TAI_S, parse_utc, tai_minus_utc_s, tt_seconds_from_utc
 
 try:
@@ -96,7 +97,14 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "count": Field(int, 2, lower=1, lower_inclusive=True),
         "thrust_n": Field(_NUMBER, REQUIRED, lower=0.0),
         "isp_s": Field(_NUMBER, REQUIRED, lower=0.0),
+        # Robotic-arm limits, Li 2022 eq. (1); defaults: the "normal" level of Table 1.
+        "beta_max_deg": Field(_NUMBER, 70.0),
+        "beta_min_deg": Field(_NUMBER, 0.0),
+        "alpha_max_deg": Field(_NUMBER, 60.0),
+        "alpha_min_deg": Field(_NUMBER, 30.0),
+        "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True),
     },
+    "controller": {"kind": Field(str, "none", choices=("none", "qffc"))},
     "forces": {
         "j2": Field(bool, True),
         "c22_s22": Field(bool, False),
@@ -149,6 +157,10 @@ class Scenario:
     @property
     def dynamics(self) -> str:
         return self.config["integration"]["dynamics"]
+
+    @property
+    def controller(self) -> str:
+        return self.config["controller"]["kind"]
 
     @property
     def station_lon_deg(self) -> float:
@@ -230,6 +242,8 @@ def _validate(raw: dict) -> dict:
         else:
             config.update(out)
     _check_orbit(config["orbit"])
+    t = config["thrusters"]
+    arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
     return config
 
 

@@ -47,3 +47,23 @@ def test_demo_writes_its_figure(tmp_path, capsys):
     assert "inclination-vector change" in out and "mean longitude drift" in out
     assert (tmp_path / "li2022-uncontrolled.png").is_file()
     assert (tmp_path / "li2022-uncontrolled.h5").is_file()
+
+
+def test_simulate_writes_metrics_and_cycles(tmp_path, capsys):
+    out = tmp_path / "sim.h5"
+    assert cli.main(["simulate", "li2022-qffc", "--days", "5", "--out", str(out)]) == 0
+    assert "dv_per_year_mps" in capsys.readouterr().out
+    with h5py.File(out) as f:
+        for name in ("dv_per_year_mps", "burns_total", "burns_per_thruster_per_orbit", "max_abs_dlon_deg",
+                     "max_abs_dlat_deg", "max_abs_de", "max_abs_di", "mean_beta_deg", "cpu_s_per_orbit"):
+            assert np.isfinite(f[f"metrics/{name}"][()])
+        for name in ("v1_mps", "v2_mps", "alpha1_deg", "beta1_deg", "alpha2_deg", "beta2_deg", "l1_deg", "dv_ns_mps"):
+            assert f[f"cycles/{name}"].shape == (5,)
+        # Eq. (1), normal limits: thruster 1 pitch in [0, 70] deg where it fires.
+        fired = f["cycles/v1_mps"][()] > 0
+        assert np.all((f["cycles/beta1_deg"][()][fired] >= 0) & (f["cycles/beta1_deg"][()][fired] <= 70 + 1e-9))
+
+
+def test_simulate_refuses_a_scenario_without_controller(capsys):
+    assert cli.main(["simulate", "li2022", "--days", "2"]) == 2
+    assert "controller.kind" in capsys.readouterr().err

@@ -39,7 +39,7 @@ def test_drift_summary_of_a_synthetic_record():
     # Closed form: a straight-line inclination-vector change of 0.5 deg towards 90 deg.
     t = np.arange(5) * c.SIDEREAL_DAY_S
     iy = np.tan(np.radians(np.linspace(0.0, 0.5, 5)) / 2)
-    cycles = CycleMeans(t, np.radians(np.linspace(96, 95, 5)), np.zeros(5), np.zeros(5), np.zeros(5), np.zeros(5), iy, np.zeros(5))
+    cycles = CycleMeans(t, np.radians(np.linspace(96, 95, 5)), np.zeros(5), np.zeros(5), np.zeros(5), np.zeros(5), iy, np.zeros(5), np.zeros(5))
     s = drift_summary(cycles)
     assert abs(s.di_deg - 0.5) < 1e-12 and abs(s.di_direction_deg - 90) < 1e-9
     assert abs(s.dlon_deg + 1.0) < 1e-12
