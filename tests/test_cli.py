@@ -47,6 +47,8 @@ def test_demo_writes_its_figure(tmp_path, capsys):
     assert "inclination-vector change" in out and "mean longitude drift" in out
     assert (tmp_path / "li2022-uncontrolled.png").is_file()
     assert (tmp_path / "li2022-uncontrolled.h5").is_file()
+    assert "burns_per_thruster_per_orbit" in out
+    assert (tmp_path / "li2022-qffc.h5").is_file() and (tmp_path / "li2022-qffc.png").is_file()
 
 
 def test_simulate_writes_metrics_and_cycles(tmp_path, capsys):
