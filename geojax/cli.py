@@ -59,6 +59,9 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--controller", choices=["qffc"], help="override controller.kind (the FOMPC is not in yet)")
     sim.add_argument("--days", type=float, help="duration in days (default: the scenario's)")
     sim.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
+    sim.add_argument("--seed", type=int, default=0, help="seed of the orbit-determination and attitude errors (default 0)")
+    sim.add_argument("--h-rv", type=float, help="orbit-determination error level H_rv (Li 2022 eq. 48; default: the scenario's)")
+    sim.add_argument("--h-att", type=float, help="attitude error level H_att (default: the scenario's)")
     sim.add_argument("--out", help="write /metrics and /cycles to this HDF5 file")
     sim.add_argument("--plots", help="folder for the mean-element figure")
     sim.set_defaults(func=_simulate)
@@ -111,8 +114,12 @@ def _simulate(args) -> int:
     overrides = _overrides(args)
     if args.controller:
         overrides["controller.kind"] = args.controller
+    if args.h_rv is not None:
+        overrides["errors.h_rv"] = args.h_rv
+    if args.h_att is not None:
+        overrides["errors.h_att"] = args.h_att
     sc = scenario.load(args.scenario, overrides)
-    result = run.simulate_scenario(sc)
+    result = run.simulate_scenario(sc, args.seed)
     print(f"{sc.name}: {sc.controller.upper()}, {len(result.cycles['t_s'])} cycles, {result.wall_s:.1f} s wall")
     paper = PAPER_QFFC if sc.name.startswith("li2022") else {}
     print(f"  {'metric':32s} {'geojax':>12s}  {'Li 2022' if paper else ''}")
@@ -120,7 +127,8 @@ def _simulate(args) -> int:
         print(f"  {name:32s} {value:12.5g}  {paper.get(name, '')}")
     if args.out:
         path = store.write_h5(args.out, {"metrics": result.metrics, "cycles": result.cycles}, scenario.to_toml(sc.config),
-                              result.wall_s, attrs={"kind": "simulate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s})
+                              result.wall_s, attrs={"kind": "simulate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s,
+                                                    "seed": args.seed})
         print(f"wrote {path}")
     if args.plots:
         figure = plots.plot_cycles(result.cycles, Path(args.plots) / f"{sc.name}.png", title=f"{sc.name}, {sc.controller}")
@@ -154,7 +162,7 @@ def _demo(args) -> int:
     print(f"wrote {h5} and {figure}")
     print()
     print("geojax demo 2/2: the same year with QFFC station keeping (li2022-qffc, normal arm limits)")
-    args_sim = argparse.Namespace(scenario="li2022-qffc", controller=None, days=None, step=None,
+    args_sim = argparse.Namespace(scenario="li2022-qffc", controller=None, days=None, step=None, seed=0, h_rv=None, h_att=None,
                                   out=str(out / "li2022-qffc.h5"), plots=str(out))
     return _simulate(args_sim)
 

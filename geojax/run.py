@@ -139,11 +139,14 @@ class SimulationResult(NamedTuple):
     wall_s: float
 
 
-def simulate_scenario(scenario: Scenario) -> SimulationResult:
-    """Closed-loop QFFC run of a scenario (``controller.kind = "qffc"``): per-cycle records and metrics."""
+def simulate_scenario(scenario: Scenario, seed: int = 0) -> SimulationResult:
+    """Closed-loop QFFC run of a scenario (``controller.kind = "qffc"``): per-cycle records and metrics.
+
+    ``seed`` draws the orbit-determination and attitude errors (``[errors]``); same seed, same result.
+    """
     from geojax.control.predictor import reference
     from geojax.propulsion import arm_limits_deg
-    from geojax.simulate import LoopParams, rollout
+    from geojax.simulate import NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS, LoopParams, rollout
 
     if scenario.controller != "qffc":
         raise ValueError(f"controller.kind: 'geojax simulate' needs 'qffc', got {scenario.controller!r}")
@@ -156,14 +159,18 @@ def simulate_scenario(scenario: Scenario) -> SimulationResult:
     state = initial_state(scenario)
     fm = scenario.force_model
     ref = jax.jit(lambda s, e: reference(s, e, fm, step_s))(state, env)
-    t, st = cfg["thrusters"], cfg["station"]
+    t, st, err = cfg["thrusters"], cfg["station"], cfg["errors"]
     target = np.array([np.radians(st["lon_deg"]), 0.0, st["ex"], st["ey"], st["ix"], st["iy"]])
     params = LoopParams(
         arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"]),
         jnp.asarray(t["thrust_n"]), jnp.asarray(t["isp_s"]), jnp.asarray(t["min_burn_s"]), jnp.asarray(target),
+        sigma_r_m=jnp.asarray(err["h_rv"] * NOMINAL_3SIGMA_R_M / 3),
+        sigma_v_mps=jnp.asarray(err["h_rv"] * NOMINAL_3SIGMA_V_MPS / 3),
+        sigma_att_rad=jnp.asarray(np.radians(err["h_att"] * NOMINAL_3SIGMA_ATT_DEG / 3)),
     )
     cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
-    final, rec = jax.jit(lambda s, e, p: rollout(s, e, fm, step_s, ref, p))(state, cycles_env, params)
+    key = jax.random.key(seed)
+    final, rec = jax.jit(lambda s, e, p, k: rollout(s, e, fm, step_s, ref, p, k))(state, cycles_env, params, key)
     rec, final = jax.tree_util.tree_map(np.asarray, (rec, final))
     wall_s = time.perf_counter() - start
     return SimulationResult(_cycle_records(rec), _metrics(rec, final, target, n_cycles, wall_s), wall_s)

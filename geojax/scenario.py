@@ -105,6 +105,11 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True),
     },
     "controller": {"kind": Field(str, "none", choices=("none", "qffc"))},
+    # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors (0.3 m, 5e-5 m/s, 0.05 deg).
+    "errors": {
+        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True),
+        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True),
+    },
     "forces": {
         "j2": Field(bool, True),
         "c22_s22": Field(bool, False),

@@ -13,7 +13,14 @@ the station's nominal position (within +-0.05 deg of the satellite, a few
 seconds of eclipse timing).  A suspended burn that would run past the end of
 the cycle is cut there.
 
-Not yet modelled here (issue 3): orbit determination and attitude errors, the FOMPC.
+Errors (Li 2022, eqs. (47)-(48)) enter where a satellite gets them: the
+orbit-determination fix read at the start of a cycle carries Gaussian errors
+on every component of r and v (1-sigma ``sigma_r_m``, ``sigma_v_mps``), and
+the controller's whole estimate is built from that fix; each burn is flown
+with Gaussian yaw and pitch errors (``sigma_att_rad``) on the planned
+direction.  The key of cycle k is ``fold_in(key, k)``.
+
+Not yet modelled here (issue 3): the FOMPC.
 """
 
 from __future__ import annotations
@@ -27,7 +34,7 @@ from geojax.control import qffc
 from geojax.control.effects import R_SYNC_M
 from geojax.control.predictor import Reference, boundary_elements, estimate_mean, predict_next
 from geojax.dynamics import Thrust
-from geojax.elements import wrap_angle
+from geojax.elements import cartesian_to_mee, mee_to_cartesian, wrap_angle
 from geojax.forces import shadow_fraction
 from geojax.integrate import propagate_steps
 from geojax.propagate import MEE, CycleMeans, cycle_means
@@ -42,6 +49,15 @@ class LoopParams(NamedTuple):
     isp_s: jnp.ndarray
     min_burn_s: jnp.ndarray
     target: jnp.ndarray  # [6] (lon rad, drift rad/s, e_x, e_y, i_x, i_y), Li 2022 eq. (10)
+    sigma_r_m: jnp.ndarray = jnp.asarray(0.0)  # 1-sigma OD position error per axis
+    sigma_v_mps: jnp.ndarray = jnp.asarray(0.0)  # 1-sigma OD velocity error per axis
+    sigma_att_rad: jnp.ndarray = jnp.asarray(0.0)  # 1-sigma yaw and pitch error of a burn
+
+
+# Li 2022, eq. (48): nominal 3-sigma errors, scaled by H_rv and H_att.
+NOMINAL_3SIGMA_R_M = 0.3
+NOMINAL_3SIGMA_V_MPS = 5e-5
+NOMINAL_3SIGMA_ATT_DEG = 0.05
 
 
 class CycleRecord(NamedTuple):
@@ -51,8 +67,10 @@ class CycleRecord(NamedTuple):
     prediction: jnp.ndarray  # [6] predicted mean elements at the end of the cycle, without burns
 
 
-def rollout(state, env_grid, fm, step_s, ref: Reference, params: LoopParams):
+def rollout(state, env_grid, fm, step_s, ref: Reference, params: LoopParams, key=None):
     """Closed loop over the cycles of ``env_grid``; ``ref`` holds the reference at the same boundaries.
+
+    ``key`` (a ``jax.random`` key) draws the errors; without it they are zero.
 
     Returns (final state, CycleRecord with a leading cycle axis).
     """
@@ -63,18 +81,21 @@ def rollout(state, env_grid, fm, step_s, ref: Reference, params: LoopParams):
     def one_cycle(state, xs):
         k, env_steps, osc_ref, mean_ref, mean_ref_next = xs
         t0 = k * cycle_s
-        estimate = estimate_mean(boundary_elements(state.orbit, env_steps.earth_angle_rad[0, 0]), osc_ref, mean_ref, mu)
+        od_noise, att_noise = jax.random.normal(jax.random.fold_in(key, k), (2, 6))
+        measured = measured_mee(state.orbit, od_noise, params, mu)
+        estimate = estimate_mean(boundary_elements(measured, env_steps.earth_angle_rad[0, 0]), osc_ref, mean_ref, mu)
         prediction = predict_next(estimate, mean_ref, mean_ref_next, cycle_s)
         deviation = params.target - prediction  # eq. (28)
         deviation = deviation.at[0].set(wrap_angle(deviation[0]))
-        l_start = state.orbit[5]
+        l_start = measured[5]
         burns = qffc.solve(deviation, l_start, params.limits)
         # Burn mid-points at the right ascensions l_1, l_2: the orbit turns 2 pi per cycle.
         t_mid = jnp.mod(burns.l_rad - l_start, 2 * jnp.pi) / (2 * jnp.pi) * cycle_s
         burn_s = burns.v_mps * state.mass_kg / params.thrust_n  # eq. (13)
         burn_s = jnp.where((burn_s >= params.min_burn_s) & burns.feasible, burn_s, 0.0)
         start = jnp.clip(t_mid - burn_s / 2, 0.0, cycle_s - burn_s)
-        directions = delta_v_direction_rsw(burns.alpha_rad, burns.beta_rad)
+        attitude_error = params.sigma_att_rad * att_noise[:4].reshape(2, 2)
+        directions = delta_v_direction_rsw(burns.alpha_rad + attitude_error[0], burns.beta_rad + attitude_error[1])
         clock = sunlit_clock(sunlit_fraction(env_steps, params.target[0], fm), step_s)  # [n_steps + 1]
         clock_start = jnp.interp(start, jnp.arange(n_steps + 1) * step_s, clock)
 
@@ -92,9 +113,20 @@ def rollout(state, env_grid, fm, step_s, ref: Reference, params: LoopParams):
         fired_s = jnp.stack([jnp.minimum(burn_s[i], clock[-1] - clock_start[i]) for i in range(2)])
         return final, CycleRecord(means, burns, jnp.maximum(fired_s, 0.0), prediction)
 
+    key = jax.random.key(0) if key is None else key
     n_cycles = env_grid.earth_angle_rad.shape[0]
     xs = (jnp.arange(n_cycles), env_grid, ref.osc[:n_cycles], ref.mean[:n_cycles], ref.mean[1 : n_cycles + 1])
     return jax.lax.scan(one_cycle, state, xs)
+
+
+def measured_mee(mee, noise, params: LoopParams, mu):
+    """The orbit-determination fix: the true state with Gaussian errors on r and v (``noise`` [6] ~ N(0, 1))."""
+    r, v = mee_to_cartesian(mee, mu)
+    r = r + params.sigma_r_m * noise[:3]
+    v = v + params.sigma_v_mps * noise[3:]
+    fix = cartesian_to_mee(r, v, mu)
+    # Keep the true longitude continuous with the state's (cartesian_to_mee wraps it).
+    return fix.at[5].set(mee[5] + wrap_angle(fix[5] - mee[5]))
 
 
 def sunlit_fraction(env_steps, station_lon_rad, fm):
