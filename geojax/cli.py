@@ -126,13 +126,17 @@ def _simulate(args) -> int:
     for name, value in result.metrics.items():
         print(f"  {name:32s} {value:12.5g}  {paper.get(name, '')}")
     if args.out:
-        path = store.write_h5(args.out, {"metrics": result.metrics, "cycles": result.cycles}, scenario.to_toml(sc.config),
+        groups = {"metrics": result.metrics, "cycles": result.cycles, "reference": result.reference, "target": result.target}
+        path = store.write_h5(args.out, groups, scenario.to_toml(sc.config),
                               result.wall_s, attrs={"kind": "simulate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s,
                                                     "seed": args.seed})
         print(f"wrote {path}")
     if args.plots:
-        figure = plots.plot_cycles(result.cycles, Path(args.plots) / f"{sc.name}.png", title=f"{sc.name}, {sc.controller}")
-        print(f"wrote {figure}")
+        title = f"{sc.name}, {sc.controller}"
+        figures = [plots.plot_cycles(result.cycles, Path(args.plots) / f"{sc.name}.png", title=title),
+                   plots.plot_station_keeping(result.cycles, result.reference, result.target,
+                                              Path(args.plots) / f"{sc.name}-station-keeping.png", title=title)]
+        print("wrote " + " and ".join(map(str, figures)))
     return 0
 
 
@@ -180,8 +184,12 @@ def _plot(args) -> int:
     if "cycles" not in groups:
         raise ValueError(f"file {str(path)!r}: no /cycles group to plot")
     out = Path(args.out) if args.out else path.parent
-    figure = plots.plot_cycles(groups["cycles"], out / f"{path.stem}.png", title=str(attrs.get("scenario", path.stem)))
-    print(f"wrote {figure}")
+    title = str(attrs.get("scenario", path.stem))
+    figures = [plots.plot_cycles(groups["cycles"], out / f"{path.stem}.png", title=title)]
+    if {"reference", "target"} <= set(groups):
+        figures.append(plots.plot_station_keeping(groups["cycles"], groups["reference"], groups["target"],
+                                                  out / f"{path.stem}-station-keeping.png", title=title))
+    print("wrote " + " and ".join(map(str, figures)))
     return 0
 
 

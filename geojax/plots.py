@@ -44,3 +44,43 @@ def plot_cycles(cycles: dict[str, np.ndarray], path: str | Path, title: str = ""
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def plot_station_keeping(cycles, reference, target, path: str | Path, title: str = "") -> Path:
+    """Li 2022 Figs. 4-8 from a closed-loop run: longitude history, the (de_x, de_y) and
+    (di_x, di_y) planes with the uncontrolled reference dashed, Delta-V_NS per cycle
+    (eq. (45)) and the mean pitch angle (eq. (46)).
+
+    ``cycles``, ``reference`` and ``target`` are the /cycles, /reference and /target
+    groups of ``geojax simulate --out``.
+    """
+    days = np.asarray(cycles["t_s"]) / 86400.0
+    ref_days = np.asarray(reference["t_s"]) / 86400.0
+    fig, axes = plt.subplots(2, 3, figsize=(14, 8), constrained_layout=True)
+    ax = axes.ravel()
+    ax[0].plot(days, np.asarray(cycles["lon_deg"]) - target["lon_deg"], label="controlled")
+    ax[0].set(xlabel="days", ylabel="mean δλ (deg)")
+    ax[0].legend()
+    for a, (x, y, label) in zip(ax[1:3], [("ex", "ey", "e"), ("ix", "iy", "i")]):
+        a.plot(np.asarray(reference[x]) - target[x], np.asarray(reference[y]) - target[y], "r--", label="uncontrolled")
+        a.plot(np.asarray(cycles[x]) - target[x], np.asarray(cycles[y]) - target[y], label="controlled")
+        a.set(xlabel=f"δ{label}_x", ylabel=f"δ{label}_y")
+        a.legend()
+    ax[3].plot(ref_days, np.asarray(reference["lon_deg"]) - target["lon_deg"], "r--")
+    ax[3].set(xlabel="days", ylabel="uncontrolled mean δλ (deg)")
+    v_total = np.asarray(cycles["v1_mps"]) + np.asarray(cycles["v2_mps"])
+    dv_ns = np.asarray(cycles["dv_ns_mps"])
+    ax[4].plot(days, dv_ns)
+    ax[4].set(xlabel="days", ylabel="ΔV_NS per cycle (m/s), eq. (45)")
+    mean_beta = np.degrees(np.arcsin(np.clip(dv_ns / np.where(v_total > 0, v_total, 1.0), 0.0, 1.0)))
+    ax[5].plot(days[v_total > 0], mean_beta[v_total > 0])
+    ax[5].set(xlabel="days", ylabel="mean pitch β̄ (deg), eq. (46)")
+    for a in ax:
+        a.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -136,6 +136,8 @@ def drift_summary(cycles: CycleMeans, span_days: float | None = None) -> DriftSu
 class SimulationResult(NamedTuple):
     cycles: dict[str, np.ndarray]  # the /cycles datasets
     metrics: dict[str, float]  # the /metrics datasets
+    reference: dict[str, np.ndarray]  # the /reference datasets: uncontrolled mean elements at cycle boundaries
+    target: dict[str, float]  # the station's targets (/target)
     wall_s: float
 
 
@@ -173,7 +175,11 @@ def simulate_scenario(scenario: Scenario, seed: int = 0) -> SimulationResult:
     final, rec = jax.jit(lambda s, e, p, k: rollout(s, e, fm, step_s, ref, p, k))(state, cycles_env, params, key)
     rec, final = jax.tree_util.tree_map(np.asarray, (rec, final))
     wall_s = time.perf_counter() - start
-    return SimulationResult(_cycle_records(rec), _metrics(rec, final, target, n_cycles, wall_s), wall_s)
+    ref_mean = np.asarray(ref.mean)
+    uncontrolled = {"t_s": np.arange(n_cycles + 1) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref_mean[:, 0]),
+                    "ex": ref_mean[:, 3], "ey": ref_mean[:, 4], "ix": ref_mean[:, 5], "iy": ref_mean[:, 6]}
+    goals = dict(zip(("lon_deg", "drift_deg_per_day", "ex", "ey", "ix", "iy"), [float(st["lon_deg"]), 0.0, *map(float, target[2:])]))
+    return SimulationResult(_cycle_records(rec), _metrics(rec, final, target, n_cycles, wall_s), uncontrolled, goals, wall_s)
 
 
 def _cycle_records(rec) -> dict[str, np.ndarray]:

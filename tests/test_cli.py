@@ -64,6 +64,9 @@ def test_simulate_writes_metrics_and_cycles(tmp_path, capsys):
         # Eq. (1), normal limits: thruster 1 pitch in [0, 70] deg where it fires.
         fired = f["cycles/v1_mps"][()] > 0
         assert np.all((f["cycles/beta1_deg"][()][fired] >= 0) & (f["cycles/beta1_deg"][()][fired] <= 70 + 1e-9))
+        assert f["reference/ix"].shape == (6,) and f["target/iy"][()] == 3e-5
+    assert cli.main(["plot", str(out), "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "sim-station-keeping.png").stat().st_size > 10_000
 
 
 def test_simulate_refuses_a_scenario_without_controller(capsys):
