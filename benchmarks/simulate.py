@@ -26,11 +26,8 @@ import numpy as np  # noqa: E402
 
 from geojax import constants as c  # noqa: E402
 from geojax import run, scenario  # noqa: E402
-from geojax.control.predictor import reference  # noqa: E402
 from geojax.parallel import replicate, shard_batch  # noqa: E402
-from geojax.propagate import environment_grid, steps_per_cycle  # noqa: E402
-from geojax.propulsion import PRESETS_DEG, arm_limits_deg  # noqa: E402
-from geojax.simulate import NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS, LoopParams, rollout  # noqa: E402
+from geojax.simulate import rollout  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 PAPER_S_PER_ORBIT = 0.09
@@ -38,24 +35,13 @@ PAPER_S_PER_ORBIT = 0.09
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--days", type=int, default=365)
+    parser.add_argument("--days", type=float, default=365.25)
     parser.add_argument("--batches", type=int, nargs="+", default=[1, 256])
     args = parser.parse_args()
-    sc = scenario.load("li2022-qffc")
-    n = steps_per_cycle(sc.step_s)
-    h = c.SIDEREAL_DAY_S / n
-    env = environment_grid(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s, h, args.days + 1, n)
-    state0 = run.initial_state(sc)
-    fm = sc.force_model
-    ref = jax.jit(lambda s, e: reference(s, e, fm, h))(state0, env)
-    cycles = replicate(jax.tree_util.tree_map(lambda x: x[: args.days], env))
-    ref = replicate(ref)
-    params = LoopParams(
-        arm_limits_deg(*PRESETS_DEG["normal"]), jnp.asarray(0.5), jnp.asarray(2250.0), jnp.asarray(30.0),
-        jnp.array([np.radians(96.0), 0.0, 0.0, 1e-4, 0.0, 3e-5]),
-        jnp.asarray(NOMINAL_3SIGMA_R_M / 3), jnp.asarray(NOMINAL_3SIGMA_V_MPS / 3),
-        jnp.asarray(np.radians(NOMINAL_3SIGMA_ATT_DEG / 3)),
-    )
+    sc = scenario.load("li2022-qffc", {"duration.days": args.days, "errors.h_rv": 1.0, "errors.h_att": 1.0})
+    loop = run.closed_loop_setup(sc)
+    fm, h, state0 = sc.force_model, loop.step_s, loop.state
+    cycles, ref, params = replicate(loop.cycles_env), replicate(loop.reference), loop.params
     batched = jax.jit(jax.vmap(lambda s, k: rollout(s, cycles, fm, h, ref, params, k)))
     rows = []
     for batch in args.batches:
@@ -69,16 +55,16 @@ def main() -> None:
         t = time.perf_counter()
         final, rec = jax.block_until_ready(compiled(states, keys))
         run_s = time.perf_counter() - t
-        dv_year = np.asarray(final.dv_mps) * 365.25 * 86400 / (args.days * c.SIDEREAL_DAY_S)
-        per_orbit = run_s / (args.days * batch)
+        dv_year = np.asarray(final.dv_mps) * 365.25 * 86400 / (loop.n_cycles * c.SIDEREAL_DAY_S)
+        per_orbit = run_s / (loop.n_cycles * batch)
         rows.append({"batch": batch, "compile_s": compile_s, "run_s": run_s, "s_per_orbit_per_sample": per_orbit,
                      "speedup_vs_paper_qffc": PAPER_S_PER_ORBIT / per_orbit,
                      "dv_per_year_mps_mean": float(dv_year.mean()), "dv_per_year_mps_std": float(dv_year.std())})
         print(rows[-1])
     RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "simulate.json").write_text(json.dumps({"days": args.days, "devices": jax.device_count(), "rows": rows}, indent=2))
+    (RESULTS / "simulate.json").write_text(json.dumps({"cycles": loop.n_cycles, "devices": jax.device_count(), "rows": rows}, indent=2))
     lines = [
-        f"# QFFC closed loop, li2022-qffc, {args.days} cycles, H_rv = H_att = 1",
+        f"# QFFC closed loop, li2022-qffc, {loop.n_cycles} cycles, H_rv = H_att = 1",
         "",
         f"`python benchmarks/simulate.py` on {os.cpu_count()} CPU cores ({jax.device_count()} XLA devices). "
         f"Li 2022: {PAPER_S_PER_ORBIT} s per orbit (QFFC, Fortran, i7-9700K, one sample).",

@@ -35,15 +35,7 @@ def plot_cycles(cycles: dict[str, np.ndarray], path: str | Path, title: str = ""
     ax[4].legend()
     ax[5].plot(days, np.degrees(2 * np.arctan(np.hypot(cycles["ix"], cycles["iy"]))))
     ax[5].set(xlabel="days", ylabel="mean inclination (deg)")
-    for a in ax:
-        a.grid(alpha=0.3)
-    if title:
-        fig.suptitle(title)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, ax, title, path)
 
 
 def plot_station_keeping(cycles, reference, target, path: str | Path, title: str = "") -> Path:
@@ -75,7 +67,11 @@ def plot_station_keeping(cycles, reference, target, path: str | Path, title: str
     mean_beta = np.degrees(np.arcsin(np.clip(dv_ns / np.where(v_total > 0, v_total, 1.0), 0.0, 1.0)))
     ax[5].plot(days[v_total > 0], mean_beta[v_total > 0])
     ax[5].set(xlabel="days", ylabel="mean pitch β̄ (deg), eq. (46)")
-    for a in ax:
+    return _save(fig, ax, title, path)
+
+
+def _save(fig, axes, title: str, path: str | Path) -> Path:
+    for a in axes:
         a.grid(alpha=0.3)
     if title:
         fig.suptitle(title)

@@ -141,45 +141,68 @@ class SimulationResult(NamedTuple):
     wall_s: float
 
 
-def simulate_scenario(scenario: Scenario, seed: int = 0) -> SimulationResult:
-    """Closed-loop QFFC run of a scenario (``controller.kind = "qffc"``): per-cycle records and metrics.
+class ClosedLoop(NamedTuple):
+    """Everything a closed-loop rollout of a scenario needs, built once and shared by a batch."""
 
-    ``seed`` draws the orbit-determination and attitude errors (``[errors]``); same seed, same result.
-    """
+    state: SpacecraftState
+    cycles_env: object  # Environment leaves [n_cycles, n_steps, 3, ...]
+    reference: object  # control.predictor.Reference at the n_cycles + 1 boundaries
+    params: object  # simulate.LoopParams
+    step_s: float
+    n_cycles: int
+
+
+def closed_loop_setup(scenario: Scenario) -> ClosedLoop:
+    """Environment grid, uncontrolled reference and loop parameters of a QFFC scenario."""
     from geojax.control.predictor import reference
     from geojax.propulsion import arm_limits_deg
-    from geojax.simulate import NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS, LoopParams, rollout
+    from geojax.simulate import NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS, LoopParams
 
     if scenario.controller != "qffc":
         raise ValueError(f"controller.kind: 'geojax simulate' needs 'qffc', got {scenario.controller!r}")
-    start = time.perf_counter()
     cfg = scenario.config
     n_steps = steps_per_cycle(scenario.step_s)
     step_s = SIDEREAL_DAY_S / n_steps
     n_cycles = max(1, round(scenario.days * SECONDS_PER_DAY / SIDEREAL_DAY_S))
     env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, n_cycles + 1, n_steps)
     state = initial_state(scenario)
-    fm = scenario.force_model
-    ref = jax.jit(lambda s, e: reference(s, e, fm, step_s))(state, env)
+    ref = jax.jit(lambda s, e: reference(s, e, scenario.force_model, step_s))(state, env)
     t, st, err = cfg["thrusters"], cfg["station"], cfg["errors"]
-    target = np.array([np.radians(st["lon_deg"]), 0.0, st["ex"], st["ey"], st["ix"], st["iy"]])
     params = LoopParams(
         arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"]),
-        jnp.asarray(t["thrust_n"]), jnp.asarray(t["isp_s"]), jnp.asarray(t["min_burn_s"]), jnp.asarray(target),
+        jnp.asarray(t["thrust_n"]), jnp.asarray(t["isp_s"]), jnp.asarray(t["min_burn_s"]),
+        jnp.array([np.radians(st["lon_deg"]), 0.0, st["ex"], st["ey"], st["ix"], st["iy"]]),
         sigma_r_m=jnp.asarray(err["h_rv"] * NOMINAL_3SIGMA_R_M / 3),
         sigma_v_mps=jnp.asarray(err["h_rv"] * NOMINAL_3SIGMA_V_MPS / 3),
         sigma_att_rad=jnp.asarray(np.radians(err["h_att"] * NOMINAL_3SIGMA_ATT_DEG / 3)),
     )
     cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
-    key = jax.random.key(seed)
-    final, rec = jax.jit(lambda s, e, p, k: rollout(s, e, fm, step_s, ref, p, k))(state, cycles_env, params, key)
+    return ClosedLoop(state, cycles_env, ref, params, step_s, n_cycles)
+
+
+def simulate_scenario(scenario: Scenario, seed: int = 0) -> SimulationResult:
+    """Closed-loop QFFC run of a scenario (``controller.kind = "qffc"``): per-cycle records and metrics.
+
+    ``seed`` draws the orbit-determination and attitude errors (``[errors]``); same seed, same result.
+    """
+    from geojax.simulate import rollout
+
+    start = time.perf_counter()
+    loop = closed_loop_setup(scenario)
+    fm = scenario.force_model
+    final, rec = jax.jit(lambda s, e, p, k: rollout(s, e, fm, loop.step_s, loop.reference, p, k))(
+        loop.state, loop.cycles_env, loop.params, jax.random.key(seed)
+    )
     rec, final = jax.tree_util.tree_map(np.asarray, (rec, final))
     wall_s = time.perf_counter() - start
-    ref_mean = np.asarray(ref.mean)
-    uncontrolled = {"t_s": np.arange(n_cycles + 1) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref_mean[:, 0]),
+    target = np.asarray(loop.params.target)
+    ref_mean = np.asarray(loop.reference.mean)
+    uncontrolled = {"t_s": np.arange(loop.n_cycles + 1) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref_mean[:, 0]),
                     "ex": ref_mean[:, 3], "ey": ref_mean[:, 4], "ix": ref_mean[:, 5], "iy": ref_mean[:, 6]}
-    goals = dict(zip(("lon_deg", "drift_deg_per_day", "ex", "ey", "ix", "iy"), [float(st["lon_deg"]), 0.0, *map(float, target[2:])]))
-    return SimulationResult(_cycle_records(rec), _metrics(rec, final, target, n_cycles, wall_s), uncontrolled, goals, wall_s)
+    goals = dict(zip(("lon_deg", "drift_deg_per_day", "ex", "ey", "ix", "iy"),
+                     [float(np.degrees(target[0])), 0.0, *map(float, target[2:])]))
+    metrics = _metrics(rec, final, target, loop.n_cycles, wall_s)
+    return SimulationResult(_cycle_records(rec), metrics, uncontrolled, goals, wall_s)
 
 
 def _cycle_records(rec) -> dict[str, np.ndarray]:
