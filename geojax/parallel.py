@@ -2,23 +2,16 @@
 
 On a CPU, XLA runs one device on about one core.  To use every core, start
 Python with ``XLA_FLAGS=--xla_force_host_platform_device_count=N`` (N = cores)
-before JAX is imported; ``host_device_flag`` gives the flag.  A batch whose
+before JAX is imported.  A batch whose
 leading axis is sharded over the devices then runs on all of them with the
 same compiled program; results do not depend on the device count.
 """
 
 from __future__ import annotations
 
-import os
-
 import jax
 import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
-
-
-def host_device_flag(count: int | None = None) -> str:
-    """The XLA flag that splits the CPU into ``count`` devices (default: one per core)."""
-    return f"--xla_force_host_platform_device_count={count or os.cpu_count() or 1}"
 
 
 def batch_mesh() -> Mesh:
