@@ -2,7 +2,7 @@
 
     geojax demo [--out DIR]
     geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5]
-    geojax simulate SCENARIO [--controller qffc] [--days D] [--out FILE.h5] [--plots DIR]
+    geojax simulate SCENARIO [--controller qffc|fompc] [--horizon N] [--days D] [--seed S] [--out FILE.h5] [--plots DIR]
     geojax plot FILE.h5 [--out DIR]
     geojax scenarios
 
@@ -54,9 +54,10 @@ def _parser() -> argparse.ArgumentParser:
     prop.add_argument("--quiet", action="store_true", help="no progress bar")
     prop.set_defaults(func=_propagate)
 
-    sim = sub.add_parser("simulate", help="closed-loop station keeping (QFFC, Li 2022); summary, metrics, HDF5")
-    sim.add_argument("scenario", help="a scenario with a [controller] table, e.g. li2022-qffc, or a .toml path")
-    sim.add_argument("--controller", choices=["qffc"], help="override controller.kind (the FOMPC is not in yet)")
+    sim = sub.add_parser("simulate", help="closed-loop station keeping (QFFC or FOMPC, Li 2022); summary, metrics, HDF5")
+    sim.add_argument("scenario", help="a scenario with a [controller] table, e.g. li2022-qffc, li2022-fompc, or a .toml path")
+    sim.add_argument("--controller", choices=["qffc", "fompc"], help="override controller.kind")
+    sim.add_argument("--horizon", type=int, help="FOMPC prediction horizon N in cycles, 1-10 (default: the scenario's)")
     sim.add_argument("--days", type=float, help="duration in days (default: the scenario's)")
     sim.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
     sim.add_argument("--seed", type=int, default=0, help="seed of the orbit-determination and attitude errors (default 0)")
@@ -104,8 +105,13 @@ def _propagate(args) -> int:
     return 0
 
 
-PAPER_QFFC = {"dv_per_year_mps": "60.2", "burns_total": "728", "burns_per_thruster_per_orbit": "0.997", "max_abs_dlon_deg": "~0.013",
-              "max_abs_de": "~1.1e-4"}
+# Li 2022, Sec. 5.1 and Table 2.
+PAPER = {
+    "qffc": {"dv_per_year_mps": "60.2", "burns_total": "728", "burns_per_thruster_per_orbit": "0.997",
+             "max_abs_dlon_deg": "~0.013", "max_abs_de": "~1.1e-4", "cpu_s_per_orbit": "0.09"},
+    "fompc": {"dv_per_year_mps": "54.2", "burns_total": "721", "burns_per_thruster_per_orbit": "0.988",
+              "max_abs_dlon_deg": "~0.013", "max_abs_de": "~1.1e-4", "cpu_s_per_orbit": "57.4"},
+}
 
 
 def _simulate(args) -> int:
@@ -114,14 +120,17 @@ def _simulate(args) -> int:
     overrides = _overrides(args)
     if args.controller:
         overrides["controller.kind"] = args.controller
+    if args.horizon is not None:
+        overrides["controller.horizon"] = args.horizon
     if args.h_rv is not None:
         overrides["errors.h_rv"] = args.h_rv
     if args.h_att is not None:
         overrides["errors.h_att"] = args.h_att
     sc = scenario.load(args.scenario, overrides)
+    print(f"{sc.name}: {sc.controller.upper()} for {sc.days:g} days (compiling, then running)...", flush=True)
     result = run.simulate_scenario(sc, args.seed)
     print(f"{sc.name}: {sc.controller.upper()}, {len(result.cycles['t_s'])} cycles, {result.wall_s:.1f} s wall")
-    paper = PAPER_QFFC if sc.name.startswith("li2022") else {}
+    paper = PAPER.get(sc.controller, {}) if sc.name.startswith("li2022") else {}
     print(f"  {'metric':32s} {'geojax':>12s}  {'Li 2022' if paper else ''}")
     for name, value in result.metrics.items():
         print(f"  {name:32s} {value:12.5g}  {paper.get(name, '')}")
@@ -166,7 +175,7 @@ def _demo(args) -> int:
     print(f"wrote {h5} and {figure}")
     print()
     print("geojax demo 2/2: the same year with QFFC station keeping (li2022-qffc, normal arm limits)")
-    args_sim = argparse.Namespace(scenario="li2022-qffc", controller=None, days=None, step=None, seed=0, h_rv=None, h_att=None,
+    args_sim = argparse.Namespace(scenario="li2022-qffc", controller=None, horizon=None, days=None, step=None, seed=0, h_rv=None, h_att=None,
                                   out=str(out / "li2022-qffc.h5"), plots=str(out))
     return _simulate(args_sim)
 

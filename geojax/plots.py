@@ -39,9 +39,10 @@ def plot_cycles(cycles: dict[str, np.ndarray], path: str | Path, title: str = ""
 
 
 def plot_station_keeping(cycles, reference, target, path: str | Path, title: str = "") -> Path:
-    """Li 2022 Figs. 4-8 from a closed-loop run: longitude history, the (de_x, de_y) and
-    (di_x, di_y) planes with the uncontrolled reference dashed, Delta-V_NS per cycle
-    (eq. (45)) and the mean pitch angle (eq. (46)).
+    """Li 2022 Figs. 4-8 from a closed-loop run: longitude history; the (d lambda, d phi),
+    (de_x, de_y) and (di_x, di_y) planes with the uncontrolled reference dashed (its
+    first 30 days in the ground-track plane); Delta-V_NS per cycle (eq. (45)) and
+    the mean pitch angle (eq. (46)).
 
     ``cycles``, ``reference`` and ``target`` are the /cycles, /reference and /target
     groups of ``geojax simulate --out``.
@@ -57,9 +58,15 @@ def plot_station_keeping(cycles, reference, target, path: str | Path, title: str
         a.plot(np.asarray(reference[x]) - target[x], np.asarray(reference[y]) - target[y], "r--", label="uncontrolled")
         a.plot(np.asarray(cycles[x]) - target[x], np.asarray(cycles[y]) - target[y], label="controlled")
         a.set(xlabel=f"δ{label}_x", ylabel=f"δ{label}_y")
+        a.ticklabel_format(style="sci", scilimits=(0, 0))
         a.legend()
-    ax[3].plot(ref_days, np.asarray(reference["lon_deg"]) - target["lon_deg"], "r--")
-    ax[3].set(xlabel="days", ylabel="uncontrolled mean δλ (deg)")
+    month = ref_days <= 30.0
+    ref_lon, ref_lat = ground_track_deg(*(np.asarray(reference[k])[month] for k in ("lon_deg", "ex", "ey", "ix", "iy")))
+    lon, lat = ground_track_deg(*(np.asarray(cycles[k]) for k in ("lon_deg", "ex", "ey", "ix", "iy")))
+    ax[3].plot(ref_lon - target["lon_deg"], ref_lat, "r--", lw=0.6, label="uncontrolled, 30 days")
+    ax[3].plot(lon - target["lon_deg"], lat, lw=0.6, label="controlled")
+    ax[3].set(xlabel="δλ (deg)", ylabel="δφ (deg)", xlim=_padded(lon - target["lon_deg"]), ylim=_padded(lat))
+    ax[3].legend()
     v_total = np.asarray(cycles["v1_mps"]) + np.asarray(cycles["v2_mps"])
     dv_ns = np.asarray(cycles["dv_ns_mps"])
     ax[4].plot(days, dv_ns)
@@ -68,6 +75,32 @@ def plot_station_keeping(cycles, reference, target, path: str | Path, title: str
     ax[5].plot(days[v_total > 0], mean_beta[v_total > 0])
     ax[5].set(xlabel="days", ylabel="mean pitch β̄ (deg), eq. (46)")
     return _save(fig, ax, title, path)
+
+
+def ground_track_deg(lon_deg, ex, ey, ix, iy, samples_per_cycle: int = 48):
+    """Longitude and latitude (deg) over each cycle, rebuilt from its mean elements [n].
+
+    First order in e and i: the true minus the mean longitude is 2 (f sin L - g cos L)
+    and the latitude i sin(L - Omega) = 2 (h sin L - k cos L) for MEE (f, g, h, k),
+    with L the true longitude running once round per cycle.  This is the daily
+    libration of Li 2022 Fig. 4 drawn from the stored cycle means.
+    """
+    turn = np.linspace(0.0, 2 * np.pi, samples_per_cycle, endpoint=False)[None, :]
+    lon = np.degrees(np.unwrap(np.radians(np.asarray(lon_deg))))[:, None]
+    d_lon, lat = libration_rad(turn, *(np.asarray(x)[:, None] for x in (ex, ey, ix, iy)))
+    return (lon + np.degrees(d_lon)).ravel(), np.degrees(lat).ravel()
+
+
+def libration_rad(true_lon_rad, f, g, h, k):
+    """(true minus mean longitude, latitude) at true longitude L, first order in MEE (f, g, h, k)."""
+    s, c = np.sin(true_lon_rad), np.cos(true_lon_rad)
+    return 2 * (f * s - g * c), 2 * (h * s - k * c)
+
+
+def _padded(values, factor: float = 1.5):
+    centre, half = 0.5 * (np.max(values) + np.min(values)), 0.5 * (np.max(values) - np.min(values))
+    half = max(half * factor, 1e-6)
+    return centre - half, centre + half
 
 
 def _save(fig, axes, title: str, path: str | Path) -> Path:

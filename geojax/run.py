@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from typing import NamedTuple
@@ -146,28 +147,38 @@ class ClosedLoop(NamedTuple):
 
     state: SpacecraftState
     cycles_env: object  # Environment leaves [n_cycles, n_steps, 3, ...]
-    reference: object  # control.predictor.Reference at the n_cycles + 1 boundaries
+    reference: object  # control.predictor.Reference at n_cycles + REFERENCE_PAD_CYCLES + 1 boundaries
     params: object  # simulate.LoopParams
     step_s: float
     n_cycles: int
+    controller: str  # "qffc" or "fompc"
+    annealing: object  # control.fompc.Annealing (static)
+
+
+# The uncontrolled reference runs this many cycles past the end, for the FOMPC's horizon (N <= 10)
+# and the V_DT estimate's look at the next cycle.
+REFERENCE_PAD_CYCLES = 12
 
 
 def closed_loop_setup(scenario: Scenario) -> ClosedLoop:
-    """Environment grid, uncontrolled reference and loop parameters of a QFFC scenario."""
-    from geojax.control.predictor import reference
+    """Environment grid, uncontrolled reference and loop parameters of a QFFC or FOMPC scenario."""
+    from geojax.control.fompc import Annealing, MpcParams
     from geojax.propulsion import arm_limits_deg
-    from geojax.simulate import NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS, LoopParams
+    from geojax.simulate import CONTROLLERS, NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS, LoopParams
 
-    if scenario.controller != "qffc":
-        raise ValueError(f"controller.kind: 'geojax simulate' needs 'qffc', got {scenario.controller!r}")
+    if scenario.controller not in CONTROLLERS:
+        raise ValueError(
+            f"controller.kind: 'geojax simulate' needs one of {', '.join(CONTROLLERS)}, got {scenario.controller!r}"
+        )
     cfg = scenario.config
     n_steps = steps_per_cycle(scenario.step_s)
     step_s = SIDEREAL_DAY_S / n_steps
     n_cycles = max(1, round(scenario.days * SECONDS_PER_DAY / SIDEREAL_DAY_S))
-    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, n_cycles + 1, n_steps)
+    n_env = n_cycles + REFERENCE_PAD_CYCLES
+    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, n_env, n_steps)
     state = initial_state(scenario)
-    ref = jax.jit(lambda s, e: reference(s, e, scenario.force_model, step_s))(state, env)
-    t, st, err = cfg["thrusters"], cfg["station"], cfg["errors"]
+    ref = _reference(state, env, scenario.force_model, step_s)
+    t, st, err, ctl = cfg["thrusters"], cfg["station"], cfg["errors"], cfg["controller"]
     params = LoopParams(
         arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"]),
         jnp.asarray(t["thrust_n"]), jnp.asarray(t["isp_s"]), jnp.asarray(t["min_burn_s"]),
@@ -175,28 +186,48 @@ def closed_loop_setup(scenario: Scenario) -> ClosedLoop:
         sigma_r_m=jnp.asarray(err["h_rv"] * NOMINAL_3SIGMA_R_M / 3),
         sigma_v_mps=jnp.asarray(err["h_rv"] * NOMINAL_3SIGMA_V_MPS / 3),
         sigma_att_rad=jnp.asarray(np.radians(err["h_att"] * NOMINAL_3SIGMA_ATT_DEG / 3)),
+        vdt_estimate=jnp.asarray(float(ctl["vdt_estimate"])),
+        mpc=MpcParams(jnp.asarray(ctl["horizon"]), jnp.asarray(float(ctl["di_max"])), jnp.asarray(float(ctl["penalty"]))),
     )
+    annealing = Annealing(chains=ctl["chains"], iterations=ctl["iterations"])
     cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
-    return ClosedLoop(state, cycles_env, ref, params, step_s, n_cycles)
+    return ClosedLoop(state, cycles_env, ref, params, step_s, n_cycles, scenario.controller, annealing)
+
+
+@functools.partial(jax.jit, static_argnames=("step_s",))
+def _reference(state, env, fm, step_s):
+    from geojax.control.predictor import reference
+
+    return reference(state, env, fm, step_s)
+
+
+@functools.partial(jax.jit, static_argnames=("step_s", "controller", "annealing"))
+def closed_loop_rollout(loop_state, env, fm, ref, params, key, step_s, controller, annealing):
+    """``simulate.rollout``, compiled once per (shapes, step, controller, annealing) and reused."""
+    from geojax.simulate import rollout
+
+    return rollout(loop_state, env, fm, step_s, ref, params, key, controller, annealing)
+
+
+def run_closed_loop(loop: ClosedLoop, fm, key):
+    """One rollout of a set-up closed loop; (final state, CycleRecord)."""
+    return closed_loop_rollout(loop.state, loop.cycles_env, fm, loop.reference, loop.params, key,
+                               step_s=loop.step_s, controller=loop.controller, annealing=loop.annealing)
 
 
 def simulate_scenario(scenario: Scenario, seed: int = 0) -> SimulationResult:
-    """Closed-loop QFFC run of a scenario (``controller.kind = "qffc"``): per-cycle records and metrics.
+    """Closed-loop run of a scenario (``controller.kind`` "qffc" or "fompc"): per-cycle records and metrics.
 
-    ``seed`` draws the orbit-determination and attitude errors (``[errors]``); same seed, same result.
+    ``seed`` draws the orbit-determination and attitude errors (``[errors]``)
+    and the FOMPC's annealing; same seed, same result.
     """
-    from geojax.simulate import rollout
-
     start = time.perf_counter()
     loop = closed_loop_setup(scenario)
-    fm = scenario.force_model
-    final, rec = jax.jit(lambda s, e, p, k: rollout(s, e, fm, loop.step_s, loop.reference, p, k))(
-        loop.state, loop.cycles_env, loop.params, jax.random.key(seed)
-    )
+    final, rec = run_closed_loop(loop, scenario.force_model, jax.random.key(seed))
     rec, final = jax.tree_util.tree_map(np.asarray, (rec, final))
     wall_s = time.perf_counter() - start
     target = np.asarray(loop.params.target)
-    ref_mean = np.asarray(loop.reference.mean)
+    ref_mean = np.asarray(loop.reference.mean)[: loop.n_cycles + 1]
     uncontrolled = {"t_s": np.arange(loop.n_cycles + 1) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref_mean[:, 0]),
                     "ex": ref_mean[:, 3], "ey": ref_mean[:, 4], "ix": ref_mean[:, 5], "iy": ref_mean[:, 6]}
     goals = dict(zip(("lon_deg", "drift_deg_per_day", "ex", "ey", "ix", "iy"),
@@ -222,6 +253,7 @@ def _cycle_records(rec) -> dict[str, np.ndarray]:
         "dv_ns_mps": np.sum(np.where(fired, np.abs(dv[..., 2]), 0.0), axis=1),
         "burn1_s": rec.burn_s[:, 0],
         "burn2_s": rec.burn_s[:, 1],
+        "ns_fraction": rec.fraction,
         "status": np.where(rec.burns.feasible, 0, 1).astype(np.int8),
     })
     return table

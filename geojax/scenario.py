@@ -104,7 +104,18 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "alpha_min_deg": Field(_NUMBER, 30.0),
         "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True),
     },
-    "controller": {"kind": Field(str, "none", choices=("none", "qffc"))},
+    "controller": {
+        "kind": Field(str, "none", choices=("none", "qffc", "fompc")),
+        # Start V_DT from the estimate of Li 2022, eqs. (37)-(39), instead of the drift target.
+        "vdt_estimate": Field(bool, False),
+        # FOMPC (Li 2022, eqs. (40)-(42)): horizon N <= 10 cycles, Delta i_max in MEE (h, k), penalty P in
+        # (m/s)^2 per unit (h, k)^2; simulated annealing with `chains` chains of `iterations` moves.
+        "horizon": Field(int, 6, lower=1, upper=11, lower_inclusive=True),
+        "di_max": Field(_NUMBER, 8e-5, lower=0.0),
+        "penalty": Field(_NUMBER, 1e8, lower=0.0),
+        "chains": Field(int, 8, lower=1, upper=1025, lower_inclusive=True),
+        "iterations": Field(int, 64, lower=0, upper=100001, lower_inclusive=True),
+    },
     # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors (0.3 m, 5e-5 m/s, 0.05 deg).
     "errors": {
         "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True),

@@ -1,4 +1,4 @@
-"""Quick feedforward controller, the per-cycle solve (Li 2022, Sec. 4.2, eqs. (28)-(35)).
+"""Quick feedforward controller, the per-cycle solve (Li 2022, Sec. 4.2, eqs. (28)-(39)).
 
 Given the predictive deviation dx = (d lambda, d lambda_dot, d e_x, d e_y, d i_x, d i_y)
 of eq. (28) (target minus predicted, lambda in rad, lambda_dot in rad/s, e and i
@@ -14,14 +14,30 @@ V_N = v_n1 - v_n2, the rows of eq. (29) read (compare eqs. (32)-(33)):
     V_RS = -V_s / 2 d lambda - 3 V_s / (2 R_s) (T_1 v_t1 + T_2 v_t2)
     V_N  = 2 V_s (di_x cos l_1 + di_y sin l_1) = -2 V_s |di|,   l_2 = atan2(di_y, di_x)  (eq. (31))
 
-The remaining freedom is how V_N is shared (v_n1 <= 0 <= v_n2), and V_DT,
-which eq. (35) lets us raise when the burns cannot both point away from the
-Earth (v_r1, v_r2 <= 0, eq. (34)) or the arms cannot reach the directions.
-This solve is a bounded, vectorised search (jittable, vmappable): V_DT takes
-the predicted value plus ``vdt_raise_mps`` steps (the smallest raise that works
-wins, "increasing V_DT until we obtain a solution"), the north-south share
-takes ``n_split`` values, and among the feasible candidates with the smallest
-raise we keep the one of least V_1 + V_2.
+The in-plane parts (v_r, v_t) of both burns follow from V_DT alone.  What is
+left is how |V_N| is shared (|v_n1| = n_1, |v_n2| = |V_N| - n_1; v_n1 <= 0 <= v_n2)
+and V_DT, which eq. (35) lets us raise when the burns cannot both point away
+from the Earth (v_r1, v_r2 <= 0, eq. (34)) or the arms cannot reach the directions.
+
+Both are solved without trigonometry on candidates:
+
+* Yaw limits (eq. (1)) and v_r <= 0 constrain only the in-plane part; with
+  (x, y) = (-v_r, -v_t) and x >= 0, alpha <= a_hi is y cos a_hi <= x sin a_hi, and
+  alpha >= a_lo likewise.
+* Pitch limits: beta_min <= beta <= beta_max is p tan beta_min <= n <= p tan beta_max
+  with p = |(v_r, v_t)| the in-plane magnitude.  So n_1 lies in an interval, and
+  V_1 + V_2 = sqrt(p_1^2 + n_1^2) + sqrt(p_2^2 + (|V_N| - n_1)^2) is convex in n_1
+  with its free minimum at equal pitch, n_1 = |V_N| p_1 / (p_1 + p_2): the least
+  V_1 + V_2 is that point clipped to the interval (exact, no search).
+* V_DT takes the starting value plus ``vdt_raises_mps`` (0 to 0.2 m/s in 2 mm/s
+  steps by default): the smallest raise with a solution wins ("increasing V_DT
+  until we obtain a solution").
+
+The starting V_DT is the one that cancels the predicted drift, or, with the
+estimate of eqs. (37)-(39) (``estimated_drift_rad_s``), the one that leaves the
+drift the next cycle needs.  ``v_n_mps`` overrides |V_N| (the FOMPC's action,
+eq. (40)): the inclination is then corrected along the same direction by
+|V_N| / (2 V_s) instead of |di|.
 """
 
 from __future__ import annotations
@@ -30,8 +46,8 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_matrix
-from geojax.propulsion import ArmLimits, within_limits
+from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_matrix, remaining_fraction
+from geojax.propulsion import ArmLimits
 
 
 class BurnPair(NamedTuple):
@@ -42,7 +58,7 @@ class BurnPair(NamedTuple):
     alpha_rad: jnp.ndarray  # [2]
     beta_rad: jnp.ndarray  # [2]
     l_rad: jnp.ndarray  # [2] right ascensions of the burn mid-points
-    vdt_raise_mps: jnp.ndarray  # [] how much V_DT was raised above the prediction
+    vdt_raise_mps: jnp.ndarray  # [] how much V_DT was raised above its starting value
     feasible: jnp.ndarray  # [] bool: a candidate met every constraint
 
 
@@ -51,11 +67,17 @@ def default_vdt_raises(max_raise_mps: float = 0.2, count: int = 101):
     return jnp.linspace(0.0, max_raise_mps, count)
 
 
-def solve(delta_x, l_start_rad, limits: ArmLimits, vdt_raises_mps=None, n_split: int = 33, coast_offset_s=0.0) -> BurnPair:
+def full_correction_mps(delta_x):
+    """|V_N| = 2 V_s |di| that cancels the inclination deviation in one cycle (eq. (30))."""
+    return 2 * V_SYNC_MPS * jnp.hypot(delta_x[4], delta_x[5])
+
+
+def solve(delta_x, l_start_rad, limits: ArmLimits, vdt_raises_mps=None, coast_offset_s=0.0, v_n_mps=None) -> BurnPair:
     """Two burns that cancel the predictive deviation ``delta_x`` [6] (see module docstring).
 
     ``coast_offset_s`` is added to the coast T_i of eq. (20) when the deviation
     refers to a time after the end of the cycle (a mean over the next cycle).
+    ``v_n_mps`` (>= 0) replaces the north-south total 2 V_s |di| of eq. (30).
     """
     vdt_raises_mps = default_vdt_raises() if vdt_raises_mps is None else vdt_raises_mps
     d_lon, d_drift, dex, dey, dix, diy = (delta_x[j] for j in range(6))
@@ -67,46 +89,78 @@ def solve(delta_x, l_start_rad, limits: ArmLimits, vdt_raises_mps=None, n_split:
 
     v_r_diff = v_s * (dex * jnp.sin(l1) - dey * jnp.cos(l1))
     v_t_diff = 0.5 * v_s * (dex * jnp.cos(l1) + dey * jnp.sin(l1))
-    v_n_total = 2 * v_s * jnp.hypot(dix, diy)  # |v_n1| + |v_n2|
+    v_n_total = full_correction_mps(delta_x) if v_n_mps is None else jnp.maximum(v_n_mps, 0.0)
 
-    # Candidates: [raises, splits].
-    v_dt = (-r_s / 3 * d_drift + vdt_raises_mps)[:, None]
-    v_t1 = 0.5 * (v_dt + v_t_diff)
-    v_t2 = 0.5 * (v_dt - v_t_diff)
-    v_r_sum = -0.5 * v_s * d_lon - 1.5 * v_s / r_s * (coast[0] * v_t1 + coast[1] * v_t2)
-    v_r1 = 0.5 * (v_r_sum + v_r_diff)
-    v_r2 = 0.5 * (v_r_sum - v_r_diff)
-    share = jnp.linspace(0.0, 1.0, n_split)[None, :]
-    v_n1 = -share * v_n_total
-    v_n2 = (1 - share) * v_n_total
+    # In-plane parts of both burns for every candidate V_DT: [raises, 2].
+    v_dt = -r_s / 3 * d_drift + vdt_raises_mps
+    v_t = 0.5 * jnp.stack([v_dt + v_t_diff, v_dt - v_t_diff], -1)
+    v_r_sum = -0.5 * v_s * d_lon - 1.5 * v_s / r_s * (v_t @ coast)
+    v_r = 0.5 * jnp.stack([v_r_sum + v_r_diff, v_r_sum - v_r_diff], -1)
+    in_plane = jnp.hypot(v_r, v_t)
+    scale = jnp.maximum(in_plane, 1e-9)
 
-    dv = jnp.stack(
-        [jnp.stack(jnp.broadcast_arrays(v_r1, v_t1, v_n1), -1), jnp.stack(jnp.broadcast_arrays(v_r2, v_t2, v_n2), -1)],
-        -2,
-    )  # [raises, splits, 2, 3]
+    ok_in_plane = (v_r <= 1e-12 * scale) & _yaw_ok(-v_r, -v_t, limits, 1e-12 * scale)
+    n_lo, n_hi = _pitch_interval(in_plane, limits)
+    # n_1 within its own interval and V_N - n_1 within thruster 2's.
+    lo = jnp.maximum(n_lo[:, 0], v_n_total - n_hi[:, 1])
+    hi = jnp.minimum(n_hi[:, 0], v_n_total - n_lo[:, 1])
+    ok_pitch = lo <= hi + 1e-12 * (v_n_total + scale[:, 0] + scale[:, 1])
+    feasible = jnp.all(ok_in_plane, axis=-1) & ok_pitch  # [raises]
+
+    i = jnp.argmax(feasible)  # the smallest raise that works (0 if none does)
+    p1, p2 = in_plane[i, 0], in_plane[i, 1]
+    equal_pitch = jnp.where(p1 + p2 > 0, v_n_total * p1 / jnp.where(p1 + p2 > 0, p1 + p2, 1.0), 0.5 * v_n_total)
+    n1 = jnp.clip(equal_pitch, lo[i], jnp.maximum(lo[i], hi[i]))
+    dv = jnp.stack([
+        jnp.stack([v_r[i, 0], v_t[i, 0], -n1]),
+        jnp.stack([v_r[i, 1], v_t[i, 1], v_n_total - n1]),
+    ])
     v = jnp.linalg.norm(dv, axis=-1)
     # Eq. (14): dv = -V (cos b cos a, cos b sin a, sin b).
-    alpha = jnp.arctan2(-dv[..., 1], -dv[..., 0])
-    beta = jnp.arcsin(jnp.clip(-dv[..., 2] / jnp.where(v > 0, v, 1.0), -1.0, 1.0))
-    idle = v < 1e-9  # a thruster with nothing to do has no direction to check
-    ok = (within_limits(alpha, beta, limits) | idle) & ((dv[..., 0] <= 1e-12) | idle)
-    feasible = jnp.all(ok, axis=-1)  # [raises, splits]
+    alpha = jnp.arctan2(-dv[:, 1], -dv[:, 0])
+    beta = jnp.arcsin(jnp.clip(-dv[:, 2] / jnp.where(v > 0, v, 1.0), -1.0, 1.0))
+    return BurnPair(dv, v, alpha, beta, jnp.stack([l1, l2]), vdt_raises_mps[i], jnp.any(feasible))
 
-    # Smallest raise that works, then least V_1 + V_2 at that raise.
-    any_at_raise = jnp.any(feasible, axis=1)
-    raise_index = jnp.argmax(any_at_raise)
-    cost = jnp.where(feasible[raise_index], jnp.sum(v[raise_index], axis=-1), jnp.inf)
-    split_index = jnp.argmin(cost)
-    pick = lambda x: x[raise_index, split_index]  # noqa: E731
-    return BurnPair(
-        dv_rsw_mps=pick(dv),
-        v_mps=pick(v),
-        alpha_rad=pick(alpha),
-        beta_rad=pick(beta),
-        l_rad=jnp.stack([l1, l2]),
-        vdt_raise_mps=vdt_raises_mps[raise_index],
-        feasible=jnp.any(any_at_raise),
-    )
+
+def _yaw_ok(x, y, limits: ArmLimits, tol):
+    """Eq. (1) yaw limits for in-plane vectors (x, y) = (-v_r, -v_t) [..., 2] with x >= 0, without atan2."""
+    lo = jnp.stack([-limits.alpha_min_rad, -limits.alpha_max_rad])
+    hi = jnp.stack([limits.alpha_max_rad, limits.alpha_min_rad])
+    below_hi = y * jnp.cos(hi) - x * jnp.sin(hi) <= tol
+    above_lo = y * jnp.cos(lo) - x * jnp.sin(lo) >= -tol
+    return below_hi & above_lo
+
+
+def _pitch_interval(in_plane_mps, limits: ArmLimits):
+    """Eq. (1) pitch limits as bounds on |v_n| for in-plane magnitudes p [..., 2]: [p tan b_min, p tan b_max]."""
+    vertical = jnp.cos(limits.beta_max_rad) < 1e-12  # beta_max = 90 deg: no upper bound
+    hi = jnp.where(vertical, jnp.inf, in_plane_mps * jnp.tan(jnp.minimum(limits.beta_max_rad, jnp.pi / 2 - 1e-12)))
+    lo = in_plane_mps * jnp.tan(jnp.minimum(limits.beta_min_rad, jnp.pi / 2 - 1e-12))
+    return lo, hi
+
+
+def estimated_drift_rad_s(next_deviation, l_start_rad):
+    """The drift to leave at the end of a cycle, eqs. (37)-(38) with the corrected B.
+
+    ``next_deviation`` is the predictive deviation of the *next* cycle as the
+    natural drift alone will make it (e and i: minus their natural change over
+    that cycle).  Eq. (37) asks which V_L that cycle could absorb with V_DT = 0
+    and both radial components inward: with the longitude row of
+    ``control.effects`` (T_i / R_s = 2 pi c_i / V_s) eq. (35) reads
+    V_L - 3 pi / 2 [(c_1 + c_2) V_DT + (c_1 - c_2) V_ET] + |V_R| <= 0, so
+    V~_L = 3 pi / 2 (c_1 - c_2) V_ET - |V_R|.  A drift lambda_dot moves the
+    longitude by -d lambda = lambda_dot T_s over that cycle, which asks for
+    V_L = -V_s / 2 d lambda = pi R_s lambda_dot (eq. (38) prints 2 / R_s, without
+    the 2 pi of T_s = 2 pi R_s / V_s, the same slip as in eq. (22)).
+    """
+    dex, dey, dix, diy = (next_deviation[j] for j in range(2, 6))
+    v_s = V_SYNC_MPS
+    l1 = jnp.arctan2(diy, dix) - jnp.pi
+    v_r = v_s * (dex * jnp.sin(l1) - dey * jnp.cos(l1))
+    v_et = 0.5 * v_s * (dex * jnp.cos(l1) + dey * jnp.sin(l1))
+    c1, c2 = remaining_fraction(l1, l_start_rad), remaining_fraction(l1 + jnp.pi, l_start_rad)
+    v_l = 1.5 * jnp.pi * (c1 - c2) * v_et - jnp.abs(v_r)
+    return v_l / (jnp.pi * R_SYNC_M)
 
 
 def effect(burns: BurnPair, l_start_rad, coast_offset_s=0.0):
@@ -114,4 +168,3 @@ def effect(burns: BurnPair, l_start_rad, coast_offset_s=0.0):
     coast = cycle_coast_s(burns.l_rad, l_start_rad) + coast_offset_s
     matrices = effect_matrix(burns.l_rad, coast)  # [2, 6, 3]
     return jnp.einsum("nij,nj->i", matrices, burns.dv_rsw_mps)
-

@@ -1,0 +1,128 @@
+"""Fuel-optimal model predictive controller (Li 2022, Sec. 4.3, eqs. (40)-(42)).
+
+The action of cycle k is the north-south correction u_k = |V_N|; the QFFC
+turns it into the rest of the solution S_k (eq. (40)), so the in-plane
+targets (longitude, eccentricity) are met every cycle and only the
+inclination is allowed to lag, within Delta i_max.  Over a horizon of N cycles
+the predictor model (``control.plan``) gives the burns and the inclination at
+the end of each cycle, and eq. (42) scores the sequence:
+
+    J = 1/2 sum_k [V_1k^2 + V_2k^2 + zeta_k |i_T - i_k|^2],
+    zeta_k = P if |i_T - i_k| > Delta i_max else 0.
+
+Choices where the paper is silent:
+
+* u_k is searched as a fraction w_k of the QFFC's full correction of that
+  cycle, u_k = w_k 2 V_s |di_k|, w_k in [0, ``fraction_max``]: the QFFC is
+  w = 1 everywhere, and the annealing steps are scale-free.
+* i is the MEE vector (h, k) (the one whose B rows carry the 1/2, see
+  ``control.effects``); Delta i_max = 8e-5 is read in the same units.
+* A cycle in which the QFFC finds no solution (S = 0) costs P Delta i_max^2 on
+  top of its inclination term, so that a sequence is never preferred for
+  skipping a cycle.
+* Simulated annealing: ``chains`` independent Metropolis chains start at the
+  QFFC sequence and move all N fractions at once by Gaussian steps whose size
+  and temperature fall geometrically; temperatures are relative to the QFFC
+  sequence's cost.  The best sequence met by any chain (the start included)
+  is returned, so J(FOMPC) <= J(QFFC) on the model by construction.
+* The horizon is padded to ``n_max`` cycles; cycles at or beyond N are masked
+  out of J, so a sweep over N compiles once.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from geojax.control.plan import model_cycle
+
+
+class MpcParams(NamedTuple):
+    """FOMPC parameters a sweep can vary (array leaves)."""
+
+    horizon: jnp.ndarray = jnp.asarray(6)  # N, cycles (<= Annealing.n_max)
+    di_max: jnp.ndarray = jnp.asarray(8e-5)  # Delta i_max, MEE (h, k)
+    penalty: jnp.ndarray = jnp.asarray(1e8)  # P, (m/s)^2 per unit (h, k)^2
+
+
+class Annealing(NamedTuple):
+    """Shape and schedule of the simulated annealing (static: hashable Python numbers)."""
+
+    n_max: int = 10  # horizon padding
+    chains: int = 8
+    iterations: int = 64
+    step_start: float = 0.3  # 1-sigma move of each fraction w_k
+    step_end: float = 0.01
+    temperature_start: float = 0.05  # relative to the QFFC sequence's cost
+    temperature_end: float = 1e-4
+    fraction_max: float = 2.0
+
+
+class Plan(NamedTuple):
+    burns: object  # qffc.BurnPair of the current cycle
+    fractions: jnp.ndarray  # [n_max] the best sequence w; w_1 is flown
+    cost: jnp.ndarray  # J of the returned sequence
+    cost_qffc: jnp.ndarray  # J of the QFFC sequence (w = 1)
+
+
+def horizon_cost(fractions, x0, ref_windows, target, l_start_rad, limits, cycle_s, vdt_estimate, mpc: MpcParams):
+    """J of eq. (42) for fractions [n_max] from the mean state x0 [6]; ref_windows [n_max + 2, 7]."""
+    n_max = fractions.shape[0]
+
+    def one(x, k):
+        window = jax.lax.dynamic_slice_in_dim(ref_windows, k, 3)
+        _, burns, after = model_cycle(x, window, target, l_start_rad, limits, cycle_s, vdt_estimate, fractions[k])
+        di = jnp.hypot(target[4] - after[4], target[5] - after[5])
+        zeta = jnp.where(di > mpc.di_max, mpc.penalty, 0.0)
+        cost = jnp.sum(burns.v_mps**2) + zeta * di**2 + jnp.where(burns.feasible, 0.0, mpc.penalty * mpc.di_max**2)
+        return after, 0.5 * jnp.where(k < mpc.horizon, cost, 0.0)
+
+    _, costs = jax.lax.scan(one, x0, jnp.arange(n_max))
+    return jnp.sum(costs)
+
+
+def plan(key, x0, ref_windows, target, l_start_rad, limits, cycle_s, vdt_estimate, mpc: MpcParams,
+         annealing: Annealing = Annealing(), warm_start=None) -> Plan:
+    """Solve eq. (41) by simulated annealing from the QFFC sequence; the burns of the first cycle.
+
+    ``warm_start`` [n_max] (the previous cycle's best sequence, shifted by one
+    cycle) starts every chain but the first, which starts at the QFFC's w = 1.
+    """
+    cost = lambda w: horizon_cost(w, x0, ref_windows, target, l_start_rad, limits, cycle_s, vdt_estimate, mpc)  # noqa: E731
+    n, chains, iters = annealing.n_max, annealing.chains, annealing.iterations
+    w0 = jnp.ones(n)
+    j0 = cost(w0)
+    scale = jnp.maximum(j0, 1e-12)
+    decay = lambda start, end, i: start * (end / start) ** (i / max(iters - 1, 1))  # noqa: E731
+
+    def step(carry, i):
+        w, j, best_w, best_j = carry
+        k_move, k_accept = jax.random.split(jax.random.fold_in(key, i))
+        move = decay(annealing.step_start, annealing.step_end, i) * jax.random.normal(k_move, (chains, n))
+        proposal = jnp.clip(w + move, 0.0, annealing.fraction_max)
+        j_new = jax.vmap(cost)(proposal)
+        temperature = scale * decay(annealing.temperature_start, annealing.temperature_end, i)
+        u = jax.random.uniform(k_accept, (chains,))
+        accept = (j_new <= j) | (u < jnp.exp(-(j_new - j) / temperature))
+        w = jnp.where(accept[:, None], proposal, w)
+        j = jnp.where(accept, j_new, j)
+        better = j_new < best_j
+        return (w, j, jnp.where(better[:, None], proposal, best_w), jnp.where(better, j_new, best_j)), None
+
+    if warm_start is None:
+        w_start, j_start = jnp.tile(w0, (chains, 1)), jnp.full(chains, j0)
+    else:
+        w_start = jnp.concatenate([w0[None], jnp.tile(warm_start, (chains - 1, 1))])
+        j_start = jnp.concatenate([j0[None], jnp.full(chains - 1, cost(warm_start))])
+    start = (w_start, j_start, w_start, j_start)
+    (_, _, best_w, best_j), _ = jax.lax.scan(step, start, jnp.arange(iters))
+    w_star = best_w[jnp.argmin(best_j)]
+    _, burns, _ = model_cycle(x0, ref_windows[:3], target, l_start_rad, limits, cycle_s, vdt_estimate, w_star[0])
+    return Plan(burns, w_star, jnp.min(best_j), j0)
+
+
+def shifted(fractions):
+    """A plan's sequence one cycle later: drop w_1, repeat the last (the MPC warm start)."""
+    return jnp.concatenate([fractions[1:], fractions[-1:]])
