@@ -3,6 +3,7 @@
     geojax demo [--out DIR]
     geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5]
     geojax simulate SCENARIO [--controller qffc|fompc] [--horizon N] [--days D] [--seed S] [--out FILE.h5] [--plots DIR]
+    geojax sweep SWEEP.toml --out FILE.h5 [--resume] [--chunk N]
     geojax plot FILE.h5 [--out DIR]
     geojax scenarios
 
@@ -66,6 +67,14 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--out", help="write /metrics and /cycles to this HDF5 file")
     sim.add_argument("--plots", help="folder for the mean-element figure")
     sim.set_defaults(func=_simulate)
+
+    swp = sub.add_parser("sweep", help="Monte Carlo sweep over scenario parameters x repetitions x controllers; HDF5")
+    swp.add_argument("file", help="a sweep file (TOML; see geojax.sweep for the keys)")
+    swp.add_argument("--out", required=True, help="results file (HDF5); chunks are kept in FILE.h5.parts/ until done")
+    swp.add_argument("--resume", action="store_true", help="continue an interrupted sweep into the same --out")
+    swp.add_argument("--chunk", type=int, help="samples per compiled batch (default: all, within a 2 GB budget)")
+    swp.add_argument("--quiet", action="store_true", help="no progress bar")
+    swp.set_defaults(func=_sweep)
 
     plot = sub.add_parser("plot", help="draw the figures of a results file")
     plot.add_argument("file", help="an HDF5 file written by geojax")
@@ -180,6 +189,25 @@ def _demo(args) -> int:
     return _simulate(args_sim)
 
 
+def _sweep(args) -> int:
+    import numpy as np
+
+    from geojax import store, sweep
+
+    spec = sweep.load(args.file)
+    n = spec.n_points * spec.repetitions
+    print(f"{spec.name}: {len(spec.controllers)} controller(s) x {spec.n_points} grid point(s) x "
+          f"{spec.repetitions} repetition(s) = {len(spec.controllers) * n} samples", flush=True)
+    path = sweep.run_sweep(spec, args.out, resume=args.resume, chunk=args.chunk, progress=False if args.quiet else None)
+    groups, _ = store.read_h5(path)
+    dv = groups["metrics"]["dv_per_year_mps"]
+    for i, controller in enumerate(spec.controllers):
+        print(f"  {controller}: ΔV per year {np.nanmean(dv[i]):.2f} m/s/yr averaged over the sweep, "
+              f"{int(np.sum(groups['status']['code'][i] == sweep.STATUS_UNSTABLE))} unstable sample(s)")
+    print(f"wrote {path}")
+    return 0
+
+
 def _plot(args) -> int:
     from geojax import plots, store
 
@@ -190,9 +218,14 @@ def _plot(args) -> int:
         groups, attrs = store.read_h5(path)
     except OSError:
         raise ValueError(f"file {str(path)!r}: not an HDF5 file") from None
+    out = Path(args.out) if args.out else path.parent
+    if attrs.get("kind") == "sweep":
+        figure = plots.plot_sweep(groups, str(attrs["grid_axes"]).split(","), out / f"{path.stem}.png",
+                                  title=str(attrs.get("name", path.stem)))
+        print(f"wrote {figure}")
+        return 0
     if "cycles" not in groups:
         raise ValueError(f"file {str(path)!r}: no /cycles group to plot")
-    out = Path(args.out) if args.out else path.parent
     title = str(attrs.get("scenario", path.stem))
     figures = [plots.plot_cycles(groups["cycles"], out / f"{path.stem}.png", title=title)]
     if {"reference", "target"} <= set(groups):

@@ -14,7 +14,6 @@ import numpy as np
 from geojax.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.dynamics import SpacecraftState
 from geojax.progress import Progress
-from geojax.elements import wrap_angle
 from geojax.propagate import DYNAMICS, CycleMeans, environment_grid, propagate_cycles, steps_per_cycle
 from geojax.scenario import Scenario
 
@@ -162,9 +161,8 @@ REFERENCE_PAD_CYCLES = 12
 
 def closed_loop_setup(scenario: Scenario) -> ClosedLoop:
     """Environment grid, uncontrolled reference and loop parameters of a QFFC or FOMPC scenario."""
-    from geojax.control.fompc import Annealing, MpcParams
-    from geojax.propulsion import arm_limits_deg
-    from geojax.simulate import CONTROLLERS, NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS, LoopParams
+    from geojax.control.fompc import Annealing
+    from geojax.simulate import CONTROLLERS
 
     if scenario.controller not in CONTROLLERS:
         raise ValueError(
@@ -178,10 +176,24 @@ def closed_loop_setup(scenario: Scenario) -> ClosedLoop:
     env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, n_env, n_steps)
     state = initial_state(scenario)
     ref = _reference(state, env, scenario.force_model, step_s)
+    params = loop_params(scenario)
+    ctl = cfg["controller"]
+    annealing = Annealing(chains=ctl["chains"], iterations=ctl["iterations"])
+    cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
+    return ClosedLoop(state, cycles_env, ref, params, step_s, n_cycles, scenario.controller, annealing)
+
+
+def loop_params(scenario: Scenario):
+    """The ``simulate.LoopParams`` of a scenario: every value a sweep may vary, as array leaves."""
+    from geojax.control.fompc import MpcParams
+    from geojax.propulsion import arm_limits_deg
+    from geojax.simulate import NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS, LoopParams
+
+    cfg = scenario.config
     t, st, err, ctl = cfg["thrusters"], cfg["station"], cfg["errors"], cfg["controller"]
-    params = LoopParams(
+    return LoopParams(
         arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"]),
-        jnp.asarray(t["thrust_n"]), jnp.asarray(t["isp_s"]), jnp.asarray(t["min_burn_s"]),
+        jnp.asarray(float(t["thrust_n"])), jnp.asarray(float(t["isp_s"])), jnp.asarray(float(t["min_burn_s"])),
         jnp.array([np.radians(st["lon_deg"]), 0.0, st["ex"], st["ey"], st["ix"], st["iy"]]),
         sigma_r_m=jnp.asarray(err["h_rv"] * NOMINAL_3SIGMA_R_M / 3),
         sigma_v_mps=jnp.asarray(err["h_rv"] * NOMINAL_3SIGMA_V_MPS / 3),
@@ -189,9 +201,6 @@ def closed_loop_setup(scenario: Scenario) -> ClosedLoop:
         vdt_estimate=jnp.asarray(float(ctl["vdt_estimate"])),
         mpc=MpcParams(jnp.asarray(ctl["horizon"]), jnp.asarray(float(ctl["di_max"])), jnp.asarray(float(ctl["penalty"]))),
     )
-    annealing = Annealing(chains=ctl["chains"], iterations=ctl["iterations"])
-    cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
-    return ClosedLoop(state, cycles_env, ref, params, step_s, n_cycles, scenario.controller, annealing)
 
 
 @functools.partial(jax.jit, static_argnames=("step_s",))
@@ -260,23 +269,7 @@ def _cycle_records(rec) -> dict[str, np.ndarray]:
 
 
 def _metrics(rec, final, target, n_cycles: int, wall_s: float) -> dict[str, float]:
-    m = rec.means
-    after = slice(1, None) if n_cycles > 1 else slice(None)  # the first cycle is acquisition
-    fired = rec.burn_s > 0
-    v = np.where(fired, rec.burns.v_mps, 0.0)
-    dv_ns = np.sum(np.where(fired, np.abs(rec.burns.dv_rsw_mps[..., 2]), 0.0), axis=1)
-    with_burns = v.sum(axis=1) > 0
-    # Li 2022, eq. (46), averaged over the cycles that burn.
-    mean_beta = np.degrees(np.arcsin(np.clip(dv_ns[with_burns] / v.sum(axis=1)[with_burns], 0, 1))).mean() if with_burns.any() else 0.0
-    return {
-        "dv_per_year_mps": float(final.dv_mps) * 365.25 * SECONDS_PER_DAY / (n_cycles * SIDEREAL_DAY_S),
-        "burns_total": float(fired.sum()),
-        "burns_per_thruster_per_orbit": float(fired.sum() / (2 * n_cycles)),
-        "max_abs_dlon_deg": float(np.max(np.abs(np.degrees(np.asarray(wrap_angle(m.lon_rad[after] - target[0])))))),
-        "max_abs_dlat_deg": float(np.max(np.degrees(m.max_abs_lat_rad[after]))),
-        "max_abs_de": float(np.max(np.hypot(m.ex[after] - target[2], m.ey[after] - target[3]))),
-        "max_abs_di": float(np.max(np.hypot(m.ix[after] - target[4], m.iy[after] - target[5]))),
-        "mean_beta_deg": float(mean_beta),
-        "cycles_without_solution": float(np.sum(~rec.burns.feasible)),
-        "cpu_s_per_orbit": wall_s / n_cycles,
-    }
+    from geojax.metrics import closed_loop_metrics
+
+    metrics = {name: float(value) for name, value in closed_loop_metrics(rec, final, target, n_cycles).items()}
+    return {**metrics, "cpu_s_per_orbit": wall_s / n_cycles}

@@ -1,0 +1,125 @@
+"""Sweeps: chunk-size and device-count invariance, resume after a kill, the HDF5 schema, bad input."""
+
+import os
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+import pytest
+
+from geojax import cli, sweep
+
+SPEC = """
+name = "test"
+scenario = "li2022-qffc"
+controllers = ["qffc"]
+repetitions = 5
+seed = 4
+[set]
+"duration.days" = 3
+"errors.h_rv" = 5.0
+"errors.h_att" = 5.0
+[grid]
+"thrusters.beta_max_deg" = [60.0, 90.0]
+"""
+
+
+def write_spec(tmp_path, text=SPEC, name="s.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def data(path):
+    with h5py.File(path) as f:
+        return {name: f[name][()] for group in ("metrics", "status", "grid") for name in
+                [f"{group}/{k}" for k in f[group]]}
+
+
+@pytest.fixture(scope="module")
+def straight(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("sweep")
+    spec = sweep.load(write_spec(tmp))
+    return spec, data(sweep.run_sweep(spec, tmp / "straight.h5", chunk=64, progress=False))
+
+
+def test_schema_and_physics(straight):
+    _, d = straight
+    assert d["metrics/dv_per_year_mps"].shape == (1, 2, 5)
+    assert d["status/code"].shape == (1, 2, 5)
+    np.testing.assert_array_equal(d["grid/thrusters__beta_max_deg"], [60.0, 90.0])
+    assert list(d["grid/controller"]) == [b"qffc"]
+    # A wider pitch range needs less Delta-V for the same job (Li 2022 Fig. 9); errors spread the reps.
+    dv = d["metrics/dv_per_year_mps"][0]
+    assert np.mean(dv[1]) < np.mean(dv[0]) and np.std(dv[0]) > 0
+
+
+def test_chunk_size_does_not_change_results(straight, tmp_path):
+    spec, d = straight
+    other = data(sweep.run_sweep(spec, tmp_path / "chunked.h5", chunk=7, progress=False))
+    for name in d:
+        np.testing.assert_array_equal(other[name], d[name])
+
+
+def test_killed_sweep_resumes_to_the_same_data(straight, tmp_path, monkeypatch):
+    spec, d = straight
+    out = tmp_path / "resumed.h5"
+    real_write = sweep._atomic_write
+    calls = []
+
+    def dies_after_first_chunk(path, payload):
+        calls.append(path)
+        if len(calls) == 3:  # sweep.sha256, chunk 0, then "killed" while writing chunk 1
+            path.with_name(f".{path.name}.tmp-999").write_bytes(payload[:10])  # a torn temporary file
+            raise KeyboardInterrupt
+        real_write(path, payload)
+
+    monkeypatch.setattr(sweep, "_atomic_write", dies_after_first_chunk)
+    with pytest.raises(KeyboardInterrupt):
+        sweep.run_sweep(spec, out, chunk=3, progress=False)
+    monkeypatch.setattr(sweep, "_atomic_write", real_write)
+    assert not out.exists()
+    with pytest.raises(ValueError, match="pass --resume"):
+        sweep.run_sweep(spec, out, chunk=3, progress=False)
+    resumed = data(sweep.run_sweep(spec, out, resume=True, chunk=3, progress=False))
+    for name in d:
+        np.testing.assert_array_equal(resumed[name], d[name])
+    assert not out.with_name(out.name + ".parts").exists()
+
+
+def test_two_host_devices_give_the_same_results(straight, tmp_path):
+    _, d = straight
+    spec_path = write_spec(tmp_path)
+    env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=2"}
+    out = tmp_path / "two.h5"
+    code = ("import jax, sys; from geojax import sweep; assert jax.device_count() == 2; "
+            f"sweep.run_sweep(sweep.load({str(spec_path)!r}), {str(out)!r}, chunk=64, progress=False)")
+    subprocess.run([sys.executable, "-c", code], check=True, env=env)
+    two = data(out)
+    for name in d:
+        np.testing.assert_array_equal(two[name], d[name])
+
+
+@pytest.mark.parametrize("grid, message", [
+    ('"thrusters.beta_maxx_deg" = [60.0]', "grid.thrusters.beta_maxx_deg: unknown parameter path; sweepable: thrusters.beta_max_deg"),
+    ('"thrusters.beta_max_deg" = []', "grid.thrusters.beta_max_deg: must be a non-empty list of numbers"),
+    ('"thrusters.beta_max_deg" = ["high"]', "grid.thrusters.beta_max_deg: must be a list of numbers"),
+    ('"thrusters.beta_max_deg" = [60.0, 120.0]', "thrusters.beta_max_deg: must be >= 0 and <= 90, got 120.0"),
+    ('"errors.h_rv" = [-1.0]', "errors.h_rv: must be >= 0"),
+])
+def test_bad_sweep_files_exit_2_and_write_nothing(tmp_path, capsys, grid, message):
+    spec = write_spec(tmp_path, SPEC.split("[grid]")[0] + "[grid]\n" + grid + "\n")
+    out = tmp_path / "never.h5"
+    assert cli.main(["sweep", str(spec), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not out.exists() and not out.with_name(out.name + ".parts").exists()
+
+
+def test_existing_output_without_resume_is_refused(tmp_path, capsys):
+    out = tmp_path / "there.h5"
+    out.write_bytes(b"not ours")
+    assert cli.main(["sweep", str(write_spec(tmp_path)), "--out", str(out)]) == 2
+    assert "exists; pass --resume" in capsys.readouterr().err
+    assert out.read_bytes() == b"not ours"
