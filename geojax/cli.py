@@ -21,6 +21,9 @@ EXIT_BAD_INPUT = 2
 
 
 def main(argv: list[str] | None = None) -> int:
+    from geojax.parallel import use_host_cores
+
+    use_host_cores()  # batches (sweeps) are sharded over one XLA CPU device per core
     parser = _parser()
     args = parser.parse_args(argv)
     if not hasattr(args, "func"):
@@ -72,7 +75,8 @@ def _parser() -> argparse.ArgumentParser:
     swp.add_argument("file", help="a sweep file (TOML; see geojax.sweep for the keys)")
     swp.add_argument("--out", required=True, help="results file (HDF5); chunks are kept in FILE.h5.parts/ until done")
     swp.add_argument("--resume", action="store_true", help="continue an interrupted sweep into the same --out")
-    swp.add_argument("--chunk", type=int, help="samples per compiled batch (default: all, within a 2 GB budget)")
+    swp.add_argument("--chunk", type=int, help="samples per saved chunk (default: one compiled batch of the widest "
+                     "controller, 64 per device; a resumed sweep keeps its cut)")
     swp.add_argument("--quiet", action="store_true", help="no progress bar")
     swp.set_defaults(func=_sweep)
 

@@ -11,6 +11,7 @@ import jax.numpy as jnp
 from geojax.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.elements import wrap_angle
 
+CYCLE_NAMES = ("lon_deg", "ex", "ey", "ix", "iy", "dv_mps", "ns_fraction")
 NAMES = ("dv_per_year_mps", "burns_total", "burns_per_thruster_per_orbit", "max_abs_dlon_deg", "max_abs_dlat_deg",
          "max_abs_de", "max_abs_di", "mean_beta_deg", "cycles_without_solution")
 
@@ -37,4 +38,16 @@ def closed_loop_metrics(records, final, target, n_cycles: int) -> dict:
         "max_abs_di": jnp.max(jnp.hypot(m.ix[first:] - target[4], m.iy[first:] - target[5])),
         "mean_beta_deg": mean_beta,
         "cycles_without_solution": jnp.sum(~records.burns.feasible).astype(float),
+    }
+
+
+def cycle_series(records) -> dict:
+    """Per-cycle records a sweep may keep (``cycles = true``): mean longitude (deg), e and i vectors
+    (MEE f, g, h, k), the Delta-V planned and fired in the cycle (m/s) and the north-south fraction."""
+    m = records.means
+    fired = records.burn_s > 0
+    return {
+        "lon_deg": jnp.degrees(m.lon_rad), "ex": m.ex, "ey": m.ey, "ix": m.ix, "iy": m.iy,
+        "dv_mps": jnp.sum(jnp.where(fired, records.burns.v_mps, 0.0), axis=1),
+        "ns_fraction": records.fraction,
     }

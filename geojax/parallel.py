@@ -9,9 +9,23 @@ same compiled program; results do not depend on the device count.
 
 from __future__ import annotations
 
+import os
+
 import jax
 import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+
+def use_host_cores(count: int | None = None) -> None:
+    """Ask XLA for one CPU device per core (``count``, default all), unless ``XLA_FLAGS`` already says.
+
+    Takes effect only if no JAX computation has run yet in this process (the
+    ``geojax`` command calls it first thing); later it changes nothing.
+    """
+    flags = os.environ.get("XLA_FLAGS", "")
+    if "xla_force_host_platform_device_count" not in flags:
+        count = count or os.cpu_count() or 1
+        os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={count}".strip()
 
 
 def batch_mesh() -> Mesh:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import matplotlib
@@ -77,30 +78,40 @@ def plot_station_keeping(cycles, reference, target, path: str | Path, title: str
     return _save(fig, ax, title, path)
 
 
-def plot_sweep(groups, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "") -> Path:
+def plot_sweep(groups, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
+               label: str = "") -> Path:
     """A sweep's metric against its first swept parameter: mean and spread (min-max) over the
     repetitions, one line per controller (and per value of any further axis), unstable points
     (status 2) marked with a cross.  ``groups`` are the groups of a ``geojax sweep`` file."""
-    values = np.asarray(groups["metrics"][metric])  # [controller, grid..., reps]
-    status = np.asarray(groups["status"]["code"])
-    controllers = [c.decode() if isinstance(c, bytes) else str(c) for c in groups["grid"]["controller"]]
-    param = axes_names[1]
-    x = np.asarray(groups["grid"][param.replace(".", "__")])
+    return plot_sweeps([(label, groups)], axes_names, path, metric, title)
+
+
+def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "") -> Path:
+    """``plot_sweep`` for several sweeps over the same parameter on one axis: ``runs`` is [(label, groups)]."""
     fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
-    for i, controller in enumerate(controllers):
-        v = values[i].reshape(len(x), -1, values.shape[-1])  # [x, other axes, reps]
-        s = status[i].reshape(v.shape)
-        for j in range(v.shape[1]):
-            label = controller.upper() + (f" #{j}" if v.shape[1] > 1 else "")
-            stable = np.where(s[:, j] == 2, np.nan, v[:, j])
-            mean = np.nanmean(stable, axis=-1)
-            line, = ax.plot(x, mean, "o-", label=label)
-            ax.fill_between(x, np.nanmin(stable, axis=-1), np.nanmax(stable, axis=-1), color=line.get_color(), alpha=0.2)
-            bad = np.any(s[:, j] == 2, axis=-1)
-            if bad.any():
-                ax.plot(x[bad], np.nanmean(v[bad, j], axis=-1), "x", color=line.get_color(), ms=10, mew=2)
+    param = axes_names[1]
+    for prefix, groups in runs:
+        values = np.asarray(groups["metrics"][metric])  # [controller, grid..., reps]
+        status = np.asarray(groups["status"]["code"])
+        controllers = [c.decode() if isinstance(c, bytes) else str(c) for c in groups["grid"]["controller"]]
+        x = np.asarray(groups["grid"][param.replace(".", "__")])
+        for i, controller in enumerate(controllers):
+            v = values[i].reshape(len(x), -1, values.shape[-1])  # [x, other axes, reps]
+            s = status[i].reshape(v.shape)
+            for j in range(v.shape[1]):
+                label = " ".join(filter(None, [prefix, controller.upper(), f"#{j}" if v.shape[1] > 1 else ""]))
+                stable = np.where(s[:, j] == 2, np.nan, v[:, j])
+                with warnings.catch_warnings():  # a point whose every repetition is unstable has no spread
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    mean, low, high = (f(stable, axis=-1) for f in (np.nanmean, np.nanmin, np.nanmax))
+                line, = ax.plot(x, mean, "o-", label=label)
+                ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2)
+                bad = np.any(s[:, j] == 2, axis=-1)
+                if bad.any():
+                    ax.plot(x[bad], np.nanmean(np.where(np.isfinite(v[bad, j]), v[bad, j], np.nan), axis=-1), "x",
+                            color=line.get_color(), ms=10, mew=2, label=f"{label}: unstable")
     ax.set(xlabel=param, ylabel=metric)
-    ax.legend()
+    ax.legend(fontsize="small")
     return _save(fig, [ax], title, path)
 
 

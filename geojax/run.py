@@ -159,8 +159,14 @@ class ClosedLoop(NamedTuple):
 REFERENCE_PAD_CYCLES = 12
 
 
-def closed_loop_setup(scenario: Scenario) -> ClosedLoop:
-    """Environment grid, uncontrolled reference and loop parameters of a QFFC or FOMPC scenario."""
+def closed_loop_setup(scenario: Scenario, horizon_max: int | None = None) -> ClosedLoop:
+    """Environment grid, uncontrolled reference and loop parameters of a QFFC or FOMPC scenario.
+
+    The FOMPC's horizon is padded to ``horizon_max`` cycles (static; default the
+    scenario's N): a sweep over N passes its largest N and compiles once, and a
+    single run plans over exactly its N (the padded cycles are masked out of
+    the cost but still evaluated, so padding to 10 would cost 10/N).
+    """
     from geojax.control.fompc import Annealing
     from geojax.simulate import CONTROLLERS
 
@@ -178,7 +184,10 @@ def closed_loop_setup(scenario: Scenario) -> ClosedLoop:
     ref = _reference(state, env, scenario.force_model, step_s)
     params = loop_params(scenario)
     ctl = cfg["controller"]
-    annealing = Annealing(chains=ctl["chains"], iterations=ctl["iterations"])
+    horizon_max = ctl["horizon"] if horizon_max is None else horizon_max
+    if not ctl["horizon"] <= horizon_max <= Annealing().n_max:
+        raise ValueError(f"horizon_max: must lie in [controller.horizon, {Annealing().n_max}], got {horizon_max}")
+    annealing = Annealing(n_max=horizon_max, chains=ctl["chains"], iterations=ctl["iterations"])
     cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
     return ClosedLoop(state, cycles_env, ref, params, step_s, n_cycles, scenario.controller, annealing)
 

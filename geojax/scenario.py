@@ -349,12 +349,17 @@ def _force_model(config: dict) -> ForceModel:
 
 def to_toml(config: dict) -> str:
     """Serialise a validated scenario table back to TOML (for HDF5 ``config_toml``)."""
-    lines = [f"{k} = {_toml_value(v)}" for k, v in config.items() if not isinstance(v, dict)]
+    lines = [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in config.items() if not isinstance(v, dict)]
     for table, values in config.items():
         if isinstance(values, dict):
-            lines.append(f"\n[{table}]")
-            lines += [f"{k} = {_toml_value(v)}" for k, v in values.items() if v is not None]
+            lines.append(f"\n[{_toml_key(table)}]")
+            lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in values.items() if v is not None]
     return "\n".join(lines) + "\n"
+
+
+def _toml_key(key: str) -> str:
+    """A bare key where TOML allows one, else quoted (``"thrusters.beta_max_deg"`` is one key, not a path)."""
+    return key if key and all(c.isalnum() or c in "_-" for c in key) else _toml_value(key)
 
 
 def _toml_value(value) -> str:

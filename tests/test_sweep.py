@@ -1,14 +1,18 @@
 """Sweeps: chunk-size and device-count invariance, resume after a kill, the HDF5 schema, bad input."""
 
 import os
+import signal
 import subprocess
 import sys
+import time
 
 import h5py
 import numpy as np
 import pytest
 
-from geojax import cli, sweep
+from geojax import cli, store, sweep
+from geojax.constants import SIDEREAL_DAY_S
+from geojax.metrics import CYCLE_NAMES
 
 SPEC = """
 name = "test"
@@ -117,9 +121,56 @@ def test_bad_sweep_files_exit_2_and_write_nothing(tmp_path, capsys, grid, messag
     assert not out.exists() and not out.with_name(out.name + ".parts").exists()
 
 
+def test_resume_into_the_results_of_another_sweep_is_refused(straight, tmp_path, capsys):
+    spec, _ = straight
+    out = tmp_path / "done.h5"
+    sweep.run_sweep(spec, out, chunk=64, progress=False)
+    other = write_spec(tmp_path, SPEC.replace("repetitions = 5", "repetitions = 4"), "other.toml")
+    assert cli.main(["sweep", str(other), "--out", str(out), "--resume"]) == 2
+    assert "holds the results of a different sweep file" in capsys.readouterr().err
+
+
 def test_existing_output_without_resume_is_refused(tmp_path, capsys):
     out = tmp_path / "there.h5"
     out.write_bytes(b"not ours")
     assert cli.main(["sweep", str(write_spec(tmp_path)), "--out", str(out)]) == 2
     assert "exists; pass --resume" in capsys.readouterr().err
     assert out.read_bytes() == b"not ours"
+
+
+def test_sweep_killed_with_sigkill_resumes_to_the_same_data(straight, tmp_path):
+    """A real ``kill -9`` of ``geojax sweep`` (a separate process on every core) as soon as its first chunk
+    is saved; ``--resume`` here (one device) then ends with the data of the straight run."""
+    _, d = straight
+    spec, out = write_spec(tmp_path), tmp_path / "killed.h5"
+    parts = out.with_name(out.name + ".parts")
+    args = ["sweep", str(spec), "--out", str(out), "--chunk", "1", "--quiet"]
+    proc = subprocess.Popen([sys.executable, "-m", "geojax.cli", *args])
+    try:
+        deadline = time.monotonic() + 300
+        while not list(parts.glob("*.npz")) and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        proc.send_signal(signal.SIGKILL)
+    finally:
+        proc.wait()
+    assert proc.returncode == -signal.SIGKILL, "the sweep ended before it could be killed"
+    assert 1 <= len(list(parts.glob("*.npz"))) < 10 and not out.exists()
+    assert cli.main([*args[:4], "--chunk", "2", "--resume", "--quiet"]) == 2  # the cut on disk is kept
+    assert cli.main([*args[:4], "--resume", "--quiet"]) == 0
+    resumed = data(out)
+    for name in d:
+        np.testing.assert_array_equal(resumed[name], d[name])
+    assert not parts.exists()
+
+
+def test_per_cycle_records_agree_with_the_metrics(tmp_path):
+    """``cycles = true`` keeps /cycles/<name> [controller, grid, reps, cycle]; recomputed from them, the longitude
+    excursion equals the metric and the ΔV planned per cycle adds up to the ΔV integrated (rocket equation)."""
+    spec = sweep.load(write_spec(tmp_path, SPEC.replace("repetitions = 5", "repetitions = 2\ncycles = true")))
+    groups, _ = store.read_h5(sweep.run_sweep(spec, tmp_path / "cycles.h5", progress=False))
+    cycles, metrics = groups["cycles"], groups["metrics"]
+    assert set(cycles) == set(CYCLE_NAMES) and cycles["lon_deg"].shape == (1, 2, 2, 3)
+    np.testing.assert_allclose(np.max(np.abs(cycles["lon_deg"][..., 1:] - 96.0), axis=-1), metrics["max_abs_dlon_deg"],
+                               rtol=1e-9)
+    per_year = 365.25 * 86400.0 / (3 * SIDEREAL_DAY_S)
+    np.testing.assert_allclose(np.sum(cycles["dv_mps"], axis=-1) * per_year, metrics["dv_per_year_mps"], rtol=1e-3)
