@@ -10,17 +10,18 @@ repetitions:
     controllers = ["qffc", "fompc"]
     repetitions = 20
     seed = 0
+    cycles = false             # true: also keep per-cycle records (/cycles/<name> [controller, grid..., reps, cycle])
     [set]                      # fixed overrides, any scenario key
     "thrusters.alpha_max_deg" = 90.0
-    cycles = false             # true: also keep per-cycle records (/cycles/<name> [controller, grid..., reps, cycle])
     [grid]                     # one axis per key, in this order
     "thrusters.beta_max_deg" = [45.0, 50.0, 60.0, 70.0, 80.0, 90.0]
 
 Every swept value is validated by loading the scenario with it (so the ranges
 and the arm-limit checks of ``geojax.scenario`` apply).  Swept parameters are
-array leaves of ``simulate.LoopParams``, so each controller compiles once and
-the batch is vmapped and sharded over the local devices, in chunks of a fixed
-size.  Sample ``j`` of a controller (grid point ``j // reps``, repetition
+array leaves of ``simulate.LoopParams``, so each controller compiles once
+(the FOMPC's horizon padded to the largest N of the sweep) and the batch is
+vmapped and sharded over the local devices, ``LANES_PER_DEVICE`` samples per
+device per call whatever the sweep, so memory does not grow with it.  Sample ``j`` of a controller (grid point ``j // reps``, repetition
 ``j % reps``) draws its errors and annealing from ``fold_in(key(seed), j)``:
 the same draws for both controllers (a paired comparison) and independent of
 the chunk size, the device count and the resume point.
@@ -28,7 +29,8 @@ the chunk size, the device count and the resume point.
 Each finished chunk is saved at once to ``OUT.parts/`` (written to a temporary
 name and renamed, so a kill leaves either the whole chunk or nothing); when
 every chunk is in, the HDF5 file is written atomically and the parts removed.
-``resume=True`` picks up the saved chunks.
+``resume=True`` picks up the saved chunks (with the cut they were made with).
+The file's ``wall_s`` and ``compile_s`` count the last run only.
 """
 
 from __future__ import annotations
