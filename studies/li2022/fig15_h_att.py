@@ -10,9 +10,13 @@ from sweep_study import Figure, first_unstable, main, relative_change
 
 def findings(summaries):
     (s,) = summaries
-    return ["; ".join(f"{c.upper()}: ΔV within {100 * np.nanmax(np.abs(relative_change(s, c, 0.0))):.1f} % of "
-                      f"H_att = 0 up to {s.x.max():g}, first unstable level {first_unstable(s, c)}"
-                      for c in ("qffc", "fompc"))]
+    out = []
+    for c in ("qffc", "fompc"):
+        change = relative_change(s, c, 0.0)
+        steps = ", ".join(f"{100 * change[j]:+.1f} % at {x:g} (3σ = {0.05 * x:g}°)"
+                          for j, x in enumerate(s.x) if 0 < x and np.isfinite(change[j]) and s.unstable[c][j] == 0)
+        out.append(f"{c.upper()}: ΔV {steps}; first level with a repetition out of the box: {first_unstable(s, c)}")
+    return ["; ".join(out)]
 
 
 FIGURE = Figure(
