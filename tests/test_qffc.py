@@ -125,3 +125,22 @@ def test_raising_vdt_further_solves_what_a_short_search_cannot():
     # beyond one step of its own grid (6 % above 0.1 m/s).
     both = np.asarray(capped.feasible)
     assert bool(jnp.all(wide.vdt_raise_mps[both] <= capped.vdt_raise_mps[both] * 1.062 + 1e-12))
+
+
+def test_a_correction_below_the_pitch_floor_is_raised_to_it():
+    """Eq. (1) with beta_min > 0: both burns need |v_n| >= p tan(beta_min).  A small inclination correction
+    against a large in-plane one is raised to exactly that floor (both burns at beta_min), along the direction
+    of di, rather than left unsolved; the in-plane rows of eq. (29) still hold."""
+    limits = arm_limits_deg(90.0, 30.0, 90.0, 90.0)
+    dx = jnp.array([0.0, 0.0, 1.2e-5, -0.8e-5, 1e-6, 2e-6])
+    sol = qffc.solve(dx, 0.7, limits)
+    assert bool(sol.feasible)
+    p = jnp.hypot(sol.dv_rsw_mps[:, 0], sol.dv_rsw_mps[:, 1])
+    n = jnp.abs(sol.dv_rsw_mps[:, 2])
+    assert float(jnp.sum(n)) > float(qffc.full_correction_mps(dx))  # the floor acted
+    np.testing.assert_allclose(n, p * np.tan(np.radians(30.0)), rtol=1e-9)
+    np.testing.assert_allclose(jnp.abs(sol.beta_rad), np.radians(30.0), atol=1e-9)  # thruster 2 mirrored
+    achieved = qffc.effect(sol, 0.7)
+    np.testing.assert_allclose(achieved[2:4], dx[2:4], rtol=1e-9)
+    di = achieved[4:] / jnp.linalg.norm(achieved[4:])
+    np.testing.assert_allclose(di, dx[4:] / jnp.linalg.norm(dx[4:]), atol=1e-12)

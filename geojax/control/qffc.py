@@ -14,7 +14,12 @@ V_N = v_n1 - v_n2, the rows of eq. (29) read (compare eqs. (32)-(33)):
     V_RS = -V_s / 2 d lambda - 3 V_s / (2 R_s) (T_1 v_t1 + T_2 v_t2)
     V_N  = 2 V_s (di_x cos l_1 + di_y sin l_1) = -2 V_s |di|,   l_2 = atan2(di_y, di_x)  (eq. (31))
 
-The in-plane parts (v_r, v_t) of both burns follow from V_DT alone.  What is
+The in-plane parts (v_r, v_t) of both burns follow from V_DT alone.  With a
+pitch floor beta_min > 0 a small |V_N| cannot be flown at all (both burns need
+|v_n| >= p tan beta_min); it is then raised to that floor (see ``solve``) instead
+of leaving the cycle without a solution, which made the loop run away from
+beta_min = 20 deg (weak preset otherwise, one year; Li 2022 Fig. 10 finds
+beta_min harmless up to 40 deg).  What is
 left is how |V_N| is shared (|v_n1| = n_1, |v_n2| = |V_N| - n_1; v_n1 <= 0 <= v_n2)
 and V_DT, which eq. (35) lets us raise when the burns cannot both point away
 from the Earth (v_r1, v_r2 <= 0, eq. (34)) or the arms cannot reach the directions.
@@ -113,19 +118,23 @@ def solve(delta_x, l_start_rad, limits: ArmLimits, vdt_raises_mps=None, coast_of
 
     ok_in_plane = (v_r <= 1e-12 * scale) & _yaw_ok(-v_r, -v_t, limits, 1e-12 * scale)
     n_lo, n_hi = _pitch_interval(in_plane, limits)
+    # The pitch floor: both burns at beta >= beta_min need |V_N| >= tan(beta_min) (p_1 + p_2).  A smaller
+    # correction is raised to it (the inclination overshoots by the excess and the next cycle takes it
+    # back) rather than flying nothing; with beta_min = 0 this never acts.
+    v_n = jnp.maximum(v_n_total, n_lo[:, 0] + n_lo[:, 1])  # [raises]
     # n_1 within its own interval and V_N - n_1 within thruster 2's.
-    lo = jnp.maximum(n_lo[:, 0], v_n_total - n_hi[:, 1])
-    hi = jnp.minimum(n_hi[:, 0], v_n_total - n_lo[:, 1])
-    ok_pitch = lo <= hi + 1e-12 * (v_n_total + scale[:, 0] + scale[:, 1])
+    lo = jnp.maximum(n_lo[:, 0], v_n - n_hi[:, 1])
+    hi = jnp.minimum(n_hi[:, 0], v_n - n_lo[:, 1])
+    ok_pitch = lo <= hi + 1e-12 * (v_n + scale[:, 0] + scale[:, 1])
     feasible = jnp.all(ok_in_plane, axis=-1) & ok_pitch  # [raises]
 
     i = jnp.argmax(feasible)  # the smallest raise that works (0 if none does)
     p1, p2 = in_plane[i, 0], in_plane[i, 1]
-    equal_pitch = jnp.where(p1 + p2 > 0, v_n_total * p1 / jnp.where(p1 + p2 > 0, p1 + p2, 1.0), 0.5 * v_n_total)
+    equal_pitch = jnp.where(p1 + p2 > 0, v_n[i] * p1 / jnp.where(p1 + p2 > 0, p1 + p2, 1.0), 0.5 * v_n[i])
     n1 = jnp.clip(equal_pitch, lo[i], jnp.maximum(lo[i], hi[i]))
     dv = jnp.stack([
         jnp.stack([v_r[i, 0], v_t[i, 0], -n1]),
-        jnp.stack([v_r[i, 1], v_t[i, 1], v_n_total - n1]),
+        jnp.stack([v_r[i, 1], v_t[i, 1], v_n[i] - n1]),
     ])
     v = jnp.linalg.norm(dv, axis=-1)
     # Eq. (14): dv = -V (cos b cos a, cos b sin a, sin b).
