@@ -21,10 +21,11 @@ and the arm-limit checks of ``geojax.scenario`` apply).  Swept parameters are
 array leaves of ``simulate.LoopParams``, so each controller compiles once
 (the FOMPC's horizon padded to the largest N of the sweep) and the batch is
 vmapped and sharded over the local devices, ``LANES_PER_DEVICE`` samples per
-device per call whatever the sweep, so memory does not grow with it.  Sample ``j`` of a controller (grid point ``j // reps``, repetition
-``j % reps``) draws its errors and annealing from ``fold_in(key(seed), j)``:
-the same draws for both controllers (a paired comparison) and independent of
-the chunk size, the device count and the resume point.
+device per call whatever the sweep, so memory does not grow with it.  Sample
+``j`` of a controller (grid point ``j // reps``, repetition ``j % reps``) draws
+its errors and annealing from ``fold_in(key(seed), j)``: the same draws for both
+controllers (a paired comparison) and independent of the chunk size, the device
+count and the resume point.
 
 Each finished chunk is saved at once to ``OUT.parts/`` (written to a temporary
 name and renamed, so a kill leaves either the whole chunk or nothing); when
@@ -178,15 +179,14 @@ def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | 
         if store.read_h5(out)[1].get("config_toml") != sweep.text:
             raise ValueError(f"--resume: {str(out)!r} holds the results of a different sweep file")
         return out  # finished earlier
+    n_samples = sweep.n_points * sweep.repetitions
+    if chunk is not None and chunk < 1:
+        raise ValueError(f"--chunk: must be >= 1, got {chunk}")
     if parts.exists():
         if not resume:
             raise ValueError(f"--out {str(out)!r}: an unfinished sweep is in {str(parts)!r}; pass --resume")
         if (parts / "sweep.sha256").read_text().strip() != digest:
             raise ValueError(f"--resume: {str(parts)!r} belongs to a different sweep file")
-    n_samples = sweep.n_points * sweep.repetitions
-    if chunk is not None and chunk < 1:
-        raise ValueError(f"--chunk: must be >= 1, got {chunk}")
-    if parts.exists():
         # The chunks on disk fix the cut: a resumed sweep keeps it, whatever the device count.
         started = int((parts / "chunk").read_text())
         if chunk is not None and chunk != started:
