@@ -116,7 +116,7 @@ def rollout(state, env_grid, fm, step_s, ref: Reference, params: LoopParams, key
         fraction = jnp.asarray(1.0)
         if controller == "fompc":
             planned = fompc.plan(jax.random.fold_in(cycle_key, 1), *model, params.mpc, annealing, warm_start)
-            burns, fraction, warm_start = planned.burns, planned.fractions[0], fompc.shifted(planned.fractions)
+            burns, fraction, warm_start = planned.burns, planned.fractions[0], fompc.shifted(planned.fractions, params.mpc.horizon)
         # Burn mid-points at the right ascensions l_1, l_2: the orbit turns 2 pi per cycle.
         t_mid = jnp.mod(burns.l_rad - l_start, 2 * jnp.pi) / (2 * jnp.pi) * cycle_s
         burn_s = burns.v_mps * state.mass_kg / params.thrust_n  # eq. (13)

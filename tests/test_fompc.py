@@ -101,3 +101,12 @@ def test_same_key_same_plan_other_key_other_search(windows):
     plans = plan_batch(windows, x0, keys)
     np.testing.assert_array_equal(plans.fractions[0], plans.fractions[7])
     assert not np.array_equal(plans.fractions[0], plans.fractions[8])
+
+
+def test_warm_start_repeats_the_last_planned_cycle_whatever_the_padding():
+    """The shifted plan drops w_1 and repeats w_N; with the horizon padded (n_max > N) the padded, never
+    optimised values must not leak in, so padding to 10 warm-starts like planning over exactly N."""
+    w = jnp.array([0.5, 0.8, 1.2, 0.9, 7.0, 7.0, 7.0])  # N = 4, padded to 7 with junk
+    np.testing.assert_array_equal(fompc.shifted(w, 4), [0.8, 1.2, 0.9, 0.9, 0.9, 0.9, 0.9])
+    np.testing.assert_array_equal(fompc.shifted(w[:4], 4), [0.8, 1.2, 0.9, 0.9])
+    np.testing.assert_array_equal(fompc.shifted(w, 1), jnp.full(7, 0.5))

@@ -123,6 +123,8 @@ def plan(key, x0, ref_windows, target, l_start_rad, limits, cycle_s, vdt_estimat
     return Plan(burns, w_star, jnp.min(best_j), j0)
 
 
-def shifted(fractions):
-    """A plan's sequence one cycle later: drop w_1, repeat the last (the MPC warm start)."""
-    return jnp.concatenate([fractions[1:], fractions[-1:]])
+def shifted(fractions, horizon):
+    """A plan's sequence one cycle later (the MPC warm start): drop w_1 and repeat w_N, the last planned
+    cycle.  Padded cycles at or beyond N (masked out of J, so never optimised) are not used."""
+    n_max = fractions.shape[0]
+    return fractions[jnp.minimum(jnp.arange(n_max) + 1, jnp.clip(horizon, 1, n_max) - 1)]
