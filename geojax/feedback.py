@@ -82,7 +82,7 @@ def rollout(dynamics: Dynamics, state: SpacecraftState, env_grid, fm, step_s: fl
 
     @jax.checkpoint
     def one_day(state, env_steps):
-        return jax.lax.scan(step, state, env_steps)
+        return jax.lax.scan(jax.checkpoint(step), state, env_steps)
 
     return jax.lax.scan(one_day, state, env_grid)
 
@@ -100,6 +100,9 @@ class FeedbackMetrics(NamedTuple):
     dv_per_year_mps: jnp.ndarray  # delivered Delta-V scaled to 365.25 days
     max_abs_dlon_deg: jnp.ndarray  # max |lambda - lambda_d| over every step
     max_abs_dlat_deg: jnp.ndarray  # max |latitude| over every step
+    mean_dlon_deg: jnp.ndarray  # mean lambda - lambda_d (the longitude loop's offset, set by lambda_b)
+    dlon_half_range_deg: jnp.ndarray  # (max - min) / 2 of lambda - lambda_d: the "+-" of Katz Table 1
+    dlat_half_range_deg: jnp.ndarray  # (max - min) / 2 of the latitude
     duty_x: jnp.ndarray  # fraction of the time each ECEF component of the delivered u is non-zero
     duty_y: jnp.ndarray
     duty_z: jnp.ndarray
@@ -110,13 +113,18 @@ def metrics(initial: SpacecraftState, final: SpacecraftState, records: StepRecor
             station_lon_rad, box_half_width_rad) -> FeedbackMetrics:
     """Katz 2025 eqs. (8)-(10): yearly Delta-V and the box, from a rollout's records."""
     span_s = records.lon_rad.size * step_s
-    dlon = jnp.max(jnp.abs(wrap_angle(records.lon_rad - station_lon_rad)))
+    dlon_all = wrap_angle(records.lon_rad - station_lon_rad)
+    dlon = jnp.max(jnp.abs(dlon_all))
     dlat = jnp.max(jnp.abs(records.lat_rad))
+    half_range = lambda x: jnp.degrees(jnp.max(x) - jnp.min(x)) / 2  # noqa: E731
     duty = jnp.mean(records.u_ecef_mps2.reshape(-1, 3) != 0.0, axis=0)
     return FeedbackMetrics(
         dv_per_year_mps=(final.dv_mps - initial.dv_mps) * SECONDS_PER_YEAR / span_s,
         max_abs_dlon_deg=jnp.degrees(dlon),
         max_abs_dlat_deg=jnp.degrees(dlat),
+        mean_dlon_deg=jnp.degrees(jnp.mean(dlon_all)),
+        dlon_half_range_deg=half_range(dlon_all),
+        dlat_half_range_deg=half_range(records.lat_rad),
         duty_x=duty[0], duty_y=duty[1], duty_z=duty[2],
         box_ok=((dlon <= box_half_width_rad) & (dlat <= box_half_width_rad)).astype(float),
     )

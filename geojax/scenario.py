@@ -253,19 +253,7 @@ def _validate(raw: dict) -> dict:
         given = raw if table == "" else raw.get(table, {})
         if not isinstance(given, dict):
             raise ValueError(f"{table}: must be a table")
-        prefix = f"{table}." if table else ""
-        for key in given:
-            if key not in fields and not (table == "" and key in SCHEMA):
-                raise ValueError(f"{prefix}{key}: unknown key; allowed: {', '.join(fields)}")
-        out = {}
-        for key, field in fields.items():
-            name = f"{prefix}{key}"
-            if key not in given:
-                if field.default is REQUIRED:
-                    raise ValueError(f"{name}: missing (required)")
-                out[key] = field.default
-                continue
-            out[key] = _check(name, given[key], field)
+        out = check_table(f"{table}." if table else "", given, fields, ignore=SCHEMA if table == "" else ())
         if table:
             config[table] = out
         else:
@@ -276,6 +264,23 @@ def _validate(raw: dict) -> dict:
     t = config["thrusters"]
     arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
     return config
+
+
+def check_table(prefix: str, given: dict, fields: dict[str, Field], ignore=()) -> dict:
+    """Validate one table against its fields (names reported as ``prefix + key``); defaults filled in."""
+    for key in given:
+        if key not in fields and key not in ignore:
+            raise ValueError(f"{prefix}{key}: unknown key; allowed: {', '.join(fields)}")
+    out = {}
+    for key, field in fields.items():
+        name = f"{prefix}{key}"
+        if key not in given:
+            if field.default is REQUIRED:
+                raise ValueError(f"{name}: missing (required)")
+            out[key] = field.default
+            continue
+        out[key] = _check(name, given[key], field)
+    return out
 
 
 def _check(name: str, value: Any, field: Field) -> Any:
