@@ -45,6 +45,7 @@ import optax
 
 from geojax import feedback, run, scenario as scenario_mod, store
 from geojax.control import lyapunov
+from geojax.parallel import shard_batch
 from geojax.propagate import DYNAMICS
 from geojax.scenario import REQUIRED, Field
 
@@ -228,14 +229,22 @@ class Problem:
 
     def exact(self, thetas):
         """Exact-law (dv_per_year_mps [n], constraint [n, 2], box_ok [n]) of a batch of parameter vectors."""
-        return self._exact(jnp.asarray(thetas))
+        return self._exact(_spread(thetas))
 
     def exact_one(self, theta):
         return self._single(jnp.asarray(theta))
 
     def surrogate_grad(self, thetas, temperature):
-        (loss, aux), grad = self._grad(jnp.asarray(thetas), jnp.asarray(temperature))
+        (loss, aux), grad = self._grad(_spread(thetas), jnp.asarray(temperature))
         return loss, aux, grad
+
+
+def _spread(thetas):
+    """The batch of starts, sharded over the local devices when it divides evenly (``geojax.parallel``)."""
+    thetas = jnp.asarray(thetas)
+    if jax.device_count() > 1 and thetas.shape[0] % jax.device_count() == 0:
+        return shard_batch(thetas)
+    return thetas
 
 
 # ---------------------------------------------------------------- the optimiser
