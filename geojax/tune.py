@@ -10,7 +10,7 @@ a strong sensitivity to the initial guess).  A tuning file:
     starts = 16                         # start 0 is the scenario's own gains
     iterations = 30
     # optional: days, step_s, learning_rate, spread_decades, spread_lambda_b_deg,
-    # temperature_start, temperature_end, penalty_mps, margin, seed
+    # temperature_start, temperature_end, penalty_mps, margin, seed, gradient ("forward" or "reverse")
 
 Parameters live in an unconstrained space: the natural log of the positive
 gains (k_h, k_e, k_lambda), lambda_b / 0.1 deg, and for the discrete
@@ -26,8 +26,10 @@ Delta-V whose exact rollout keeps the box.  A start whose loss or gradient is
 not finite stops (its best feasible point is kept); when every start has
 stopped the run ends with a message.
 
-The gradient of a one-year rollout is taken through ``jax.checkpoint`` on each
-day (``feedback.rollout``), so memory grows with days, not steps.
+Gradients are forward-mode by default (``jacfwd``: no tape, so memory does not
+grow with the horizon; for 2-7 parameters about twice as fast as reverse mode
+on a CPU); ``gradient = "reverse"`` takes them through ``jax.checkpoint`` on
+each day (``feedback.rollout``), so memory grows with days, not steps.
 """
 
 from __future__ import annotations
@@ -86,6 +88,7 @@ FIELDS = {
     "penalty_mps": Field((int, float), 200.0, lower=0.0),
     "margin": Field((int, float), 0.02, lower=0.0, upper=1.0, lower_inclusive=True),
     "seed": Field(int, 0, lower=0, lower_inclusive=True),
+    "gradient": Field(str, "forward", choices=("forward", "reverse")),
 }
 
 
@@ -200,15 +203,15 @@ def start_points(spec: TuneSpec, center: np.ndarray) -> np.ndarray:
 class Problem:
     """The tuning problem of one scenario: batched exact evaluation and surrogate gradients, compiled once."""
 
-    def __init__(self, sc: scenario_mod.Scenario, names, penalty_mps: float = 200.0, margin: float = 0.02):
+    def __init__(self, sc: scenario_mod.Scenario, names, penalty_mps: float = 200.0, margin: float = 0.02,
+                 gradient: str = "forward"):
         self.setup = run.feedback_setup(sc)
         self.names = tuple(names)
         self.fm = sc.force_model
         self.penalty_mps, self.margin = penalty_mps, margin
         self._exact = jax.jit(jax.vmap(lambda th: self.evaluate(th, smooth=False)[1]))
         self._single = jax.jit(lambda th: self.evaluate(th, smooth=False)[1])
-        grad = jax.value_and_grad(lambda th, t: self.evaluate(th, smooth=True, temperature=t), has_aux=True)
-        self._grad = jax.jit(jax.vmap(grad, in_axes=(0, None)))
+        self._grad = jax.jit(jax.vmap(_value_and_grad(self.evaluate, gradient), in_axes=(0, None)))
 
     @property
     def exact_is_smooth(self) -> bool:
@@ -239,6 +242,28 @@ class Problem:
         return loss, aux, grad
 
 
+def _value_and_grad(evaluate, gradient: str):
+    """(loss, aux), d loss / d theta of the surrogate rollout.
+
+    "forward": forward-mode (``jacfwd``), P tangents carried through one pass: no tape at all, so memory does
+    not grow with the horizon, and for the few parameters tuned here (2 to 7) it is about twice as fast as
+    reverse mode on a CPU.  "reverse": ``value_and_grad`` through the day-checkpointed rollout (memory grows
+    with the number of days only), the choice when many parameters are tuned.
+    """
+    def surrogate(theta, temperature):
+        loss, aux = evaluate(theta, smooth=True, temperature=temperature)
+        return loss, (loss, aux)
+
+    if gradient == "forward":
+        def forward(theta, temperature):
+            grad, (loss, aux) = jax.jacfwd(surrogate, has_aux=True)(theta, temperature)
+            return (loss, aux), grad
+        return forward
+    if gradient == "reverse":
+        return jax.value_and_grad(lambda th, t: evaluate(th, smooth=True, temperature=t), has_aux=True)
+    raise ValueError(f"gradient: must be 'forward' or 'reverse', got {gradient!r}")
+
+
 def _spread(thetas):
     """The batch of starts, sharded over the local devices when it divides evenly (``geojax.parallel``)."""
     thetas = jnp.asarray(thetas)
@@ -265,7 +290,7 @@ class TuneResult:
 def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool = True) -> TuneResult:
     """Run the tuning of ``spec``; per-iteration progress on stdout and, with ``out``, in an HDF5 file."""
     start_wall = time.perf_counter()
-    problem = problem or Problem(spec.scenario, spec.parameters, spec.penalty_mps, spec.margin)
+    problem = problem or Problem(spec.scenario, spec.parameters, spec.penalty_mps, spec.margin, spec.gradient)
     center = to_theta(problem.setup.params, spec.parameters)
     theta = start_points(spec, center)
     low, high = center - LOG_BOUND, center + LOG_BOUND
@@ -273,7 +298,8 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
     opt_state = optimiser.init(jnp.asarray(theta))
     active = np.ones(spec.starts, bool)
     best = {"dv": math.inf, "theta": None, "g": np.full(2, np.nan)}
-    hist = {k: [] for k in ("dv_per_year_mps", "constraint", "loss", "step_norm", "theta", "temperature", "active")}
+    hist = {k: [] for k in ("dv_per_year_mps", "constraint", "loss", "step_norm", "theta", "temperature", "active",
+                            "best_dv_per_year_mps", "wall_s")}
     message = f"finished {spec.iterations} iterations"
     say = print if verbose else (lambda *a, **k: None)
     say(f"tune {spec.scenario.name}: {', '.join(spec.parameters)} from {spec.starts} starts, {spec.iterations} "
@@ -303,7 +329,7 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
             updates, opt_state = optimiser.update(jnp.asarray(grad), opt_state)
             new = np.clip(theta + np.where(active[:, None], np.asarray(updates), 0.0), low, high)
             step = np.linalg.norm(new - theta, axis=1)
-        _record(hist, dv, g, loss, step, theta, temperature, active)
+        _record(hist, dv, g, loss, step, theta, temperature, active, best["dv"], time.perf_counter() - start_wall)
         say(f"  it {it:3d}  T {temperature:.3f}  ΔV exact median {np.nanmedian(dv):7.3f} m/s/yr  "
             f"max constraint median {np.nanmedian(np.max(g, axis=1)):+.3f}  feasible {int(np.sum(ok > 0))}/{spec.starts}"
             f"  step {np.median(step):.3g}  best feasible {best['dv']:.3f}", flush=True)
@@ -335,8 +361,8 @@ def _keep_best(best, theta, dv, g, ok, active):
             best.update(dv=float(dv[j]), theta=np.array(theta[j]), g=np.array(g[j]))
 
 
-def _record(hist, dv, g, loss, step, theta, temperature, active):
-    for key, value in zip(hist, (dv, g, loss, step, theta, temperature, active)):
+def _record(hist, *values):
+    for key, value in zip(hist, values):
         hist[key].append(np.array(value))
 
 
