@@ -3,7 +3,7 @@
     python benchmarks/tune.py [--quick] [--modes continuous discrete constant]
 
 Per thrust mode (scenarios ``katz2025-<mode>``, one year, k_h and k_e tuned as in
-the paper), from the same starts (start 0 = the paper's gains, the others
+the paper; lambda_b too for the continuous law, see ``PARAMETERS``), from the same starts (start 0 = the paper's gains, the others
 log-uniform within +-0.3 decades):
 
 - **geojax**: ``geojax.tune`` -- Adam on surrogate gradients (forward mode), all
@@ -49,6 +49,10 @@ from geojax import tune  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 FD_STEP = 1e-2  # SLSQP's finite-difference step in log-gain
+# The paper tunes (k_h, k_e).  For the continuous law at its printed lambda_b = -0.056 deg no (k_h, k_e) keeps
+# the box in our model (the loop settles 0.04 deg west of the station and overshoots to 0.08 deg during
+# acquisition; 16 starts x 20 Adam iterations found no feasible point), so lambda_b is tuned with them there.
+PARAMETERS = {"continuous": ["k_h", "k_e", "lambda_b"], "discrete": ["k_h", "k_e"], "constant": ["k_h", "k_e"]}
 
 MEMORY_PROBE = """
 import resource, sys, jax, numpy as np
@@ -70,7 +74,8 @@ def main() -> None:
     starts, iterations, slsqp_iterations = (4, 6, 6) if args.quick else (16, 20, 20)
     rows = []
     for mode in args.modes:
-        spec = tune.from_dict({"scenario": f"katz2025-{mode}", "starts": starts, "iterations": iterations})
+        spec = tune.from_dict({"scenario": f"katz2025-{mode}", "starts": starts, "iterations": iterations,
+                               "parameters": PARAMETERS[mode]})
         problem = tune.Problem(spec.scenario, spec.parameters, spec.penalty_mps, spec.margin, spec.gradient)
         center = tune.to_theta(problem.setup.params, spec.parameters)
         paper_dv, paper_g, paper_ok = map(float, map(np.max, problem.exact_one(center)))
@@ -82,12 +87,13 @@ def main() -> None:
         t_reach = float(np.asarray(ours.history["wall_s"])[reached][0]) if reached.any() else None
         gains = tune.paper_units(ours.best_params) if ours.best_params is not None else {}
         row = {
-            "mode": mode, "days": spec.scenario.days, "starts": starts,
+            "mode": mode, "parameters": spec.parameters, "days": spec.scenario.days, "starts": starts,
             "paper_dv_per_year_mps": float(tune.PAPER[mode]["dv_per_year_mps"]),
             "paper_gains_dv_per_year_mps": paper_dv, "paper_gains_box_ok": bool(paper_ok),
             "geojax_dv_per_year_mps": ours.best_dv_per_year_mps, "geojax_wall_s": ours.wall_s,
             "geojax_iterations": iterations, "geojax_k_h_per_km2_s": gains.get("k_h_per_km2_s"),
-            "geojax_k_e_km2_per_s3": gains.get("k_e_km2_per_s3"), "geojax_message": ours.message,
+            "geojax_k_e_km2_per_s3": gains.get("k_e_km2_per_s3"), "geojax_lambda_b_deg": gains.get("lambda_b_deg"),
+            "geojax_message": ours.message,
             "geojax_s_to_slsqp_result": t_reach,
             **{f"slsqp_{k}": v for k, v in reference.items()},
         }
@@ -128,7 +134,8 @@ def slsqp(problem: tune.Problem, starts: np.ndarray, center: np.ndarray, max_ite
     if best["theta"] is not None:
         gains = tune.paper_units(tune.from_theta(best["theta"], problem.setup.params, problem.names))
     return {"best_dv_per_year_mps": best["dv"], "wall_s": wall, "evaluations": evaluations,
-            "k_h_per_km2_s": gains.get("k_h_per_km2_s"), "k_e_km2_per_s3": gains.get("k_e_km2_per_s3")}
+            "k_h_per_km2_s": gains.get("k_h_per_km2_s"), "k_e_km2_per_s3": gains.get("k_e_km2_per_s3"),
+            "lambda_b_deg": gains.get("lambda_b_deg")}
 
 
 def memory_probe() -> float:
@@ -148,26 +155,28 @@ def write(rows, memory_gib, quick: bool) -> None:
         "# Gain tuning: geojax gradient tuner vs SciPy SLSQP (finite differences)",
         "",
         f"`python benchmarks/tune.py{' --quick' if quick else ''}` on {meta['device']} devices; one year per "
-        f"rollout, k_h and k_e tuned, {rows[0]['starts'] if rows else 0} starts (start 0 = Katz's gains). "
+        f"rollout, {rows[0]['starts'] if rows else 0} starts (start 0 = Katz's gains). "
         "ΔV in m/s/yr, exact law, full horizon; a result counts only if it keeps the ±0.05° box.",
         "",
-        "| mode | Katz ΔV | ours at Katz's gains (box) | geojax tuned ΔV | geojax wall s | SLSQP ΔV | SLSQP wall s "
+        "| mode | tuned | Katz ΔV | ours at Katz's gains (box) | geojax tuned ΔV | geojax wall s | SLSQP ΔV | SLSQP wall s "
         "(evals) | SLSQP / geojax wall | geojax s to SLSQP's ΔV |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         lines.append(
-            f"| {r['mode']} | {r['paper_dv_per_year_mps']} | {fmt(r['paper_gains_dv_per_year_mps'])} "
+            f"| {r['mode']} | {', '.join(r['parameters'])} | {r['paper_dv_per_year_mps']} | {fmt(r['paper_gains_dv_per_year_mps'])} "
             f"({'kept' if r['paper_gains_box_ok'] else 'left'}) | {fmt(r['geojax_dv_per_year_mps'])} | "
             f"{fmt(r['geojax_wall_s'], '{:.0f}')} | {fmt(r['slsqp_best_dv_per_year_mps'])} | "
             f"{fmt(r['slsqp_wall_s'], '{:.0f}')} ({r['slsqp_evaluations']}) | "
             f"{fmt(r['wall_ratio_slsqp_over_geojax'], '{:.2f}')} | {fmt(r['geojax_s_to_slsqp_result'], '{:.0f}')} |")
-    lines += ["", "Tuned gains (k_h in 1/(km² s), k_e in km²/s³):", "",
-              "| mode | geojax k_h | geojax k_e | SLSQP k_h | SLSQP k_e |", "|---|---:|---:|---:|---:|"]
+    lines += ["", "Tuned gains (k_h in 1/(km² s), k_e in km²/s³, λ_b in degrees):", "",
+              "| mode | geojax k_h | geojax k_e | geojax λ_b | SLSQP k_h | SLSQP k_e | SLSQP λ_b |",
+              "|---|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         g = lambda x: "–" if x is None else f"{x:.4g}"  # noqa: E731
         lines.append(f"| {r['mode']} | {g(r['geojax_k_h_per_km2_s'])} | {g(r['geojax_k_e_km2_per_s3'])} | "
-                     f"{g(r['slsqp_k_h_per_km2_s'])} | {g(r['slsqp_k_e_km2_per_s3'])} |")
+                     f"{g(r['geojax_lambda_b_deg'])} | {g(r['slsqp_k_h_per_km2_s'])} | {g(r['slsqp_k_e_km2_per_s3'])} | "
+                     f"{g(r['slsqp_lambda_b_deg'])} |")
     if memory_gib is not None:
         lines += ["", f"Peak resident memory of a reverse-mode gradient (day-checkpointed) of a one-year rollout, "
                       f"batch 16, one device: {memory_gib:.2f} GiB (whole process, compilation included)."]

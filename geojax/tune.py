@@ -9,7 +9,7 @@ a strong sensitivity to the initial guess).  A tuning file:
     parameters = ["k_h", "k_e"]         # any of k_h, k_e, k_lambda, lambda_b, sigma
     starts = 16                         # start 0 is the scenario's own gains
     iterations = 30
-    # optional: days, step_s, learning_rate, spread_decades, spread_lambda_b_deg,
+    # optional: days, step_s, learning_rate, learning_rate_end, momentum, spread_decades, spread_lambda_b_deg,
     # temperature_start, temperature_end, penalty_mps, margin, seed, gradient ("forward" or "reverse")
 
 Parameters live in an unconstrained space: the natural log of the positive
@@ -80,7 +80,9 @@ FIELDS = {
     "iterations": Field(int, 30, lower=0, upper=10001, lower_inclusive=True),
     "days": Field((int, float), None, lower=0.0),
     "step_s": Field((int, float), None, lower=0.0),
-    "learning_rate": Field((int, float), 0.05, lower=0.0),
+    "learning_rate": Field((int, float), 0.1, lower=0.0),
+    "learning_rate_end": Field((int, float), 0.02, lower=0.0),
+    "momentum": Field((int, float), 0.5, lower=0.0, upper=1.0, lower_inclusive=True),
     "spread_decades": Field((int, float), 0.3, lower=0.0, lower_inclusive=True),
     "spread_lambda_b_deg": Field((int, float), 0.02, lower=0.0, lower_inclusive=True),
     "temperature_start": Field((int, float), 0.3, lower=0.0),
@@ -294,7 +296,13 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
     center = to_theta(problem.setup.params, spec.parameters)
     theta = start_points(spec, center)
     low, high = center - LOG_BOUND, center + LOG_BOUND
-    optimiser = optax.adam(spec.learning_rate)
+    # Few parameters, few iterations: a learning rate decaying geometrically (large steps to find the box,
+    # small ones to settle on its edge), a short momentum (b1), so a start that has crossed into the box
+    # does not coast on through it, and a short second-moment memory (b2 = 0.5), so the penalty's large
+    # gradients outside the box do not shrink the steps along the Delta-V gradient inside it.
+    schedule = optax.exponential_decay(spec.learning_rate, max(spec.iterations, 1),
+                                       spec.learning_rate_end / spec.learning_rate)
+    optimiser = optax.adam(schedule, b1=spec.momentum, b2=0.5)
     opt_state = optimiser.init(jnp.asarray(theta))
     active = np.ones(spec.starts, bool)
     best = {"dv": math.inf, "theta": None, "g": np.full(2, np.nan)}
