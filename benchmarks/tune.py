@@ -3,7 +3,7 @@
     python benchmarks/tune.py [--quick] [--modes continuous discrete constant]
 
 Per thrust mode (scenarios ``katz2025-<mode>``, one year, k_h and k_e tuned as in
-the paper; lambda_b too for the continuous law, see ``PARAMETERS``), from the same starts (start 0 = the paper's gains, the others
+the paper; the continuous law clipped and lambda_b tuned too, see ``PARAMETERS``), from the same starts (start 0 = the paper's gains, the others
 log-uniform within +-0.3 decades):
 
 - **geojax**: ``geojax.tune`` -- Adam on surrogate gradients (forward mode), all
@@ -35,6 +35,7 @@ import os
 os.environ.setdefault("XLA_FLAGS", f"--xla_force_host_platform_device_count={os.cpu_count() or 1}")
 
 import argparse  # noqa: E402
+import dataclasses  # noqa: E402
 import json  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
@@ -45,14 +46,17 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.optimize import minimize  # noqa: E402
 
-from geojax import tune  # noqa: E402
+from geojax import scenario, tune  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 FD_STEP = 1e-2  # SLSQP's finite-difference step in log-gain
 # The paper tunes (k_h, k_e).  For the continuous law at its printed lambda_b = -0.056 deg no (k_h, k_e) keeps
 # the box in our model (the loop settles 0.04 deg west of the station and overshoots to 0.08 deg during
 # acquisition; 16 starts x 20 Adam iterations found no feasible point), so lambda_b is tuned with them there.
-PARAMETERS = {"continuous": ["k_h", "k_e", "lambda_b"], "discrete": ["k_h", "k_e"], "constant": ["k_h", "k_e"]}
+# The continuous law is benchmarked in its clipped form: eq. (5) as printed (zero thrust above u0) holds
+# the box only in a sliver where |u| stays below u0 all year (Katz's gains reach 0.98 u0; 1.3 k_h already
+# cuts the thrust 36 % of the time and the latitude runs to 0.4 deg), which no local method explores.
+PARAMETERS = {"continuous-clipped": ["k_h", "k_e", "lambda_b"], "discrete": ["k_h", "k_e"], "constant": ["k_h", "k_e"]}
 
 MEMORY_PROBE = """
 import resource, sys, jax, numpy as np
@@ -69,13 +73,15 @@ print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20)
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--modes", nargs="+", default=["continuous", "discrete", "constant"])
+    parser.add_argument("--modes", nargs="+", default=list(PARAMETERS))
     args = parser.parse_args()
     starts, iterations, slsqp_iterations = (4, 6, 6) if args.quick else (16, 20, 20)
     rows = []
     for mode in args.modes:
-        spec = tune.from_dict({"scenario": f"katz2025-{mode}", "starts": starts, "iterations": iterations,
+        paper_mode = mode.split("-")[0]
+        spec = tune.from_dict({"scenario": f"katz2025-{paper_mode}", "starts": starts, "iterations": iterations,
                                "parameters": PARAMETERS[mode]})
+        spec = dataclasses.replace(spec, scenario=scenario.load(f"katz2025-{paper_mode}", {"controller.thrust_mode": mode}))
         problem = tune.Problem(spec.scenario, spec.parameters, spec.penalty_mps, spec.margin, spec.gradient)
         center = tune.to_theta(problem.setup.params, spec.parameters)
         paper_dv, paper_g, paper_ok = map(float, map(np.max, problem.exact_one(center)))
@@ -88,7 +94,7 @@ def main() -> None:
         gains = tune.paper_units(ours.best_params) if ours.best_params is not None else {}
         row = {
             "mode": mode, "parameters": spec.parameters, "days": spec.scenario.days, "starts": starts,
-            "paper_dv_per_year_mps": float(tune.PAPER[mode]["dv_per_year_mps"]),
+            "paper_dv_per_year_mps": float(tune.PAPER[paper_mode]["dv_per_year_mps"]),
             "paper_gains_dv_per_year_mps": paper_dv, "paper_gains_box_ok": bool(paper_ok),
             "geojax_dv_per_year_mps": ours.best_dv_per_year_mps, "geojax_wall_s": ours.wall_s,
             "geojax_iterations": iterations, "geojax_k_h_per_km2_s": gains.get("k_h_per_km2_s"),
