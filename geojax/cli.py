@@ -273,6 +273,11 @@ def _plot(args) -> int:
                                   title=str(attrs.get("name", path.stem)))
         print(f"wrote {figure}")
         return 0
+    if "steps" in groups:  # a feedback run (Katz 2025)
+        box = _box_half_width_deg(attrs)
+        figures = plots.plot_feedback(groups["steps"], box, out / path.stem, title=str(attrs.get("scenario", path.stem)))
+        print("wrote " + " and ".join(map(str, figures)))
+        return 0
     if "cycles" not in groups:
         raise ValueError(f"file {str(path)!r}: no /cycles group to plot")
     title = str(attrs.get("scenario", path.stem))
@@ -282,6 +287,13 @@ def _plot(args) -> int:
                                                   out / f"{path.stem}-station-keeping.png", title=title))
     print("wrote " + " and ".join(map(str, figures)))
     return 0
+
+
+def _box_half_width_deg(attrs) -> float:
+    """The box half-width (deg) of the scenario stored with a results file."""
+    from geojax import scenario
+
+    return float(scenario.from_dict(scenario.tomllib.loads(str(attrs["config_toml"]))).config["station"]["box_half_width_deg"])
 
 
 def _scenarios(args) -> int:

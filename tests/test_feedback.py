@@ -85,3 +85,23 @@ def test_gradient_of_delta_v_matches_central_differences():
         fd = (float(dv(theta + e)) - float(dv(theta - e))) / (2 * step)
         assert grad[i] == pytest.approx(fd, rel=1e-4), (i, grad[i], fd)
     assert np.all(np.abs(grad) > 1e-3)  # both gains matter
+
+
+def test_cli_simulate_dispatches_to_the_feedback_loop(tmp_path, capsys):
+    """`geojax simulate katz2025-constant` runs the feedback loop: metrics beside Katz's, per-step HDF5,
+    the ground-track and thrust figures; the constant-magnitude law delivers exactly 0 or u0."""
+    from geojax import cli, store
+
+    out = tmp_path / "k.h5"
+    assert cli.main(["simulate", "katz2025-constant", "--days", "2", "--out", str(out), "--plots", str(tmp_path)]) == 0
+    assert "Katz 2025" in capsys.readouterr().out
+    groups, attrs = store.read_h5(out)
+    assert attrs["kind"] == "simulate" and "dv_per_year_mps" in groups["metrics"]
+    u = np.stack([groups["steps"][k] for k in ("ux_mps2", "uy_mps2", "uz_mps2")], -1)
+    norms = np.linalg.norm(u, axis=1)
+    u0 = 4.5351e-6
+    assert np.all((norms == 0) | (np.abs(norms - u0) < 1e-12 * u0))
+    assert (tmp_path / "katz2025-constant-ground-track.png").is_file()
+    assert (tmp_path / "katz2025-constant-thrust.png").is_file()
+    assert cli.main(["plot", str(out), "--out", str(tmp_path / "again")]) == 0
+    assert (tmp_path / "again" / "k-ground-track.png").is_file()
