@@ -323,7 +323,7 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
             loss, grad = np.asarray(loss), np.asarray(grad)
             if problem.exact_is_smooth:
                 dv, g, ok = map(np.asarray, aux)
-        _keep_best(best, theta, dv, g, ok, active)
+        _keep_best(best, theta, dv, g, ok)
         if last:
             step = np.zeros(spec.starts)
             loss = np.full(spec.starts, np.nan)
@@ -361,7 +361,7 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
     return result
 
 
-def _keep_best(best, theta, dv, g, ok, active):
+def _keep_best(best, theta, dv, g, ok):
     feasible = (ok > 0) & np.isfinite(dv)
     if np.any(feasible):
         j = int(np.argmin(np.where(feasible, dv, np.inf)))
