@@ -4,6 +4,7 @@
     geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5]
     geojax simulate SCENARIO [--controller qffc|fompc] [--horizon N] [--days D] [--seed S] [--out FILE.h5] [--plots DIR]
     geojax sweep SWEEP.toml --out FILE.h5 [--resume] [--chunk N]
+    geojax tune TUNE.toml --out FILE.h5 [--quiet]
     geojax plot FILE.h5 [--out DIR]
     geojax scenarios
 
@@ -70,6 +71,12 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--out", help="write /metrics and /cycles to this HDF5 file")
     sim.add_argument("--plots", help="folder for the mean-element figure")
     sim.set_defaults(func=_simulate)
+
+    tune = sub.add_parser("tune", help="tune Milankovitch-Lyapunov gains by gradients through the rollout (Katz 2025)")
+    tune.add_argument("file", help="a tuning file (TOML; see geojax.tune for the keys)")
+    tune.add_argument("--out", required=True, help="results file (HDF5): /iterations per iteration, /best, /metrics")
+    tune.add_argument("--quiet", action="store_true", help="no per-iteration lines")
+    tune.set_defaults(func=_tune)
 
     swp = sub.add_parser("sweep", help="Monte Carlo sweep over scenario parameters x repetitions x controllers; HDF5")
     swp.add_argument("file", help="a sweep file (TOML; see geojax.sweep for the keys)")
@@ -140,6 +147,8 @@ def _simulate(args) -> int:
     if args.h_att is not None:
         overrides["errors.h_att"] = args.h_att
     sc = scenario.load(args.scenario, overrides)
+    if sc.controller == "lyapunov":
+        return _simulate_feedback(args, sc)
     print(f"{sc.name}: {sc.controller.upper()} for {sc.days:g} days (compiling, then running)...", flush=True)
     result = run.simulate_scenario(sc, args.seed)
     print(f"{sc.name}: {sc.controller.upper()}, {len(result.cycles['t_s'])} cycles, {result.wall_s:.1f} s wall")
@@ -159,6 +168,46 @@ def _simulate(args) -> int:
                    plots.plot_station_keeping(result.cycles, result.reference, result.target,
                                               Path(args.plots) / f"{sc.name}-station-keeping.png", title=title)]
         print("wrote " + " and ".join(map(str, figures)))
+    return 0
+
+
+def _simulate_feedback(args, sc) -> int:
+    from geojax import plots, run, scenario, store
+    from geojax.tune import PAPER
+
+    mode = sc.config["controller"]["thrust_mode"]
+    print(f"{sc.name}: Milankovitch-Lyapunov feedback, {mode} thrust, {sc.days:g} days (compiling, then running)...",
+          flush=True)
+    result = run.simulate_feedback(sc)
+    paper = PAPER.get(mode, {}) if sc.name.startswith("katz2025") else {}
+    print(f"  {'metric':32s} {'geojax':>12s}  {'Katz 2025' if paper else ''}")
+    for name, value in result.metrics.items():
+        print(f"  {name:32s} {value:12.5g}  {paper.get(name, '')}")
+    if args.out:
+        path = store.write_h5(args.out, {"metrics": result.metrics, "steps": result.steps}, scenario.to_toml(sc.config),
+                              result.wall_s, attrs={"kind": "simulate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s})
+        print(f"wrote {path}")
+    if args.plots:
+        figures = plots.plot_feedback(result.steps, sc.config["station"]["box_half_width_deg"],
+                                      Path(args.plots) / sc.name, title=f"{sc.name}, {mode} thrust")
+        print("wrote " + " and ".join(map(str, figures)))
+    return 0
+
+
+def _tune(args) -> int:
+    from geojax import tune
+
+    spec = tune.load(args.file)
+    result = tune.tune(spec, out=args.out, verbose=not args.quiet)
+    print(f"{spec.scenario.name}: {result.message}; {result.wall_s:.1f} s wall")
+    if result.best_params is None:
+        print("  no feasible point: every iterate left the box with the exact law")
+        return 1
+    for name, value in tune.paper_units(result.best_params).items():
+        print(f"  {name:24s} {value:.6g}")
+    print(f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept "
+          f"(constraint lon {result.best_constraint[0]:+.4f}, lat {result.best_constraint[1]:+.4f})")
+    print(f"wrote {args.out}")
     return 0
 
 
@@ -228,6 +277,11 @@ def _plot(args) -> int:
                                   title=str(attrs.get("name", path.stem)))
         print(f"wrote {figure}")
         return 0
+    if "steps" in groups:  # a feedback run (Katz 2025)
+        box = _box_half_width_deg(attrs)
+        figures = plots.plot_feedback(groups["steps"], box, out / path.stem, title=str(attrs.get("scenario", path.stem)))
+        print("wrote " + " and ".join(map(str, figures)))
+        return 0
     if "cycles" not in groups:
         raise ValueError(f"file {str(path)!r}: no /cycles group to plot")
     title = str(attrs.get("scenario", path.stem))
@@ -237,6 +291,13 @@ def _plot(args) -> int:
                                                   out / f"{path.stem}-station-keeping.png", title=title))
     print("wrote " + " and ".join(map(str, figures)))
     return 0
+
+
+def _box_half_width_deg(attrs) -> float:
+    """The box half-width (deg) of the scenario stored with a results file."""
+    from geojax import scenario
+
+    return float(scenario.from_dict(scenario.tomllib.loads(str(attrs["config_toml"]))).config["station"]["box_half_width_deg"])
 
 
 def _scenarios(args) -> int:

@@ -103,18 +103,31 @@ def shadow_fraction(r_eci, r_sun_eci, r_earth_m):
     a = x * (1 + x**2 / 6 + 0.075 * x**4)
     b = jnp.arcsin(jnp.clip(r_earth_m / d_earth, 0.0, 1.0))
     cos_sep = -jnp.sum(r_eci * to_sun, axis=-1) / (d_earth * d_sun)
-    sep = jnp.arccos(jnp.clip(cos_sep, -1.0, 1.0))
+    sep = _safe_arccos(cos_sep)
     # Occulted area of two overlapping discs of angular radii a (Sun) and b (Earth).
     safe_sep = jnp.maximum(sep, 1e-12)
     x = (safe_sep**2 + a**2 - b**2) / (2 * safe_sep)
-    y = jnp.sqrt(jnp.maximum(a**2 - x**2, 0.0))
-    area = a**2 * jnp.arccos(jnp.clip(x / a, -1.0, 1.0)) + b**2 * jnp.arccos(
-        jnp.clip((safe_sep - x) / b, -1.0, 1.0)
-    ) - safe_sep * y
+    y = _safe_sqrt(a**2 - x**2)
+    area = a**2 * _safe_arccos(x / a) + b**2 * _safe_arccos((safe_sep - x) / b) - safe_sep * y
     partial = 1 - area / (jnp.pi * a**2)
     full_umbra = sep <= b - a
     # Both branches are evaluated under vmap; where() picks per sample.
     return jnp.where(sep >= a + b, 1.0, jnp.where(full_umbra, 0.0, jnp.clip(partial, 0.0, 1.0)))
+
+
+# Gradient-safe forms: outside the discs' overlap these are evaluated and then selected away (or
+# multiplied by a switch that is off); the plain sqrt / arccos would put an infinite derivative there,
+# and 0 * inf = NaN would poison every gradient through the force model.
+def _safe_sqrt(x):
+    """sqrt(max(x, 0)) with a zero gradient where x <= 0."""
+    positive = x > 0
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, x, 1.0)), 0.0)
+
+
+def _safe_arccos(x):
+    """arccos(clip(x, -1, 1)) with a zero gradient where |x| >= 1."""
+    inside = jnp.abs(x) < 1.0
+    return jnp.where(inside, jnp.arccos(jnp.where(inside, x, 0.0)), jnp.where(x >= 1.0, 0.0, jnp.pi))
 
 
 def solar_radiation_pressure(r_eci, r_sun_eci, mass_kg, fm: ForceModel):

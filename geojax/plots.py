@@ -115,6 +115,32 @@ def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv
     return _save(fig, [ax], title, path)
 
 
+def plot_feedback(steps, box_half_width_deg: float, path_stem: str | Path, title: str = "") -> list[Path]:
+    """Katz 2025 Figs. 1-7 from a feedback run (``/steps`` of ``geojax simulate --out``): the ground track
+    (lambda - lambda_d, latitude) inside the box; the delivered acceleration per ECEF axis and its norm
+    over the run; and a two-day close-up of the z axis mid-run (Fig. 5)."""
+    days = np.asarray(steps["t_s"]) / 86400.0
+    u = np.stack([np.asarray(steps[k]) for k in ("ux_mps2", "uy_mps2", "uz_mps2")], -1) * 1e-3  # km/s^2
+    box = box_half_width_deg
+    fig, ax = plt.subplots(figsize=(6, 6), constrained_layout=True)
+    ax.plot(steps["dlon_deg"], steps["lat_deg"], lw=0.3)
+    ax.plot([-box, box, box, -box, -box], [-box, -box, box, box, -box], "r--", label="box")
+    ax.set(xlabel="λ − λ_d (deg)", ylabel="latitude (deg)", aspect="equal")
+    ax.legend()
+    track = _save(fig, [ax], title, f"{path_stem}-ground-track.png")
+    fig, axes = plt.subplots(5, 1, figsize=(10, 11), constrained_layout=True)
+    for a, series, label in zip(axes, [u[:, 0], u[:, 1], u[:, 2], np.linalg.norm(u, axis=-1)],
+                                ["u_x", "u_y", "u_z", "|u|"]):
+        a.plot(days, series, lw=0.4)
+        a.set(xlabel="days", ylabel=f"{label} (km/s²)")
+    mid = days[len(days) // 2]
+    close = (days >= mid) & (days <= mid + 2.0)
+    axes[4].step(days[close], u[close, 2], where="post")
+    axes[4].set(xlabel="days", ylabel="u_z (km/s²), 2 days")
+    history = _save(fig, list(axes), title, f"{path_stem}-thrust.png")
+    return [track, history]
+
+
 def ground_track_deg(lon_deg, ex, ey, ix, iy, samples_per_cycle: int = 48):
     """Longitude and latitude (deg) over each cycle, rebuilt from its mean elements [n].
 

@@ -15,6 +15,7 @@ from geojax.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.dynamics import SpacecraftState
 from geojax.progress import Progress
 from geojax.propagate import DYNAMICS, CycleMeans, environment_grid, propagate_cycles, steps_per_cycle
+from geojax.elements import wrap_angle
 from geojax.scenario import Scenario
 
 
@@ -282,3 +283,95 @@ def _metrics(rec, final, target, n_cycles: int, wall_s: float) -> dict[str, floa
 
     metrics = {name: float(value) for name, value in closed_loop_metrics(rec, final, target, n_cycles).items()}
     return {**metrics, "cpu_s_per_orbit": wall_s / n_cycles}
+
+
+class FeedbackSetup(NamedTuple):
+    """A feedback-law scenario (``controller.kind = "lyapunov"``), built once and shared by a batch."""
+
+    state: SpacecraftState
+    env: object  # Environment leaves [n_days, n_steps, 3, ...]
+    params: object  # feedback.FeedbackParams
+    step_s: float
+    mode: str  # thrust_laws.MODES
+    dynamics: str  # "mee" or "cartesian"
+    box_half_width_rad: float
+
+
+def feedback_setup(scenario: Scenario) -> FeedbackSetup:
+    """Initial state, environment grid and parameters of a Katz 2025 feedback scenario."""
+    if scenario.controller != "lyapunov":
+        raise ValueError(f"controller.kind: a feedback rollout needs 'lyapunov', got {scenario.controller!r}")
+    n_steps = steps_per_cycle(scenario.step_s)
+    step_s = SIDEREAL_DAY_S / n_steps
+    n_days = max(1, round(scenario.days * SECONDS_PER_DAY / SIDEREAL_DAY_S))
+    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, n_days, n_steps)
+    cfg = scenario.config
+    return FeedbackSetup(initial_state(scenario), env, feedback_params(scenario), step_s,
+                         cfg["controller"]["thrust_mode"], scenario.dynamics,
+                         math.radians(cfg["station"]["box_half_width_deg"]))
+
+
+def feedback_params(scenario: Scenario):
+    """The ``feedback.FeedbackParams`` of a scenario, SI units (gains as array leaves)."""
+    from geojax import constants as c
+    from geojax.control import lyapunov
+    from geojax.feedback import FeedbackParams
+    from geojax.thrust_laws import ThrustLimits
+
+    cfg = scenario.config
+    ctl, st = cfg["controller"], cfg["station"]
+    sigma = ctl["sigma_km_per_s2"] or [0.0, 0.0, 0.0]
+    f = lambda x: jnp.asarray(float(x))  # noqa: E731
+    return FeedbackParams(
+        gains=lyapunov.LyapunovGains(f(ctl["k_h_per_km2_s"] * lyapunov.K_H_PAPER_TO_SI),
+                                     f(ctl["k_e_km2_per_s3"] * lyapunov.K_E_PAPER_TO_SI),
+                                     f(ctl["k_lambda_km_per_rad"] * lyapunov.K_LAMBDA_PAPER_TO_SI),
+                                     f(math.radians(ctl["lambda_b_deg"]))),
+        limits=ThrustLimits(f(ctl["u0_km_per_s2"] * 1e3), jnp.asarray(sigma) * 1e3),
+        station=lyapunov.Station(f(math.radians(st["lon_deg"])), f(st["radius_km"] * 1e3),
+                                 f(c.OMEGA_EARTH_RAD_S), f(scenario.force_model.mu_m3_s2)),
+        isp_s=f(cfg["thrusters"]["isp_s"]),
+    )
+
+
+@functools.partial(jax.jit, static_argnames=("dynamics", "step_s", "mode", "smooth"))
+def feedback_rollout(state, env, fm, params, box_half_width_rad, dynamics: str, step_s: float, mode: str,
+                     smooth: bool = False):
+    """``feedback.rollout`` and its metrics, compiled once per (shapes, dynamics, step, mode, smooth)."""
+    from geojax import feedback
+
+    final, records = feedback.rollout(DYNAMICS[dynamics], state, env, fm, step_s, params, mode, smooth)
+    summary = feedback.metrics(state, final, records, step_s, params.station.lon_rad, box_half_width_rad)
+    return final, records, summary
+
+
+def run_feedback(setup: FeedbackSetup, fm, params=None, smooth: bool = False):
+    """One rollout of a set-up feedback scenario (its own parameters unless ``params`` is given)."""
+    return feedback_rollout(setup.state, setup.env, fm, setup.params if params is None else params,
+                            setup.box_half_width_rad, dynamics=setup.dynamics, step_s=setup.step_s,
+                            mode=setup.mode, smooth=smooth)
+
+
+class FeedbackResult(NamedTuple):
+    metrics: dict[str, float]  # the /metrics datasets
+    steps: dict[str, np.ndarray]  # the /steps datasets: per integration step
+    wall_s: float
+
+
+def simulate_feedback(scenario: Scenario) -> FeedbackResult:
+    """Closed-loop run of a Milankovitch-Lyapunov scenario: metrics and the per-step history."""
+    start = time.perf_counter()
+    setup = feedback_setup(scenario)
+    final, records, summary = run_feedback(setup, scenario.force_model)
+    records = jax.tree_util.tree_map(np.asarray, records)
+    wall_s = time.perf_counter() - start
+    metrics = {name: float(value) for name, value in summary._asdict().items()}
+    metrics["mass_used_kg"] = float(setup.state.mass_kg - final.mass_kg)
+    u = records.u_ecef_mps2.reshape(-1, 3)
+    steps = {
+        "t_s": np.arange(u.shape[0]) * setup.step_s,
+        "dlon_deg": np.degrees(np.asarray(wrap_angle(records.lon_rad.ravel() - float(setup.params.station.lon_rad)))),
+        "lat_deg": np.degrees(records.lat_rad.ravel()),
+        "ux_mps2": u[:, 0], "uy_mps2": u[:, 1], "uz_mps2": u[:, 2],
+    }
+    return FeedbackResult(metrics, steps, wall_s)

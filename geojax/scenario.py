@@ -24,6 +24,8 @@ from geojax.elements import cartesian_to_mee, kepler_to_mee
 from geojax.forces import ForceModel
 from geojax.frames import ecef_to_eci, earth_rotation_angle_rad
 from geojax.propulsion import arm_limits_deg
+from geojax.thrust_laws import MODES as THRUST_MODES
+from geojax.thrust_laws import check_thresholds
 from geojax.time import TT_MINUS_TAI_S, parse_utc, tai_minus_utc_s, tt_seconds_from_utc
 
 try:
@@ -105,7 +107,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True),
     },
     "controller": {
-        "kind": Field(str, "none", choices=("none", "qffc", "fompc")),
+        "kind": Field(str, "none", choices=("none", "qffc", "fompc", "lyapunov")),
         # Start V_DT from the estimate of Li 2022, eqs. (37)-(39), instead of the drift target.
         "vdt_estimate": Field(bool, False),
         # FOMPC (Li 2022, eqs. (40)-(42)): horizon N <= 10 cycles, Delta i_max in MEE (h, k), penalty P in
@@ -115,6 +117,17 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "penalty": Field(_NUMBER, 1e8, lower=0.0),
         "chains": Field(int, 8, lower=1, upper=1025, lower_inclusive=True),
         "iterations": Field(int, 64, lower=0, upper=100001, lower_inclusive=True),
+        # Milankovitch-Lyapunov feedback (Katz 2025, eqs. (1)-(7)), in the paper's units (see
+        # geojax/control/lyapunov.py for the reading of each): gains > 0, lambda_b any sign.
+        "k_h_per_km2_s": Field(_NUMBER, None, lower=0.0),
+        "k_e_km2_per_s3": Field(_NUMBER, None, lower=0.0),
+        "k_lambda_km_per_rad": Field(_NUMBER, None, lower=0.0),
+        "lambda_b_deg": Field(_NUMBER, None),
+        "thrust_mode": Field(str, "continuous-clipped", choices=THRUST_MODES),
+        # u0: largest acceleration; default thrusters.thrust_n / spacecraft.mass_kg.
+        "u0_km_per_s2": Field(_NUMBER, None, lower=0.0),
+        # Discrete thresholds (eq. (6)) along ECEF x, y, z; their norm must be u0.
+        "sigma_km_per_s2": Field(list, None, length=3),
     },
     # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors (0.3 m, 5e-5 m/s, 0.05 deg).
     "errors": {
@@ -240,27 +253,34 @@ def _validate(raw: dict) -> dict:
         given = raw if table == "" else raw.get(table, {})
         if not isinstance(given, dict):
             raise ValueError(f"{table}: must be a table")
-        prefix = f"{table}." if table else ""
-        for key in given:
-            if key not in fields and not (table == "" and key in SCHEMA):
-                raise ValueError(f"{prefix}{key}: unknown key; allowed: {', '.join(fields)}")
-        out = {}
-        for key, field in fields.items():
-            name = f"{prefix}{key}"
-            if key not in given:
-                if field.default is REQUIRED:
-                    raise ValueError(f"{name}: missing (required)")
-                out[key] = field.default
-                continue
-            out[key] = _check(name, given[key], field)
+        out = check_table(f"{table}." if table else "", given, fields, ignore=SCHEMA if table == "" else ())
         if table:
             config[table] = out
         else:
             config.update(out)
     _check_orbit(config["orbit"])
+    if config["controller"]["kind"] == "lyapunov":
+        _check_lyapunov(config)
     t = config["thrusters"]
     arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
     return config
+
+
+def check_table(prefix: str, given: dict, fields: dict[str, Field], ignore=()) -> dict:
+    """Validate one table against its fields (names reported as ``prefix + key``); defaults filled in."""
+    for key in given:
+        if key not in fields and key not in ignore:
+            raise ValueError(f"{prefix}{key}: unknown key; allowed: {', '.join(fields)}")
+    out = {}
+    for key, field in fields.items():
+        name = f"{prefix}{key}"
+        if key not in given:
+            if field.default is REQUIRED:
+                raise ValueError(f"{name}: missing (required)")
+            out[key] = field.default
+            continue
+        out[key] = _check(name, given[key], field)
+    return out
 
 
 def _check(name: str, value: Any, field: Field) -> Any:
@@ -305,6 +325,22 @@ def _check_orbit(orbit: dict) -> None:
         raise ValueError(f"orbit.{extra[0]}: not used when orbit.elements = {kind!r}; give only {', '.join(needed)}")
     if kind == "mee" and math.hypot(orbit["f"], orbit["g"]) >= 1:
         raise ValueError(f"orbit.f, orbit.g: eccentricity sqrt(f^2 + g^2) must be < 1, got {math.hypot(orbit['f'], orbit['g']):g}")
+
+
+LYAPUNOV_GAINS = ("k_h_per_km2_s", "k_e_km2_per_s3", "k_lambda_km_per_rad", "lambda_b_deg")
+
+
+def _check_lyapunov(config: dict) -> None:
+    ctl = config["controller"]
+    missing = [k for k in LYAPUNOV_GAINS if ctl[k] is None]
+    if missing:
+        raise ValueError(f"controller.{missing[0]}: missing (required when controller.kind = 'lyapunov')")
+    if ctl["u0_km_per_s2"] is None:
+        ctl["u0_km_per_s2"] = config["thrusters"]["thrust_n"] / config["spacecraft"]["mass_kg"] / 1e3
+    if ctl["thrust_mode"] == "discrete":
+        if ctl["sigma_km_per_s2"] is None:
+            raise ValueError("controller.sigma_km_per_s2: missing (required when controller.thrust_mode = 'discrete')")
+        check_thresholds(ctl["u0_km_per_s2"], ctl["sigma_km_per_s2"])
 
 
 def _initial_mee(config: dict, epoch_tt_s: float, tt_minus_ut1_s: float) -> np.ndarray:

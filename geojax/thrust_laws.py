@@ -1,0 +1,82 @@
+"""Acceleration limits of a feedback law (Katz 2025, eqs. (5)-(7)) and their smooth surrogates.
+
+A feedback law commands an acceleration u; the propulsion system can only
+deliver part of it.  Four implementations, all functions of u [3] (m/s^2, ECEF
+axes, so the discrete thresholds act on the Earth-fixed x, y, z):
+
+- ``"continuous"`` (eq. (5) as printed): u where |u| <= u0, and **zero** where
+  |u| > u0 -- the thruster switches off when asked for more than it has.
+  That is what the equation says; a real system would rather saturate, so
+- ``"continuous-clipped"``: u scaled back to |u| = u0 where |u| > u0 (the usual
+  saturation; Lipschitz in u, the configuration the gradient checks use).
+- ``"discrete"`` (eq. (6), Guelman 2014): per axis, sigma_i sign(u_i) where
+  |u_i| >= sigma_i, else 0, with |sigma| = u0 (all three axes firing at once
+  deliver u0).
+- ``"constant"`` (eq. (7)): u0 u/|u| where |u| >= u0, else 0 (a gimballed
+  thruster, on or off).
+
+Tuning needs gradients through the on/off decisions, which are step functions.
+``smooth=True`` replaces each indicator by a logistic sigmoid of the relative
+margin with temperature ``temperature`` (e.g. 1[|u| >= u0] ->
+sigmoid((|u| - u0) / (T u0))); as T -> 0 the surrogate tends to the exact law.
+Reported objectives and box checks always use ``smooth=False``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+MODES = ("continuous", "continuous-clipped", "discrete", "constant")
+
+# |u| below this (m/s^2) counts as zero when a direction is needed (1e-9 of u0 for 10 mN on 2205 kg).
+_TINY_MPS2 = 1e-15
+
+
+class ThrustLimits(NamedTuple):
+    """Acceleration limits (SI): u0 = F_max / m, and the per-axis thresholds of eq. (6) (|sigma| = u0)."""
+
+    u0_mps2: jnp.ndarray
+    sigma_mps2: jnp.ndarray  # [3], x, y, z of ECEF; used by "discrete" only
+
+
+def apply(mode: str, u, limits: ThrustLimits, smooth: bool = False, temperature=0.05):
+    """The acceleration [3] the thrusters deliver for a commanded ``u`` [3]; ``mode`` and ``smooth`` are static."""
+    if mode not in MODES:
+        raise ValueError(f"controller.thrust_mode: must be one of {', '.join(MODES)}, got {mode!r}")
+    u0 = limits.u0_mps2
+    norm = safe_norm(u)
+    if mode == "continuous-clipped":
+        return u * jnp.minimum(1.0, u0 / norm)
+    if mode == "discrete":
+        sigma = limits.sigma_mps2
+        on = _step(jnp.abs(u) - sigma, sigma, smooth, temperature)
+        return sigma * jnp.sign(u) * on
+    if mode == "continuous":
+        return u * _step(u0 - norm, u0, smooth, temperature)
+    return u0 * u / norm * _step(norm - u0, u0, smooth, temperature)
+
+
+def safe_norm(u):
+    """|u| with a finite gradient at u = 0 (where it returns _TINY_MPS2)."""
+    return jnp.sqrt(jnp.sum(u**2, axis=-1) + _TINY_MPS2**2)
+
+
+def _step(margin, scale, smooth: bool, temperature):
+    """1[margin >= 0], or its sigmoid surrogate of relative width ``temperature``."""
+    if smooth:
+        return jax.nn.sigmoid(margin / (temperature * scale))
+    return (margin >= 0).astype(margin.dtype)
+
+
+def check_thresholds(u0_mps2: float, sigma_mps2, field: str = "controller.sigma_km_per_s2", rtol: float = 1e-6) -> None:
+    """ValueError unless every threshold is > 0 and |sigma| = u0 (eq. (6))."""
+    sigma = [float(s) for s in sigma_mps2]
+    if len(sigma) != 3 or min(sigma) <= 0:
+        raise ValueError(f"{field}: must be three thresholds > 0, got {sigma}")
+    norm = sum(s * s for s in sigma) ** 0.5
+    if abs(norm - u0_mps2) > rtol * u0_mps2:
+        raise ValueError(f"{field}: the norm of the thresholds must equal u0 = {u0_mps2:.6g} (Katz 2025, eq. (6)), "
+                         f"got {norm:.6g}")

@@ -1,0 +1,82 @@
+"""geojax tune: input checks, per-iteration records in HDF5, and a diverging run that keeps its best point."""
+
+import numpy as np
+import pytest
+
+from geojax import cli, scenario, store, tune
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("controller.k_h_per_km2_s", 0.0, "controller.k_h_per_km2_s: must be > 0"),
+    ("controller.k_e_km2_per_s3", -1e-6, "controller.k_e_km2_per_s3: must be > 0"),
+    ("controller.k_lambda_km_per_rad", 0.0, "controller.k_lambda_km_per_rad: must be > 0"),
+    ("station.box_half_width_deg", 0.0, "station.box_half_width_deg: must be > 0"),
+    ("controller.sigma_km_per_s2", [6.62e-10, 1.1e-9, 4.14e-9], "norm of the thresholds must equal u0"),
+    ("controller.thrust_mode", "bang-bang", "controller.thrust_mode: must be one of"),
+])
+def test_bad_feedback_scenarios_name_the_field(key, value, message):
+    with pytest.raises(ValueError, match=message):
+        scenario.load("katz2025-discrete", {key: value})
+
+
+def test_missing_gain_is_an_error(tmp_path):
+    text = scenario.read_text("katz2025-continuous").replace("k_e_km2_per_s3 = 5.48482e-6\n", "")
+    path = tmp_path / "no_ke.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match="controller.k_e_km2_per_s3: missing"):
+        scenario.load(path)
+
+
+@pytest.mark.parametrize("raw, message", [
+    ({"scenario": "katz2025-discrete", "parameters": ["k_h", "gain"]}, "parameters: must be distinct names"),
+    ({"scenario": "katz2025-continuous", "parameters": ["sigma"]}, "'sigma' is tuned only"),
+    ({"scenario": "li2022-qffc"}, "tuning needs controller.kind = 'lyapunov'"),
+    ({"scenario": "katz2025-discrete", "starts": 0}, "starts: must be >= 1"),
+    ({"scenario": "katz2025-discrete", "temperature_start": 0.01, "temperature_end": 0.1}, "temperature_end"),
+    ({"scenario": "katz2025-discrete", "step": 3}, "step: unknown key"),
+])
+def test_bad_tuning_files_name_the_field(raw, message):
+    with pytest.raises(ValueError, match=message):
+        tune.from_dict(raw)
+
+
+def test_parameter_space_round_trip_keeps_threshold_norm():
+    """The unconstrained vector maps back to the same gains, and any threshold weights give |sigma| = u0."""
+    sc = scenario.load("katz2025-discrete")
+    params = tune.run.feedback_params(sc)
+    names = ["k_h", "k_e", "k_lambda", "lambda_b", "sigma"]
+    theta = tune.to_theta(params, names)
+    back = tune.from_theta(theta, params, names)
+    for a, b in zip(back.gains, params.gains):
+        assert float(a) == pytest.approx(float(b), rel=1e-12)
+    np.testing.assert_allclose(back.limits.sigma_mps2, params.limits.sigma_mps2, rtol=1e-7)
+    moved = tune.from_theta(theta + np.array([0, 0, 0, 0, 1.0, -2.0, 0.5]), params, names)
+    assert float(np.linalg.norm(moved.limits.sigma_mps2)) == pytest.approx(float(params.limits.u0_mps2), rel=1e-12)
+
+
+def test_diverging_run_stops_and_keeps_the_best_feasible_point(tmp_path, capsys):
+    """A run whose gradients are all non-finite stops after its first iteration with a message, and keeps
+    the best point that the exact law found feasible (the scenario's own gains over 2 days)."""
+    spec = tune.from_dict({"scenario": "katz2025-discrete", "days": 2.0, "starts": 2, "iterations": 5,
+                           "spread_decades": 0.01})
+    problem = tune.Problem(spec.scenario, spec.parameters)
+    problem.surrogate_grad = lambda thetas, t: (np.full(len(thetas), np.nan), None, np.full(np.shape(thetas), np.nan))
+    result = tune.tune(spec, out=tmp_path / "t.h5", problem=problem)
+    assert "every start diverged" in result.message
+    assert result.best_theta is not None and np.isfinite(result.best_dv_per_year_mps)
+    groups, attrs = store.read_h5(tmp_path / "t.h5")
+    assert {"geojax_version", "config_toml", "created_utc", "wall_s", "device"} <= set(attrs)
+    assert groups["iterations"]["dv_per_year_mps"].shape == (1, 2)
+    assert groups["metrics"]["dv_per_year_mps"] == pytest.approx(result.best_dv_per_year_mps)
+    assert "diverged" in capsys.readouterr().out
+
+
+def test_cli_tune_writes_results_and_rejects_bad_files(tmp_path):
+    good = tmp_path / "t.toml"
+    good.write_text('scenario = "katz2025-constant"\ndays = 2.0\nstarts = 2\niterations = 0\n')
+    assert cli.main(["tune", str(good), "--out", str(tmp_path / "t.h5"), "--quiet"]) in (0, 1)
+    groups, attrs = store.read_h5(tmp_path / "t.h5")
+    assert attrs["kind"] == "tune" and groups["iterations"]["theta"].shape == (1, 2, 2)
+    bad = tmp_path / "bad.toml"
+    bad.write_text('scenario = "katz2025-constant"\nparameters = ["k_x"]\n')
+    assert cli.main(["tune", str(bad), "--out", str(tmp_path / "b.h5")]) == 2
