@@ -219,6 +219,18 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> Scenario:
     return from_dict(raw)
 
 
+def read_toml_file(path: str | Path, kind: str) -> tuple[dict, str]:
+    """(table, text) of a TOML file (a sweep or tuning file); ``ValueError`` naming the ``kind`` of file."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{kind} file {str(path)!r}: no such file")
+    text = path.read_text()
+    try:
+        return tomllib.loads(text), text
+    except tomllib.TOMLDecodeError as err:
+        raise ValueError(f"{kind} file {str(path)!r}: not valid TOML ({err})") from None
+
+
 def read_text(name_or_path: str | Path) -> str:
     path = Path(name_or_path)
     if path.suffix == ".toml" or path.exists():

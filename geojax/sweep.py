@@ -54,10 +54,6 @@ from geojax.metrics import CYCLE_NAMES, NAMES as METRIC_NAMES
 from geojax.parallel import shard_batch
 from geojax.progress import Progress
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
 
 # Parameters a sweep may vary: the scenario keys that are array leaves of simulate.LoopParams.
 SWEEPABLE = (
@@ -107,13 +103,7 @@ def load(path: str | Path, changes: dict | None = None) -> Sweep:
     from geojax.simulate import CONTROLLERS
 
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"sweep file {str(path)!r}: no such file")
-    text = path.read_text()
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"sweep file {str(path)!r}: not valid TOML ({err})") from None
+    raw, text = scenario_mod.read_toml_file(path, "sweep")
     if changes:
         raw = {**raw, **changes, "set": {**raw.get("set", {}), **changes.get("set", {})}}
         text = scenario_mod.to_toml(raw)

@@ -51,10 +51,6 @@ from geojax.parallel import shard_batch
 from geojax.propagate import DYNAMICS
 from geojax.scenario import REQUIRED, Field
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
 
 # Katz 2025, Table 1 and Secs. 3.1-3.3, per thrust mode ("+-" excursions as the paper states them).
 PAPER = {
@@ -110,13 +106,7 @@ class TuneSpec:
 def load(path: str | Path) -> TuneSpec:
     """Read and validate a tuning file; ``ValueError`` with one line naming the fault."""
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"tuning file {str(path)!r}: no such file")
-    text = path.read_text()
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"tuning file {str(path)!r}: not valid TOML ({err})") from None
+    raw, text = scenario_mod.read_toml_file(path, "tuning")
     return from_dict(raw, text)
 
 
