@@ -8,23 +8,43 @@ a strong sensitivity to the initial guess).  A tuning file:
     scenario = "katz2025-discrete"      # shipped name or .toml path (controller.kind = "lyapunov")
     parameters = ["k_h", "k_e"]         # any of k_h, k_e, k_lambda, lambda_b, sigma
     starts = 16                         # start 0 is the scenario's own gains
-    iterations = 30
-    # optional: days, step_s, learning_rate, learning_rate_end, momentum, spread_decades, spread_lambda_b_deg,
-    # temperature_start, temperature_end, penalty_mps, margin, seed, gradient ("forward" or "reverse")
+    iterations = 40
+    # optional: method ("sqp" or "adam"), days, step_s, spread_decades, spread_lambda_b_deg, temperature_start,
+    # temperature_end, margin, seed, gradient ("forward" or "reverse"); for "sqp": trust_radius,
+    # trust_radius_min, step_tolerance; for "adam": learning_rate, learning_rate_end, momentum, penalty_mps
 
 Parameters live in an unconstrained space: the natural log of the positive
 gains (k_h, k_e, k_lambda), lambda_b / 0.1 deg, and for the discrete
 thresholds three log-weights s with sigma = u0 exp(s) / |exp(s)|, so |sigma| =
-u0 holds by construction.  The loss is the surrogate Delta-V plus
-``penalty_mps`` times the violation of the box tightened by ``margin``
-(constraint g = max(excursion^2) / Delta_s^2 - 1 per axis, eq. (10)); the
-discontinuous thrust laws use their sigmoid surrogates at a temperature
-annealed geometrically from ``temperature_start`` to ``temperature_end``
-(``thrust_laws``).  Every iterate of every start is also evaluated with the
-*exact* law over the full horizon; the result is the iterate of least exact
-Delta-V whose exact rollout keeps the box.  A start whose loss or gradient is
-not finite stops (its best feasible point is kept); when every start has
-stopped the run ends with a message.
+u0 holds by construction.  The box is Katz's eq. (10) normalised: one
+constraint per axis, g = max(excursion^2) / Delta_s^2 - 1 <= 0.  The
+discontinuous thrust laws are differentiated through their sigmoid surrogates
+at a temperature annealed geometrically from ``temperature_start`` to
+``temperature_end`` (``thrust_laws``); every iterate of every start is also
+evaluated with the *exact* law over the full horizon, and the result is the
+iterate of least exact Delta-V whose exact rollout keeps the box.
+
+Two methods, both on all starts at once:
+
+- ``"sqp"`` (default): a trust-region sequential quadratic programme.  One
+  forward-mode pass gives the whole Jacobian of (Delta-V, g_lon, g_lat) with
+  respect to the parameters; each start then solves a small QP (the
+  linearised box tightened by ``margin``, elastic when it cannot be met, a
+  damped-BFGS model of the Lagrangian's curvature that starts from one
+  curvature fitted to all the starts' gradients, an infinity-norm trust
+  region) and the step is accepted on the *exact* law: while outside the box,
+  when the violation shrinks; inside it, when the box is kept and Delta-V
+  falls.  A rejected step halves the trust region (down to
+  ``trust_radius_min``, about the scale below which the sampled-and-held
+  discrete laws are noise); the run stops early when every step is shorter
+  than ``step_tolerance``.  Constraint Jacobians are what a penalty cannot
+  give: a start walks along the edge of the box instead of bouncing off it.
+- ``"adam"``: optax Adam on the surrogate Delta-V plus ``penalty_mps`` times
+  the violation of the box tightened by ``margin`` (the first-order method,
+  kept for comparison and for many-parameter problems).
+
+A start whose values or derivatives are not finite stops (its best feasible
+point is kept); when every start has stopped the run ends with a message.
 
 Gradients are forward-mode by default (``jacfwd``: no tape, so memory does not
 grow with the horizon; for 2-7 parameters about twice as fast as reverse mode
@@ -44,6 +64,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import optax
+from scipy.optimize import minimize
 
 from geojax import feedback, run, scenario as scenario_mod, store
 from geojax.control import lyapunov
@@ -73,7 +94,11 @@ FIELDS = {
     "scenario": Field(str, REQUIRED),
     "parameters": Field(list, ["k_h", "k_e"]),
     "starts": Field(int, 16, lower=1, upper=4097, lower_inclusive=True),
-    "iterations": Field(int, 30, lower=0, upper=10001, lower_inclusive=True),
+    "iterations": Field(int, 40, lower=0, upper=10001, lower_inclusive=True),
+    "step_tolerance": Field((int, float), 1e-4, lower=0.0, lower_inclusive=True),
+    "method": Field(str, "sqp", choices=("sqp", "adam")),
+    "trust_radius": Field((int, float), None, lower=0.0),
+    "trust_radius_min": Field((int, float), 0.02, lower=0.0),
     "days": Field((int, float), None, lower=0.0),
     "step_s": Field((int, float), None, lower=0.0),
     "learning_rate": Field((int, float), 0.1, lower=0.0),
@@ -81,10 +106,10 @@ FIELDS = {
     "momentum": Field((int, float), 0.5, lower=0.0, upper=1.0, lower_inclusive=True),
     "spread_decades": Field((int, float), 0.3, lower=0.0, lower_inclusive=True),
     "spread_lambda_b_deg": Field((int, float), 0.02, lower=0.0, lower_inclusive=True),
-    "temperature_start": Field((int, float), 0.3, lower=0.0),
+    "temperature_start": Field((int, float), 0.1, lower=0.0),
     "temperature_end": Field((int, float), 0.03, lower=0.0),
     "penalty_mps": Field((int, float), 200.0, lower=0.0),
-    "margin": Field((int, float), 0.02, lower=0.0, upper=1.0, lower_inclusive=True),
+    "margin": Field((int, float), None, lower=0.0, upper=1.0, lower_inclusive=True),
     "seed": Field(int, 0, lower=0, lower_inclusive=True),
     "gradient": Field(str, "forward", choices=("forward", "reverse")),
 }
@@ -115,6 +140,9 @@ def from_dict(raw: dict, text: str = "") -> TuneSpec:
     names = config["parameters"]
     if not names or any(n not in TUNABLE for n in names) or len(set(names)) != len(names):
         raise ValueError(f"parameters: must be distinct names from {', '.join(TUNABLE)}, got {names!r}")
+    if config["trust_radius"] is not None and config["trust_radius_min"] > config["trust_radius"]:
+        raise ValueError(f"trust_radius_min: must be <= trust_radius = {config['trust_radius']}, "
+                         f"got {config['trust_radius_min']}")
     if config["temperature_end"] > config["temperature_start"]:
         raise ValueError(f"temperature_end: must be <= temperature_start = {config['temperature_start']}, "
                          f"got {config['temperature_end']}")
@@ -204,6 +232,7 @@ class Problem:
         self._exact = jax.jit(jax.vmap(lambda th: self.evaluate(th, smooth=False)[1]))
         self._single = jax.jit(lambda th: self.evaluate(th, smooth=False)[1])
         self._grad = jax.jit(jax.vmap(_value_and_grad(self.evaluate, gradient), in_axes=(0, None)))
+        self._jacobian = jax.jit(jax.vmap(_jacobian(self.evaluate, gradient), in_axes=(0, None)))
 
     @property
     def exact_is_smooth(self) -> bool:
@@ -233,6 +262,13 @@ class Problem:
         (loss, aux), grad = self._grad(_spread(thetas), jnp.asarray(temperature))
         return loss, aux, grad
 
+    def linearise(self, thetas, temperature):
+        """Exact (dv [n], constraint [n, 2], box_ok [n]) and the surrogate's Jacobian [n, 3, P] of
+        (dv, constraint_lon, constraint_lat); one pass when the exact law is itself smooth."""
+        jac, aux = self._jacobian(_spread(thetas), jnp.asarray(temperature))
+        exact = aux if self.exact_is_smooth else self.exact(thetas)
+        return (*(np.array(v) for v in exact), np.array(jac))
+
 
 def _value_and_grad(evaluate, gradient: str):
     """(loss, aux), d loss / d theta of the surrogate rollout.
@@ -253,6 +289,20 @@ def _value_and_grad(evaluate, gradient: str):
         return forward
     if gradient == "reverse":
         return jax.value_and_grad(lambda th, t: evaluate(th, smooth=True, temperature=t), has_aux=True)
+    raise ValueError(f"gradient: must be 'forward' or 'reverse', got {gradient!r}")
+
+
+def _jacobian(evaluate, gradient: str):
+    """theta -> (d(dv, g_lon, g_lat)/d theta [3, P], (dv, g, box_ok)) of the surrogate rollout, in one pass
+    (forward mode: P tangents; reverse: three cotangents through the checkpointed rollout)."""
+    def outputs(theta, temperature):
+        _, (dv, g, ok) = evaluate(theta, smooth=True, temperature=temperature)
+        return jnp.concatenate([dv[None], g]), (dv, g, ok)
+
+    if gradient == "forward":
+        return jax.jacfwd(outputs, has_aux=True)
+    if gradient == "reverse":
+        return jax.jacrev(outputs, has_aux=True)
     raise ValueError(f"gradient: must be 'forward' or 'reverse', got {gradient!r}")
 
 
@@ -281,11 +331,245 @@ class TuneResult:
 
 def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool = True) -> TuneResult:
     """Run the tuning of ``spec``; per-iteration progress on stdout and, with ``out``, in an HDF5 file."""
-    start_wall = time.perf_counter()
-    problem = problem or Problem(spec.scenario, spec.parameters, spec.penalty_mps, spec.margin, spec.gradient)
-    center = to_theta(problem.setup.params, spec.parameters)
-    theta = start_points(spec, center)
-    low, high = center - LOG_BOUND, center + LOG_BOUND
+    run_ = _Run(spec, out, problem, verbose)
+    message = (_sqp if spec.method == "sqp" else _adam)(run_)
+    best = run_.best
+    if best["theta"] is None:
+        message += "; no iterate kept the box with the exact law"
+    wall_s = run_.elapsed()
+    best_params = None if best["theta"] is None else from_theta(jnp.asarray(best["theta"]), run_.problem.setup.params,
+                                                                 spec.parameters)
+    result = TuneResult(best["theta"], best["dv"], best["g"], best_params, _stack(run_.hist), run_.hist["theta"][0],
+                        message, wall_s)
+    if out:
+        _write(out, spec, run_.problem, run_.hist, result.starts, best, message, wall_s)
+    return result
+
+
+# The jitter of a sampled-and-held law's yearly Delta-V between gains 0.2 % apart (measured: a few 0.01 m/s/yr).
+SAMPLED_LAW_NOISE_MPS = 0.05
+
+
+def default_margin(spec: TuneSpec, sc: scenario_mod.Scenario) -> float:
+    """``margin`` when the tuning file leaves it out.  The SQP aims at the box's edge itself when the exact
+    law is smooth (continuous-clipped: its linearisation is exact there), and 1 % of Delta_s^2 inside it for
+    the sampled-and-held laws, whose excursion jumps by about that much between neighbouring gains (a step
+    aimed at the edge lands outside half the time).  Adam's penalty needs 2 % of room to settle inside."""
+    if spec.margin is not None:
+        return spec.margin
+    if spec.method == "adam":
+        return 0.02
+    return 0.0 if sc.config["controller"]["thrust_mode"] == "continuous-clipped" else 0.01
+
+
+def default_trust_radius(spec: TuneSpec, sc: scenario_mod.Scenario) -> float:
+    """The SQP's first trust radius (natural-log units) when the tuning file leaves it out: 2 for the smooth
+    law, whose linearisation holds over long steps, 0.3 for the sampled-and-held laws, whose surrogate's
+    linearisation points the right way over a shorter range (both measured with benchmarks/tune.py)."""
+    if spec.trust_radius is not None:
+        return spec.trust_radius
+    return 2.0 if sc.config["controller"]["thrust_mode"] == "continuous-clipped" else 0.3
+
+
+class _Run:
+    """What both methods share: the problem, the starts, the best feasible point, the history and its output."""
+
+    def __init__(self, spec: TuneSpec, out, problem: Problem | None, verbose: bool):
+        self.start_wall = time.perf_counter()
+        self.spec, self.out = spec, out
+        self.problem = problem or Problem(spec.scenario, spec.parameters, spec.penalty_mps,
+                                          default_margin(spec, spec.scenario), spec.gradient)
+        self.margin = default_margin(spec, spec.scenario)
+        self.noise_mps = 0.0 if self.problem.exact_is_smooth else SAMPLED_LAW_NOISE_MPS
+        self.trust_radius = max(default_trust_radius(spec, spec.scenario), spec.trust_radius_min)
+        center = to_theta(self.problem.setup.params, spec.parameters)
+        self.theta0 = start_points(spec, center)
+        self.low, self.high = center - LOG_BOUND, center + LOG_BOUND
+        self.best = {"dv": math.inf, "theta": None, "g": np.full(2, np.nan)}
+        self.hist = {k: [] for k in ("dv_per_year_mps", "constraint", "loss", "step_norm", "theta", "temperature",
+                                     "active", "trust_radius", "best_dv_per_year_mps", "wall_s")}
+        self.say = print if verbose else (lambda *a, **k: None)
+        self.say(f"tune {spec.scenario.name}: {', '.join(spec.parameters)} by {spec.method} from {spec.starts} starts, "
+                 f"{spec.iterations} iterations, {self.problem.setup.env.earth_angle_rad.shape[0]} days (compiling...)",
+                 flush=True)
+
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.start_wall
+
+    def temperature(self, it: int) -> float:
+        spec = self.spec
+        return spec.temperature_start * (spec.temperature_end / spec.temperature_start) ** (it / max(spec.iterations, 1))
+
+    def keep_best(self, theta, dv, g, ok):
+        _keep_best(self.best, theta, dv, g, ok)
+
+    def record(self, it, dv, g, ok, loss, step, theta, temperature, active, trust_radius):
+        _record(self.hist, dv, g, loss, step, theta, temperature, active, trust_radius, self.best["dv"], self.elapsed())
+        self.say(f"  it {it:3d}  T {temperature:.3f}  ΔV exact median {np.nanmedian(dv):7.3f} m/s/yr  max constraint "
+                 f"median {np.nanmedian(np.max(g, axis=1)):+.3f}  feasible {int(np.sum(ok > 0))}/{len(dv)}  step "
+                 f"{np.median(step):.3g}  best feasible {self.best['dv']:.3f}", flush=True)
+        if self.out:
+            _write(self.out, self.spec, self.problem, self.hist, self.hist["theta"][0], self.best, "running",
+                   self.elapsed())
+
+    def diverged(self, it, bad, active) -> np.ndarray:
+        """Stop the active starts flagged ``bad`` (non-finite values or derivatives), with a message."""
+        if np.any(bad & active):
+            self.say(f"  iteration {it}: start(s) {np.flatnonzero(bad & active).tolist()} diverged "
+                     "(non-finite values or derivatives); stopped, best feasible point kept")
+        return active & ~bad
+
+
+def _all_diverged(run_: _Run, it: int) -> str:
+    message = f"stopped at iteration {it}: every start diverged (non-finite values or derivatives)"
+    run_.say(f"tune: {message}; keeping the best feasible point found", file=sys.stderr)
+    return message
+
+
+def _sqp(run_: _Run) -> str:
+    """Trust-region SQP on every start at once (see the module docstring); returns the run's status message."""
+    spec, problem = run_.spec, run_.problem
+    theta = run_.theta0.copy()
+    n, n_par = theta.shape
+    dv, g, ok, jac = problem.linearise(theta, run_.temperature(0))
+    run_.keep_best(theta, dv, g, ok)
+    radius = np.full(n, run_.trust_radius)
+    # The first model's curvature: fitted over the starts; with too few, an unconstrained step as long as
+    # the trust region.
+    norms = np.linalg.norm(jac[:, 0], axis=1)
+    norms = norms[np.isfinite(norms) & (norms > 0)]
+    scale = (float(np.median(norms)) if norms.size else 1.0) / run_.trust_radius
+    hessian = np.tile(population_hessian(theta, jac[:, 0], np.eye(n_par) * scale), (n, 1, 1))
+    margin = np.full((n, 2), run_.margin)  # per start and axis; see the end of the loop
+    refused = np.zeros(n, bool)
+    rng = np.random.default_rng(spec.seed + 1)
+    active = np.ones(n, bool)
+    step = np.zeros(n)
+    for it in range(spec.iterations + 1):
+        temperature = run_.temperature(it)
+        active = run_.diverged(it, ~_finite(dv, g, jac), active)
+        run_.record(it, dv, g, ok, np.where(ok > 0, dv, np.nan), step, theta, temperature, active, radius)
+        if it == spec.iterations:
+            return f"finished {spec.iterations} iterations"
+        if not active.any():
+            return _all_diverged(run_, it)
+        steps = np.zeros_like(theta)
+        multipliers = np.zeros((n, 2))
+        for i in np.flatnonzero(active):
+            steps[i], multipliers[i] = qp_step(jac[i, 0], hessian[i], g[i] + margin[i], jac[i, 1:], radius[i],
+                                               run_.low - theta[i], run_.high - theta[i])
+        if np.all(np.max(np.abs(steps[active]), axis=1) < spec.step_tolerance):
+            return f"converged at iteration {it}: every step below {spec.step_tolerance:g} (natural-log units)"
+        # A start refused at the smallest trust region would propose the same step again: below that scale the
+        # sampled-and-held laws are noise the model cannot see, so it probes a random neighbour instead.
+        stuck = active & refused & (radius <= spec.trust_radius_min)
+        steps += np.where(stuck[:, None], rng.uniform(-1.0, 1.0, steps.shape) * spec.trust_radius_min, 0.0)
+        trial = np.clip(theta + steps, run_.low, run_.high)
+        steps = trial - theta
+        dv_t, g_t, ok_t, jac_t = problem.linearise(trial, run_.temperature(it + 1))
+        finite = _finite(dv_t, g_t, jac_t)
+        run_.keep_best(trial, np.where(finite, dv_t, np.nan), g_t, np.where(finite, ok_t, 0.0))
+        accept = active & finite & _better(dv, g, dv_t, g_t, run_.noise_mps)
+        step_len = np.max(np.abs(steps), axis=1)
+        for i in np.flatnonzero(accept):
+            lagrangian_change = (jac_t[i, 0] - jac[i, 0]) + multipliers[i] @ (jac_t[i, 1:] - jac[i, 1:])
+            hessian[i] = damped_bfgs(hessian[i], steps[i], lagrangian_change)
+        grow = accept & (step_len >= 0.9 * radius)
+        radius = np.where(grow, np.minimum(2.0 * radius, 2.0 * run_.trust_radius), radius)
+        radius = np.where(active & ~accept, np.maximum(0.5 * step_len, spec.trust_radius_min), radius)
+        take = lambda new, old: np.where(accept.reshape((-1,) + (1,) * (np.ndim(old) - 1)), new, old)  # noqa: E731
+        theta, dv, g, ok, jac = take(trial, theta), take(dv_t, dv), take(g_t, g), take(ok_t, ok), take(jac_t, jac)
+        step = np.where(accept, step_len, 0.0)
+        refused = active & ~accept
+        # A step refused for leaving the box aims that much further inside next time (the linearised constraint
+        # under-predicted the exact one by ``miss``); an accepted step relaxes the start's margin halfway back.
+        miss = np.maximum(g_t - (g + np.einsum("ncp,np->nc", jac[:, 1:], steps)), 0.0)
+        refused_outside = (active & ~accept & (np.max(g_t, axis=1) > 0))[:, None]
+        margin = np.where(refused_outside, np.minimum(margin + miss * (g_t > 0), 0.5), margin)
+        margin = np.where(accept[:, None], 0.5 * (margin + run_.margin), margin)
+
+
+def _finite(dv, g, jac) -> np.ndarray:
+    return np.isfinite(dv) & np.all(np.isfinite(g), axis=1) & np.all(np.isfinite(jac), axis=(1, 2))
+
+
+def _better(dv, g, dv_new, g_new, tolerance_mps: float) -> np.ndarray:
+    """The SQP's acceptance on the exact law: outside the box, a smaller violation; inside, the box kept and
+    a Delta-V no more than ``tolerance_mps`` higher (a filter with two entries: no penalty weight, so noise in
+    the constraint cannot outweigh a Delta-V gain).  The tolerance is the noise of the sampled-and-held laws,
+    whose yearly Delta-V jumps by a few 0.01 m/s/yr between neighbouring gains: without it a step along the
+    smooth trend is refused by a jump, and then proposed again and again."""
+    violation, violation_new = np.sum(np.maximum(g, 0.0), axis=1), np.sum(np.maximum(g_new, 0.0), axis=1)
+    return np.where(violation > 0, violation_new < violation, (violation_new == 0) & (dv_new < dv + tolerance_mps))
+
+
+def qp_step(grad, hessian, g, jac_g, radius, low, high, elastic_weight: float = 1e3):
+    """min grad.d + d'Hd/2 + w sum(t)  s.t.  g + jac_g d <= t, t >= 0, |d|_inf <= radius, low <= d <= high.
+
+    The elastic t keeps the subproblem solvable when the linearised box cannot be reached inside the trust
+    region (it then moves as far toward it as it can).  Returns (d, multipliers of the two constraints),
+    the multipliers estimated from the stationarity of the step (zero for inactive constraints).
+    """
+    n_par, n_con = grad.size, g.size
+    lower, upper = np.maximum(-radius, low), np.minimum(radius, high)
+
+    def objective(x):
+        d, t = x[:n_par], x[n_par:]
+        return grad @ d + 0.5 * d @ hessian @ d + elastic_weight * t.sum(), \
+            np.concatenate([grad + hessian @ d, np.full(n_con, elastic_weight)])
+
+    constraint = {"type": "ineq", "fun": lambda x: x[n_par:] - g - jac_g @ x[:n_par],
+                  "jac": lambda x: np.hstack([-jac_g, np.eye(n_con)])}
+    x0 = np.concatenate([np.zeros(n_par), np.maximum(g, 0.0)])
+    bounds = [(lo, hi) for lo, hi in zip(lower, upper)] + [(0.0, None)] * n_con
+    res = minimize(objective, x0, jac=True, method="SLSQP", constraints=[constraint], bounds=bounds,
+                   options={"maxiter": 200, "ftol": 1e-14})
+    d = np.clip(res.x[:n_par], lower, upper)
+    binding = g + jac_g @ d >= -1e-9 * (1.0 + np.abs(g))
+    free = (d > lower + 1e-12) & (d < upper - 1e-12)
+    multipliers = np.zeros(n_con)
+    if binding.any() and free.any():
+        residual = -(grad + hessian @ d)
+        solution = np.linalg.lstsq(jac_g[binding][:, free].T, residual[free], rcond=None)[0]
+        multipliers[binding] = np.maximum(solution, 0.0)
+    return d, multipliers
+
+
+def population_hessian(theta, grad, fallback):
+    """One curvature for every start's first model: the symmetric H of grad_i - mean = H (theta_i - mean),
+    fitted by least squares over the starts, its eigenvalues floored at 1e-3 of the largest so that it is
+    positive definite.  The starts sample the landscape around the scenario's gains, so their gradients
+    together see a curvature no single start has yet (on the smooth law it saves about two iterations).
+    ``fallback`` when there are too few finite starts to fit it."""
+    keep = np.all(np.isfinite(grad), axis=1)
+    theta, grad = theta[keep], grad[keep]
+    if len(theta) <= theta.shape[1]:
+        return fallback
+    d_theta, d_grad = theta - theta.mean(axis=0), grad - grad.mean(axis=0)
+    h = np.linalg.lstsq(d_theta, d_grad, rcond=None)[0]
+    w, v = np.linalg.eigh(0.5 * (h + h.T))
+    if not np.all(np.isfinite(w)) or np.max(w) <= 0.0:
+        return fallback
+    return (v * np.maximum(w, 1e-3 * np.max(w))) @ v.T
+
+
+def damped_bfgs(hessian, s, y):
+    """Powell's damped BFGS update: stays positive definite when the curvature along s is negative."""
+    hs = hessian @ s
+    shs, sy = float(s @ hs), float(s @ y)
+    if shs <= 0.0:
+        return hessian
+    if sy < 0.2 * shs:
+        weight = 0.8 * shs / (shs - sy)
+        y = weight * y + (1.0 - weight) * hs
+        sy = float(s @ y)
+    return hessian - np.outer(hs, hs) / shs + np.outer(y, y) / sy
+
+
+def _adam(run_: _Run) -> str:
+    """optax Adam on the penalised surrogate (see the module docstring); returns the run's status message."""
+    spec, problem = run_.spec, run_.problem
+    theta = run_.theta0.copy()
     # Few parameters, few iterations: a learning rate decaying geometrically (large steps to find the box,
     # small ones to settle on its edge), a short momentum (b1), so a start that has crossed into the box
     # does not coast on through it, and a short second-moment memory (b2 = 0.5), so the penalty's large
@@ -295,16 +579,9 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
     optimiser = optax.adam(schedule, b1=spec.momentum, b2=0.5)
     opt_state = optimiser.init(jnp.asarray(theta))
     active = np.ones(spec.starts, bool)
-    best = {"dv": math.inf, "theta": None, "g": np.full(2, np.nan)}
-    hist = {k: [] for k in ("dv_per_year_mps", "constraint", "loss", "step_norm", "theta", "temperature", "active",
-                            "best_dv_per_year_mps", "wall_s")}
-    message = f"finished {spec.iterations} iterations"
-    say = print if verbose else (lambda *a, **k: None)
-    say(f"tune {spec.scenario.name}: {', '.join(spec.parameters)} from {spec.starts} starts, {spec.iterations} "
-        f"iterations, {problem.setup.env.earth_angle_rad.shape[0]} days (compiling...)", flush=True)
+    no_radius = np.full(spec.starts, np.nan)
     for it in range(spec.iterations + 1):
-        frac = it / max(spec.iterations, 1)
-        temperature = spec.temperature_start * (spec.temperature_end / spec.temperature_start) ** frac
+        temperature = run_.temperature(it)
         last = it == spec.iterations
         if last or not problem.exact_is_smooth:
             dv, g, ok = map(np.asarray, problem.exact(theta))
@@ -313,42 +590,20 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
             loss, grad = np.asarray(loss), np.asarray(grad)
             if problem.exact_is_smooth:
                 dv, g, ok = map(np.asarray, aux)
-        _keep_best(best, theta, dv, g, ok)
+        run_.keep_best(theta, dv, g, ok)
         if last:
-            step = np.zeros(spec.starts)
-            loss = np.full(spec.starts, np.nan)
-        else:
-            bad = ~(np.isfinite(loss) & np.all(np.isfinite(grad), axis=1))
-            if np.any(bad & active):
-                say(f"  iteration {it}: start(s) {np.flatnonzero(bad & active).tolist()} diverged "
-                    "(non-finite loss or gradient); stopped, best feasible point kept")
-            active &= ~bad
-            grad = np.where(active[:, None], grad, 0.0)
-            updates, opt_state = optimiser.update(jnp.asarray(grad), opt_state)
-            new = np.clip(theta + np.where(active[:, None], np.asarray(updates), 0.0), low, high)
-            step = np.linalg.norm(new - theta, axis=1)
-        _record(hist, dv, g, loss, step, theta, temperature, active, best["dv"], time.perf_counter() - start_wall)
-        say(f"  it {it:3d}  T {temperature:.3f}  ΔV exact median {np.nanmedian(dv):7.3f} m/s/yr  "
-            f"max constraint median {np.nanmedian(np.max(g, axis=1)):+.3f}  feasible {int(np.sum(ok > 0))}/{spec.starts}"
-            f"  step {np.median(step):.3g}  best feasible {best['dv']:.3f}", flush=True)
-        if out:
-            _write(out, spec, problem, hist, theta_starts=hist["theta"][0], best=best, message="running",
-                   wall_s=time.perf_counter() - start_wall)
-        if last:
-            break
+            run_.record(it, dv, g, ok, np.full(spec.starts, np.nan), np.zeros(spec.starts), theta, temperature, active,
+                        no_radius)
+            return f"finished {spec.iterations} iterations"
+        bad = ~(np.isfinite(loss) & np.all(np.isfinite(grad), axis=1))
+        active = run_.diverged(it, bad, active)
+        grad = np.where(active[:, None], grad, 0.0)
+        updates, opt_state = optimiser.update(jnp.asarray(grad), opt_state)
+        new = np.clip(theta + np.where(active[:, None], np.asarray(updates), 0.0), run_.low, run_.high)
+        run_.record(it, dv, g, ok, loss, np.linalg.norm(new - theta, axis=1), theta, temperature, active, no_radius)
         theta = new
         if not active.any():
-            message = f"stopped at iteration {it}: every start diverged (non-finite loss or gradient)"
-            say(f"tune: {message}; keeping the best feasible point found", file=sys.stderr)
-            break
-    if best["theta"] is None:
-        message += "; no iterate kept the box with the exact law"
-    wall_s = time.perf_counter() - start_wall
-    best_params = None if best["theta"] is None else from_theta(jnp.asarray(best["theta"]), problem.setup.params, spec.parameters)
-    result = TuneResult(best["theta"], best["dv"], best["g"], best_params, _stack(hist), hist["theta"][0], message, wall_s)
-    if out:
-        _write(out, spec, problem, hist, result.starts, best, message, wall_s)
-    return result
+            return _all_diverged(run_, it)
 
 
 def _keep_best(best, theta, dv, g, ok):

@@ -54,13 +54,16 @@ def test_parameter_space_round_trip_keeps_threshold_norm():
     assert float(np.linalg.norm(moved.limits.sigma_mps2)) == pytest.approx(float(params.limits.u0_mps2), rel=1e-12)
 
 
-def test_diverging_run_stops_and_keeps_the_best_feasible_point(tmp_path, capsys):
-    """A run whose gradients are all non-finite stops after its first iteration with a message, and keeps
+@pytest.mark.parametrize("method", ["sqp", "adam"])
+def test_diverging_run_stops_and_keeps_the_best_feasible_point(tmp_path, capsys, method):
+    """A run whose derivatives are all non-finite stops after its first iteration with a message, and keeps
     the best point that the exact law found feasible (the scenario's own gains over 2 days)."""
     spec = tune.from_dict({"scenario": "katz2025-discrete", "days": 2.0, "starts": 2, "iterations": 5,
-                           "spread_decades": 0.01})
+                           "spread_decades": 0.01, "method": method})
     problem = tune.Problem(spec.scenario, spec.parameters)
     problem.surrogate_grad = lambda thetas, t: (np.full(len(thetas), np.nan), None, np.full(np.shape(thetas), np.nan))
+    problem.linearise = lambda thetas, t: (*(np.array(v) for v in problem.exact(thetas)),
+                                           np.full((len(thetas), 3, 2), np.nan))
     result = tune.tune(spec, out=tmp_path / "t.h5", problem=problem)
     assert "every start diverged" in result.message
     assert result.best_theta is not None and np.isfinite(result.best_dv_per_year_mps)
@@ -69,6 +72,54 @@ def test_diverging_run_stops_and_keeps_the_best_feasible_point(tmp_path, capsys)
     assert groups["iterations"]["dv_per_year_mps"].shape == (1, 2)
     assert groups["metrics"]["dv_per_year_mps"] == pytest.approx(result.best_dv_per_year_mps)
     assert "diverged" in capsys.readouterr().out
+
+
+def test_qp_step_matches_the_closed_form_of_one_active_constraint():
+    """min g.d + |d|^2/2 s.t. a.d <= b: the projection -g + lambda... in closed form (KKT by hand), and the
+    multiplier the step reports is that lambda; with the constraint slack the step is the Newton step -g."""
+    grad, a = np.array([-1.0, -2.0]), np.array([1.0, 1.0])
+    # Constraint c + a.d <= 0 with c = -1: the unconstrained step (1, 2) violates it (a.d = 3 > 1).
+    d, lam = tune.qp_step(grad, np.eye(2), np.array([-1.0, -5.0]), np.vstack([a, [0.0, 1.0]]), 10.0,
+                          np.full(2, -10.0), np.full(2, 10.0))
+    lam_exact = (a @ -grad - 1.0) / (a @ a)  # d = -grad - lam a on the line a.d = 1
+    np.testing.assert_allclose(d, -grad - lam_exact * a, atol=1e-7)
+    np.testing.assert_allclose(lam, [lam_exact, 0.0], atol=1e-6)
+    free, _ = tune.qp_step(grad, np.eye(2), np.array([-10.0, -10.0]), np.vstack([a, a]), 10.0,
+                           np.full(2, -10.0), np.full(2, 10.0))
+    np.testing.assert_allclose(free, -grad, atol=1e-7)
+    # An unreachable constraint inside the trust region: the elastic step goes as far toward it as it may.
+    far, _ = tune.qp_step(np.zeros(2), np.eye(2), np.array([5.0, -1.0]), np.vstack([a, a]), 0.5,
+                          np.full(2, -10.0), np.full(2, 10.0))
+    np.testing.assert_allclose(far, [-0.5, -0.5], atol=1e-7)
+
+
+def test_damped_bfgs_satisfies_the_secant_equation_and_stays_positive_definite():
+    """BFGS: H_new s = y when s.y > 0 (secant); Powell's damping keeps H positive definite when s.y < 0."""
+    rng = np.random.default_rng(0)
+    s, y = rng.normal(size=3), rng.normal(size=3)
+    y = y if s @ y > 0 else -y
+    h = tune.damped_bfgs(np.eye(3), s, y)
+    np.testing.assert_allclose(h @ s, y, atol=1e-12)
+    assert np.all(np.linalg.eigvalsh(tune.damped_bfgs(np.eye(3), s, -y)) > 0)
+
+
+def test_sqp_walks_into_the_box_and_never_back_out():
+    """The SQP's filter, checked with the exact law on the smooth (clipped) law over 20 days from gains that
+    leave the box: while a start is outside, each iterate's violation is no larger than the last; once
+    inside it stays inside with a Delta-V that never rises; and the run ends with a feasible point."""
+    spec = tune.from_dict({"scenario": "katz2025-continuous", "days": 20.0, "starts": 2, "iterations": 20,
+                           "parameters": ["k_h", "k_e", "lambda_b"], "spread_decades": 0.1})
+    spec = tune.dataclasses.replace(spec, scenario=scenario.load(
+        "katz2025-continuous", {"duration.days": 20.0, "controller.thrust_mode": "continuous-clipped"}))
+    result = tune.tune(spec, verbose=False)
+    violation = np.maximum(result.history["constraint"], 0.0).sum(axis=2)  # [iteration, start]
+    dv = result.history["dv_per_year_mps"]
+    assert np.all(violation[0] > 0)  # both starts begin outside the box
+    assert np.all(np.diff(violation, axis=0) <= 0.0)
+    inside = violation[:-1] == 0
+    assert np.all(np.diff(dv, axis=0)[inside] <= 0.0)
+    assert result.best_theta is not None and np.max(result.best_constraint) <= 0.0
+    assert result.best_dv_per_year_mps <= np.min(np.where(violation == 0, dv, np.inf))
 
 
 def test_cli_tune_writes_results_and_rejects_bad_files(tmp_path):
@@ -80,3 +131,16 @@ def test_cli_tune_writes_results_and_rejects_bad_files(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text('scenario = "katz2025-constant"\nparameters = ["k_x"]\n')
     assert cli.main(["tune", str(bad), "--out", str(tmp_path / "b.h5")]) == 2
+
+
+def test_population_hessian_recovers_a_quadratic_and_stays_positive_definite():
+    """Gradients of f = theta' H theta / 2 + b.theta at scattered starts give back H (least squares, exact for a
+    quadratic); an indefinite fit is floored to positive definite; too few starts give the fallback."""
+    rng = np.random.default_rng(1)
+    h = np.array([[4.0, 1.0, 0.5], [1.0, 2.0, 0.0], [0.5, 0.0, 1.0]])
+    theta = rng.normal(size=(16, 3))
+    grad = theta @ h + np.array([1.0, -2.0, 0.3])
+    np.testing.assert_allclose(tune.population_hessian(theta, grad, np.eye(3)), h, atol=1e-10)
+    saddle = tune.population_hessian(theta, theta @ np.diag([1.0, -1.0, 2.0]), np.eye(3))
+    assert np.all(np.linalg.eigvalsh(saddle) > 0)
+    assert tune.population_hessian(theta[:3], grad[:3], np.eye(3) * 7.0)[0, 0] == 7.0
