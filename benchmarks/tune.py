@@ -1,6 +1,8 @@
 """Gain tuning (Katz 2025): geojax's gradient tuner against SciPy SLSQP with finite differences, one run.
 
-    python benchmarks/tune.py [--quick] [--modes continuous discrete constant]
+    python benchmarks/tune.py [--quick] [--modes continuous-clipped discrete constant]
+
+(with ``--modes``, a full run replaces those modes' rows in the results and keeps the others)
 
 Per thrust mode (scenarios ``katz2025-<mode>``, one year, k_h and k_e tuned as in
 the paper; the continuous law clipped and lambda_b tuned too, see ``PARAMETERS``), from the same starts (start 0 = the paper's gains, the others
@@ -155,7 +157,15 @@ def memory_probe() -> float:
 
 
 def write(rows, memory_gib, quick: bool) -> None:
+    """Results files; a full run of some modes replaces those rows of an earlier full run and keeps the rest."""
     RESULTS.mkdir(parents=True, exist_ok=True)
+    previous = RESULTS / "tune.json"
+    if not quick and previous.exists():
+        old = json.loads(previous.read_text())
+        if not old["meta"].get("quick"):
+            fresh = {r["mode"] for r in rows}
+            rows = sorted([r for r in old["rows"] if r["mode"] not in fresh] + rows,
+                          key=lambda r: list(PARAMETERS).index(r["mode"]) if r["mode"] in PARAMETERS else 99)
     meta = {"device": f"{jax.device_count()} x {jax.devices()[0].platform}", "quick": quick,
             "reverse_gradient_batch16_year_peak_rss_gib": memory_gib}
     (RESULTS / "tune.json").write_text(json.dumps({"meta": meta, "rows": rows}, indent=1))

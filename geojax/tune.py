@@ -35,9 +35,11 @@ Two methods, both on all starts at once:
   region) and the step is accepted on the *exact* law: while outside the box,
   when the violation shrinks; inside it, when the box is kept and Delta-V
   falls.  A rejected step halves the trust region (down to
-  ``trust_radius_min``, about the scale below which the sampled-and-held
-  discrete laws are noise); the run stops early when every step is shorter
-  than ``step_tolerance``.  Constraint Jacobians are what a penalty cannot
+  ``trust_radius_min``: 0.02 for the sampled-and-held laws, about the scale
+  below which they are noise, and where a refused start probes a random
+  neighbour instead of proposing the same step again; 1e-6 for the smooth
+  law); the run stops early when every step is shorter than
+  ``step_tolerance``.  Constraint Jacobians are what a penalty cannot
   give: a start walks along the edge of the box instead of bouncing off it.
 - ``"adam"``: optax Adam on the surrogate Delta-V plus ``penalty_mps`` times
   the violation of the box tightened by ``margin`` (the first-order method,
@@ -98,7 +100,7 @@ FIELDS = {
     "step_tolerance": Field((int, float), 1e-4, lower=0.0, lower_inclusive=True),
     "method": Field(str, "sqp", choices=("sqp", "adam")),
     "trust_radius": Field((int, float), None, lower=0.0),
-    "trust_radius_min": Field((int, float), 0.02, lower=0.0),
+    "trust_radius_min": Field((int, float), None, lower=0.0),
     "days": Field((int, float), None, lower=0.0),
     "step_s": Field((int, float), None, lower=0.0),
     "learning_rate": Field((int, float), 0.1, lower=0.0),
@@ -140,7 +142,8 @@ def from_dict(raw: dict, text: str = "") -> TuneSpec:
     names = config["parameters"]
     if not names or any(n not in TUNABLE for n in names) or len(set(names)) != len(names):
         raise ValueError(f"parameters: must be distinct names from {', '.join(TUNABLE)}, got {names!r}")
-    if config["trust_radius"] is not None and config["trust_radius_min"] > config["trust_radius"]:
+    if None not in (config["trust_radius"], config["trust_radius_min"]) and \
+            config["trust_radius_min"] > config["trust_radius"]:
         raise ValueError(f"trust_radius_min: must be <= trust_radius = {config['trust_radius']}, "
                          f"got {config['trust_radius_min']}")
     if config["temperature_end"] > config["temperature_start"]:
@@ -381,7 +384,12 @@ class _Run:
                                           default_margin(spec, spec.scenario), spec.gradient)
         self.margin = default_margin(spec, spec.scenario)
         self.noise_mps = 0.0 if self.problem.exact_is_smooth else SAMPLED_LAW_NOISE_MPS
-        self.trust_radius = max(default_trust_radius(spec, spec.scenario), spec.trust_radius_min)
+        # The smallest trust region: for the sampled-and-held laws the scale below which they are noise (their
+        # refused starts then probe a random neighbour); the smooth law's may shrink until its steps converge.
+        self.trust_radius_min = spec.trust_radius_min
+        if self.trust_radius_min is None:
+            self.trust_radius_min = 1e-6 if self.problem.exact_is_smooth else 0.02
+        self.trust_radius = max(default_trust_radius(spec, spec.scenario), self.trust_radius_min)
         center = to_theta(self.problem.setup.params, spec.parameters)
         self.theta0 = start_points(spec, center)
         self.low, self.high = center - LOG_BOUND, center + LOG_BOUND
@@ -462,8 +470,8 @@ def _sqp(run_: _Run) -> str:
             return f"converged at iteration {it}: every step below {spec.step_tolerance:g} (natural-log units)"
         # A start refused at the smallest trust region would propose the same step again: below that scale the
         # sampled-and-held laws are noise the model cannot see, so it probes a random neighbour instead.
-        stuck = active & refused & (radius <= spec.trust_radius_min)
-        steps += np.where(stuck[:, None], rng.uniform(-1.0, 1.0, steps.shape) * spec.trust_radius_min, 0.0)
+        stuck = active & refused & (radius <= run_.trust_radius_min) & (run_.noise_mps > 0)
+        steps += np.where(stuck[:, None], rng.uniform(-1.0, 1.0, steps.shape) * run_.trust_radius_min, 0.0)
         trial = np.clip(theta + steps, run_.low, run_.high)
         steps = trial - theta
         dv_t, g_t, ok_t, jac_t = problem.linearise(trial, run_.temperature(it + 1))
@@ -476,7 +484,7 @@ def _sqp(run_: _Run) -> str:
             hessian[i] = damped_bfgs(hessian[i], steps[i], lagrangian_change)
         grow = accept & (step_len >= 0.9 * radius)
         radius = np.where(grow, np.minimum(2.0 * radius, 2.0 * run_.trust_radius), radius)
-        radius = np.where(active & ~accept, np.maximum(0.5 * step_len, spec.trust_radius_min), radius)
+        radius = np.where(active & ~accept, np.maximum(0.5 * step_len, run_.trust_radius_min), radius)
         take = lambda new, old: np.where(accept.reshape((-1,) + (1,) * (np.ndim(old) - 1)), new, old)  # noqa: E731
         theta, dv, g, ok, jac = take(trial, theta), take(dv_t, dv), take(g_t, g), take(ok_t, ok), take(jac_t, jac)
         step = np.where(accept, step_len, 0.0)

@@ -1,6 +1,6 @@
 """Katz 2025, Table 1 and its "Future Research": per thrust mode, the paper's gains and our tunings.
 
-    python studies/katz2025/table.py [--days 365.25] [--starts 16] [--iterations 15] [--modes ...]
+    python studies/katz2025/table.py [--days 365.25] [--starts 16] [--iterations 40] [--modes ...]
                                      [--paper-tunings] [--out studies/katz2025/results]
 
 For each thrust mode (scenarios ``katz2025-continuous``, ``-discrete``,
@@ -56,7 +56,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--days", type=float, default=365.25)
     parser.add_argument("--starts", type=int, default=16)
-    parser.add_argument("--iterations", type=int, default=15)
+    parser.add_argument("--iterations", type=int, default=tune.FIELDS["iterations"].default)
     parser.add_argument("--modes", nargs="+", default=list(TUNINGS))
     parser.add_argument("--paper-tunings", action="store_true", help="run the (k_h, k_e) tunings here too")
     parser.add_argument("--out", default=str(Path(__file__).resolve().parent / "results"))
