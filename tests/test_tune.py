@@ -34,6 +34,8 @@ def test_missing_gain_is_an_error(tmp_path):
     ({"scenario": "katz2025-discrete", "starts": 0}, "starts: must be >= 1"),
     ({"scenario": "katz2025-discrete", "temperature_start": 0.01, "temperature_end": 0.1}, "temperature_end"),
     ({"scenario": "katz2025-discrete", "step": 3}, "step: unknown key"),
+    ({"scenario": "katz2025-discrete", "method": "newton"}, "method: must be one of"),
+    ({"scenario": "katz2025-discrete", "trust_radius": 0.01, "trust_radius_min": 0.1}, "trust_radius_min: must be <="),
 ])
 def test_bad_tuning_files_name_the_field(raw, message):
     with pytest.raises(ValueError, match=message):
