@@ -59,9 +59,9 @@ def _parser() -> argparse.ArgumentParser:
     prop.add_argument("--quiet", action="store_true", help="no progress bar")
     prop.set_defaults(func=_propagate)
 
-    sim = sub.add_parser("simulate", help="closed-loop station keeping (QFFC or FOMPC, Li 2022); summary, metrics, HDF5")
+    sim = sub.add_parser("simulate", help="closed-loop station keeping (any controller); summary, metrics, status, HDF5")
     sim.add_argument("scenario", help="a scenario with a [controller] table, e.g. li2022-qffc, li2022-fompc, or a .toml path")
-    sim.add_argument("--controller", choices=["qffc", "fompc"], help="override controller.kind")
+    sim.add_argument("--controller", help="override controller.kind (qffc, fompc, lyapunov, ...)")
     sim.add_argument("--horizon", type=int, help="FOMPC prediction horizon N in cycles, 1-10 (default: the scenario's)")
     sim.add_argument("--days", type=float, help="duration in days (default: the scenario's)")
     sim.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
@@ -107,7 +107,8 @@ def _overrides(args) -> dict:
 
 
 def _propagate(args) -> int:
-    from geojax import run, scenario, store
+    from geojax import scenario, store
+    from geojax import uncontrolled as run
 
     sc = scenario.load(args.scenario, _overrides(args))
     result = run.propagate_scenario(sc, progress=None if not args.quiet else False)
@@ -135,7 +136,10 @@ PAPER = {
 
 
 def _simulate(args) -> int:
-    from geojax import plots, run, scenario, store
+    from geojax import plots, scenario, store
+    from geojax.loop.metrics import STATUS_MEANINGS
+    from geojax.loop.rollout import simulate
+    from geojax.tune import PAPER as KATZ
 
     overrides = _overrides(args)
     if args.controller:
@@ -146,64 +150,114 @@ def _simulate(args) -> int:
         overrides["errors.h_rv"] = args.h_rv
     if args.h_att is not None:
         overrides["errors.h_att"] = args.h_att
+    if args.seed < 0:
+        raise ValueError(f"--seed: must be an integer >= 0, got {args.seed}")
     sc = scenario.load(args.scenario, overrides)
-    if sc.controller == "lyapunov":
-        return _simulate_feedback(args, sc)
-    print(f"{sc.name}: {sc.controller.upper()} for {sc.days:g} days (compiling, then running)...", flush=True)
-    result = run.simulate_scenario(sc, args.seed)
-    print(f"{sc.name}: {sc.controller.upper()}, {len(result.cycles['t_s'])} cycles, {result.wall_s:.1f} s wall")
-    paper = PAPER.get(sc.controller, {}) if sc.name.startswith("li2022") else {}
-    print(f"  {'metric':32s} {'geojax':>12s}  {'Li 2022' if paper else ''}")
-    for name, value in result.metrics.items():
+    if sc.controller == "none":
+        raise ValueError(f"controller.kind: {sc.name} has no controller; give --controller or use 'geojax propagate'")
+    _check_outputs(args)
+    print(f"{sc.name}: {sc.controller} for {sc.days:g} days (compiling, then running)...", flush=True)
+    feedback = sc.controller == "lyapunov"
+    result = simulate(sc, args.seed, keep_steps=feedback)
+    cycles = result.cycles()
+    print(f"{sc.name}: {sc.controller}, {len(cycles['t_s'])} cycles, {result.wall_s:.1f} s wall, "
+          f"status {int(result.status)} ({STATUS_MEANINGS[int(result.status)]})")
+    if feedback:
+        mode = sc.config["controller"]["thrust_mode"]
+        paper, source = (KATZ.get(mode, {}), "Katz 2025") if sc.name.startswith("katz2025") else ({}, "")
+    else:
+        paper, source = (PAPER.get(sc.controller, {}), "Li 2022") if sc.name.startswith("li2022") else ({}, "")
+    metrics = {**{k: float(v) for k, v in result.metrics.items()}, "cpu_s_per_orbit": result.wall_s / len(cycles["t_s"])}
+    print(f"  {'metric':32s} {'geojax':>12s}  {source}")
+    for name, value in metrics.items():
         print(f"  {name:32s} {value:12.5g}  {paper.get(name, '')}")
+    groups = {"metrics": {**metrics, "status": int(result.status)}, "cycles": cycles}
+    steps = _steps_table(result) if feedback else None
+    if steps is not None:
+        groups["steps"] = steps
+    else:
+        groups["reference"], groups["target"] = _reference_and_target(sc, result)
     if args.out:
-        groups = {"metrics": result.metrics, "cycles": result.cycles, "reference": result.reference, "target": result.target}
-        path = store.write_h5(args.out, groups, scenario.to_toml(sc.config),
-                              result.wall_s, attrs={"kind": "simulate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s,
-                                                    "seed": args.seed})
+        path = store.write_h5(args.out, groups, scenario.to_toml(sc.config), result.wall_s,
+                              attrs={"kind": "simulate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s,
+                                     "seed": args.seed, "status_codes": _status_text()})
         print(f"wrote {path}")
     if args.plots:
         title = f"{sc.name}, {sc.controller}"
-        figures = [plots.plot_cycles(result.cycles, Path(args.plots) / f"{sc.name}.png", title=title),
-                   plots.plot_station_keeping(result.cycles, result.reference, result.target,
-                                              Path(args.plots) / f"{sc.name}-station-keeping.png", title=title)]
+        if steps is not None:
+            figures = plots.plot_feedback(steps, sc.config["station"]["box_half_width_deg"], Path(args.plots) / sc.name,
+                                          title=f"{sc.name}, {sc.config['controller']['thrust_mode']} thrust")
+        else:
+            figures = [plots.plot_cycles(cycles, Path(args.plots) / f"{sc.name}.png", title=title),
+                       plots.plot_station_keeping(cycles, groups["reference"], groups["target"],
+                                                  Path(args.plots) / f"{sc.name}-station-keeping.png", title=title)]
         print("wrote " + " and ".join(map(str, figures)))
     return 0
 
 
-def _simulate_feedback(args, sc) -> int:
-    from geojax import plots, run, scenario, store
-    from geojax.tune import PAPER
+def _status_text() -> str:
+    from geojax.loop.metrics import STATUS_TEXT
 
-    mode = sc.config["controller"]["thrust_mode"]
-    print(f"{sc.name}: Milankovitch-Lyapunov feedback, {mode} thrust, {sc.days:g} days (compiling, then running)...",
-          flush=True)
-    result = run.simulate_feedback(sc)
-    paper = PAPER.get(mode, {}) if sc.name.startswith("katz2025") else {}
-    print(f"  {'metric':32s} {'geojax':>12s}  {'Katz 2025' if paper else ''}")
-    for name, value in result.metrics.items():
-        print(f"  {name:32s} {value:12.5g}  {paper.get(name, '')}")
-    if args.out:
-        path = store.write_h5(args.out, {"metrics": result.metrics, "steps": result.steps}, scenario.to_toml(sc.config),
-                              result.wall_s, attrs={"kind": "simulate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s})
-        print(f"wrote {path}")
-    if args.plots:
-        figures = plots.plot_feedback(result.steps, sc.config["station"]["box_half_width_deg"],
-                                      Path(args.plots) / sc.name, title=f"{sc.name}, {mode} thrust")
-        print("wrote " + " and ".join(map(str, figures)))
-    return 0
+    return STATUS_TEXT
+
+
+def _steps_table(result) -> dict:
+    """The ``/steps`` datasets of a run with per-step records: time, offsets from the station, acceleration."""
+    import numpy as np
+
+    from geojax.elements import wrap_angle
+
+    steps = result.records.steps
+    u = steps.accel_ecef_mps2.reshape(-1, 3)
+    lon0 = float(result.params.station["lon_rad"])
+    return {"t_s": np.arange(u.shape[0]) * result.step_s,
+            "dlon_deg": np.degrees(np.asarray(wrap_angle(steps.lon_rad.ravel() - lon0))),
+            "lat_deg": np.degrees(steps.lat_rad.ravel()),
+            "ux_mps2": u[:, 0], "uy_mps2": u[:, 1], "uz_mps2": u[:, 2]}
+
+
+def _reference_and_target(sc, result):
+    """The uncontrolled reference at cycle boundaries (``/reference``) and the station's targets (``/target``)."""
+    import numpy as np
+
+    from geojax.constants import SIDEREAL_DAY_S
+    from geojax.loop.setup import prepare
+
+    batch = prepare([sc], reference_pad=1)
+    n = len(result.records.cycles.dv_mps)
+    ref = np.asarray(batch.shared.reference.mean)[: n + 1]
+    uncontrolled = {"t_s": np.arange(n + 1) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
+                    "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}
+    st = sc.config["station"]
+    goals = {"lon_deg": float(st["lon_deg"]), "drift_deg_per_day": 0.0,
+             **{k: float(st[k]) for k in ("ex", "ey", "ix", "iy")}}
+    return uncontrolled, goals
+
+
+def _check_outputs(args) -> None:
+    """Output paths are checked before any computation (a run never finds out after an hour that it cannot save)."""
+    from geojax.store import check_output_file
+
+    if getattr(args, "out", None):
+        check_output_file(args.out)
+    if getattr(args, "plots", None):
+        plots = Path(args.plots)
+        if plots.exists() and not plots.is_dir():
+            raise ValueError(f"--plots {str(plots)!r}: exists and is not a folder")
 
 
 def _tune(args) -> int:
-    from geojax import tune
+    from geojax import scenario, tune
 
     spec = tune.load(args.file)
+    _check_outputs(args)
     result = tune.tune(spec, out=args.out, verbose=not args.quiet)
     print(f"{spec.scenario.name}: {result.message}; {result.wall_s:.1f} s wall")
     if result.best_params is None:
         print("  no feasible point: every iterate left the box with the exact law")
         return 1
-    for name, value in tune.paper_units(result.best_params).items():
+    fields = scenario.controller_fields(spec.scenario.config["controller"], spec.controller)
+    for name, value in tune.paper_units(result.best_params, fields).items():
         print(f"  {name:24s} {value:.6g}")
     print(f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept "
           f"(constraint lon {result.best_constraint[0]:+.4f}, lat {result.best_constraint[1]:+.4f})")
@@ -222,7 +276,8 @@ def _print_summary(sc, result, summary) -> None:
 
 
 def _demo(args) -> int:
-    from geojax import plots, run, scenario, store
+    from geojax import plots, scenario, store
+    from geojax import uncontrolled as run
 
     out = Path(args.out)
     sc = scenario.load("li2022")
@@ -248,15 +303,21 @@ def _sweep(args) -> int:
     from geojax import store, sweep
 
     spec = sweep.load(args.file)
+    _check_outputs(args)
     n = spec.n_points * spec.repetitions
     print(f"{spec.name}: {len(spec.controllers)} controller(s) x {spec.n_points} grid point(s) x "
           f"{spec.repetitions} repetition(s) = {len(spec.controllers) * n} samples", flush=True)
     path = sweep.run_sweep(spec, args.out, resume=args.resume, chunk=args.chunk, progress=False if args.quiet else None)
     groups, _ = store.read_h5(path)
     dv = groups["metrics"]["dv_per_year_mps"]
+    from geojax.loop.metrics import STATUS_MEANINGS
+
     for i, controller in enumerate(spec.controllers):
-        print(f"  {controller}: ΔV per year {np.nanmean(dv[i]):.2f} m/s/yr averaged over the sweep, "
-              f"{int(np.sum(groups['status']['code'][i] == sweep.STATUS_UNSTABLE))} unstable sample(s)")
+        codes = groups["status"]["code"][i]
+        counts = ", ".join(f"{int(np.sum(codes == c))} {STATUS_MEANINGS[c]}" for c in range(1, len(STATUS_MEANINGS))
+                           if np.any(codes == c))
+        print(f"  {controller}: ΔV per year {np.nanmean(dv[i]):.2f} m/s/yr averaged over the sweep; "
+              f"{counts or 'every sample ok'}")
     print(f"wrote {path}")
     return 0
 

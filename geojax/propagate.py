@@ -1,10 +1,8 @@
-"""Propagation over control cycles with one-cycle mean GEO elements.
+"""Orbit representations, the shared environment grid and one-cycle mean GEO elements.
 
-``propagate_cycles`` is the building block of every rollout: an outer
-``lax.scan`` over cycles (one sidereal day each) around an inner scan over
-integration steps, returning the one-cycle mean elements (Li 2022, eqs. (8)-(9))
-of each cycle.  It is pure and vmappable over the initial state and the force
-model; the environment grid is shared by the batch.
+The orbit representations (MEE or Cartesian), the environment grid shared by a
+batch, and the one-cycle mean elements (Li 2022, eqs. (8)-(9)) that the closed
+loop (``geojax.loop.simulate``) records for every cycle.
 """
 
 from __future__ import annotations
@@ -16,12 +14,11 @@ import jax
 import jax.numpy as jnp
 
 from geojax.constants import SIDEREAL_DAY_S
-from geojax.dynamics import SpacecraftState, cartesian_rhs, mee_rhs
+from geojax.dynamics import cartesian_rhs, mee_rhs
 from geojax.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian, semi_major_axis_m, subsatellite_point_rad, wrap_angle
 from geojax.ephemeris import moon_position_eci_m, sun_position_eci_m
-from geojax.forces import Environment, ForceModel
+from geojax.forces import Environment
 from geojax.frames import earth_rotation_angle_rad
-from geojax.integrate import propagate_steps
 
 
 class Dynamics(NamedTuple):
@@ -30,13 +27,19 @@ class Dynamics(NamedTuple):
     rhs: Callable
     to_mee: Callable  # (orbit [6], mu) -> MEE [6]
     from_mee: Callable  # (MEE [6], mu) -> orbit [6]
+    to_cartesian: Callable  # (orbit [6], mu) -> ECI (r m, v m/s) [6]
 
 
-MEE = Dynamics(mee_rhs, lambda orbit, mu: orbit, lambda mee, mu: mee)
+def _mee_to_rv(mee, mu):
+    return jnp.concatenate(mee_to_cartesian(mee, mu), axis=-1)
+
+
+MEE = Dynamics(mee_rhs, lambda orbit, mu: orbit, lambda mee, mu: mee, _mee_to_rv)
 CARTESIAN = Dynamics(
     cartesian_rhs,
     lambda orbit, mu: cartesian_to_mee(orbit[..., :3], orbit[..., 3:], mu),
-    lambda mee, mu: jnp.concatenate(mee_to_cartesian(mee, mu), axis=-1),
+    _mee_to_rv,
+    lambda orbit, mu: orbit,
 )
 DYNAMICS = {"mee": MEE, "cartesian": CARTESIAN}
 
@@ -101,32 +104,3 @@ def cycle_means(mee_samples, earth_angle_rad, mu, cycle_s, t_mid_s) -> CycleMean
         a_m=cycle_mean(semi_major_axis_m(mee_samples)),
         max_abs_lat_rad=jnp.max(jnp.abs(lat)),
     )
-
-
-def propagate_cycles(
-    dynamics: Dynamics,
-    state: SpacecraftState,
-    env_grid: Environment,
-    fm: ForceModel,
-    step_s,
-    thrust_fn=None,
-):
-    """Propagate over all cycles of ``env_grid``; returns (final state, CycleMeans [n_cycles]).
-
-    ``thrust_fn(step_start_s, step_s) -> Thrust`` is evaluated per step with
-    the time since the start of the propagation (none if omitted).
-    """
-    n_steps = env_grid.earth_angle_rad.shape[1]
-    cycle_s = n_steps * step_s
-
-    def one_cycle(carry, xs):
-        cycle_index, env_steps = xs
-        t0 = cycle_index * cycle_s
-        final, starts = propagate_steps(dynamics.rhs, carry, env_steps, fm, step_s, t0, thrust_fn)
-        orbits = jnp.concatenate([starts.orbit, final.orbit[None]], axis=0)
-        angles = jnp.concatenate([env_steps.earth_angle_rad[:, 0], env_steps.earth_angle_rad[-1:, 2]])
-        means = cycle_means(dynamics.to_mee(orbits, fm.mu_m3_s2), angles, fm.mu_m3_s2, cycle_s, t0 + cycle_s / 2)
-        return final, means
-
-    n_cycles = env_grid.earth_angle_rad.shape[0]
-    return jax.lax.scan(one_cycle, state, (jnp.arange(n_cycles), env_grid))

@@ -68,6 +68,12 @@ def arm_limits_deg(beta_max_deg, beta_min_deg, alpha_max_deg, alpha_min_deg) -> 
     return ArmLimits(*(jnp.deg2rad(jnp.asarray(float(v))) for v in (beta_max_deg, beta_min_deg, alpha_max_deg, alpha_min_deg)))
 
 
+def arm_limits(thrusters: dict) -> ArmLimits:
+    """The ``ArmLimits`` of a ``Params.thrusters`` table (radian leaves)."""
+    return ArmLimits(thrusters["beta_max_rad"], thrusters["beta_min_rad"], thrusters["alpha_max_rad"],
+                     thrusters["alpha_min_rad"])
+
+
 def delta_v_direction_rsw(alpha_rad, beta_rad):
     """Unit velocity increment of a thrust direction (alpha, beta), Li 2022, eq. (14)."""
     cos_b = jnp.cos(beta_rad)

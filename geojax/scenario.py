@@ -14,7 +14,6 @@ import dataclasses
 import importlib.resources
 import math
 from pathlib import Path
-from typing import Any
 
 import jax.numpy as jnp
 import numpy as np
@@ -23,9 +22,8 @@ from geojax import constants as c
 from geojax.elements import cartesian_to_mee, kepler_to_mee
 from geojax.forces import ForceModel
 from geojax.frames import ecef_to_eci, earth_rotation_angle_rad
+from geojax.params import LOG, REQUIRED, Field, check_table, degrees
 from geojax.propulsion import arm_limits_deg
-from geojax.thrust_laws import MODES as THRUST_MODES
-from geojax.thrust_laws import check_thresholds
 from geojax.time import TT_MINUS_TAI_S, parse_utc, tai_minus_utc_s, tt_seconds_from_utc
 
 try:
@@ -33,33 +31,9 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-_NUMBER = (int, float)
+from geojax.params import NUMBER as _NUMBER  # noqa: E402
 
 
-@dataclasses.dataclass(frozen=True)
-class Field:
-    """One allowed key: its type(s), an optional default, an optional open/closed range, allowed choices."""
-
-    kind: type | tuple
-    default: Any = None
-    lower: float | None = None  # exclusive unless lower_inclusive
-    upper: float | None = None  # exclusive
-    lower_inclusive: bool = False
-    choices: tuple = ()
-    length: int | None = None  # for lists of numbers
-
-    def describe(self) -> str:
-        if self.choices:
-            return "one of " + ", ".join(repr(x) for x in self.choices)
-        parts = []
-        if self.lower is not None:
-            parts.append(f"{'>=' if self.lower_inclusive else '>'} {self.lower:g}")
-        if self.upper is not None:
-            parts.append(f"< {self.upper:g}")
-        return " and ".join(parts)
-
-
-REQUIRED = object()
 
 SCHEMA: dict[str, dict[str, Field]] = {
     "": {"name": Field(str, REQUIRED), "description": Field(str, "")},
@@ -84,11 +58,15 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "offset_ecef_km": Field(list, None, length=3),
     },
     "station": {
-        "lon_deg": Field(_NUMBER, REQUIRED, lower=-180.0, upper=360.0, lower_inclusive=True),
-        "radius_km": Field(_NUMBER, 42164.16, lower=0.0),
-        "ex": Field(_NUMBER, 0.0), "ey": Field(_NUMBER, 0.0),
-        "ix": Field(_NUMBER, 0.0), "iy": Field(_NUMBER, 0.0),
-        "box_half_width_deg": Field(_NUMBER, 0.05, lower=0.0),
+        "lon_deg": Field(_NUMBER, REQUIRED, lower=-180.0, upper=360.0, lower_inclusive=True, si="lon_rad",
+                         to_si=degrees),
+        "radius_km": Field(_NUMBER, 42164.16, lower=0.0, si="radius_m", to_si=1e3),
+        # Target mean e and i vectors, MEE (f, g) and (h, k) (Li 2022 eq. (10)).
+        "ex": Field(_NUMBER, 0.0, si="ex"), "ey": Field(_NUMBER, 0.0, si="ey"),
+        "ix": Field(_NUMBER, 0.0, si="ix"), "iy": Field(_NUMBER, 0.0, si="iy"),
+        # The box: a sample whose sub-satellite point leaves +-this in longitude or latitude at any step
+        # start gets status 2 or 3 (``geojax.loop.metrics``).
+        "box_half_width_deg": Field(_NUMBER, 0.05, lower=0.0, si="box_half_width_rad", to_si=degrees),
     },
     "spacecraft": {
         "mass_kg": Field(_NUMBER, REQUIRED, lower=0.0),
@@ -97,42 +75,21 @@ SCHEMA: dict[str, dict[str, Field]] = {
     },
     "thrusters": {
         "count": Field(int, 2, lower=1, lower_inclusive=True),
-        "thrust_n": Field(_NUMBER, REQUIRED, lower=0.0),
-        "isp_s": Field(_NUMBER, REQUIRED, lower=0.0),
+        "thrust_n": Field(_NUMBER, REQUIRED, lower=0.0, si="thrust_n", transform=LOG),
+        "isp_s": Field(_NUMBER, REQUIRED, lower=0.0, si="isp_s", transform=LOG),
         # Robotic-arm limits, Li 2022 eq. (1); defaults: the "normal" level of Table 1.
-        "beta_max_deg": Field(_NUMBER, 70.0),
-        "beta_min_deg": Field(_NUMBER, 0.0),
-        "alpha_max_deg": Field(_NUMBER, 60.0),
-        "alpha_min_deg": Field(_NUMBER, 30.0),
-        "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True),
+        "beta_max_deg": Field(_NUMBER, 70.0, si="beta_max_rad", to_si=degrees),
+        "beta_min_deg": Field(_NUMBER, 0.0, si="beta_min_rad", to_si=degrees),
+        "alpha_max_deg": Field(_NUMBER, 60.0, si="alpha_max_rad", to_si=degrees),
+        "alpha_min_deg": Field(_NUMBER, 30.0, si="alpha_min_rad", to_si=degrees),
+        "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True, si="min_burn_s"),
     },
-    "controller": {
-        "kind": Field(str, "none", choices=("none", "qffc", "fompc", "lyapunov")),
-        # Start V_DT from the estimate of Li 2022, eqs. (37)-(39), instead of the drift target.
-        "vdt_estimate": Field(bool, False),
-        # FOMPC (Li 2022, eqs. (40)-(42)): horizon N <= 10 cycles, Delta i_max in MEE (h, k), penalty P in
-        # (m/s)^2 per unit (h, k)^2; simulated annealing with `chains` chains of `iterations` moves.
-        "horizon": Field(int, 6, lower=1, upper=11, lower_inclusive=True),
-        "di_max": Field(_NUMBER, 8e-5, lower=0.0),
-        "penalty": Field(_NUMBER, 1e8, lower=0.0),
-        "chains": Field(int, 8, lower=1, upper=1025, lower_inclusive=True),
-        "iterations": Field(int, 64, lower=0, upper=100001, lower_inclusive=True),
-        # Milankovitch-Lyapunov feedback (Katz 2025, eqs. (1)-(7)), in the paper's units (see
-        # geojax/control/lyapunov.py for the reading of each): gains > 0, lambda_b any sign.
-        "k_h_per_km2_s": Field(_NUMBER, None, lower=0.0),
-        "k_e_km2_per_s3": Field(_NUMBER, None, lower=0.0),
-        "k_lambda_km_per_rad": Field(_NUMBER, None, lower=0.0),
-        "lambda_b_deg": Field(_NUMBER, None),
-        "thrust_mode": Field(str, "continuous-clipped", choices=THRUST_MODES),
-        # u0: largest acceleration; default thrusters.thrust_n / spacecraft.mass_kg.
-        "u0_km_per_s2": Field(_NUMBER, None, lower=0.0),
-        # Discrete thresholds (eq. (6)) along ECEF x, y, z; their norm must be u0.
-        "sigma_km_per_s2": Field(list, None, length=3),
-    },
+    # The [controller] table: `kind` here, the other keys from the controller's module (control.REGISTRY).
+    "controller": {"kind": Field(str, "none")},
     # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors (0.3 m, 5e-5 m/s, 0.05 deg).
     "errors": {
-        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True),
-        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True),
+        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, si="h_rv"),
+        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, si="h_att"),
     },
     "forces": {
         "j2": Field(bool, True),
@@ -202,21 +159,34 @@ def available() -> list[str]:
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
-def load(name_or_path: str | Path, overrides: dict | None = None) -> Scenario:
+def load(name_or_path: str | Path, overrides: dict | None = None, controller=None) -> Scenario:
     """Load a shipped scenario by name, or a TOML file by path, and validate it.
 
     ``overrides`` maps dotted keys to values (``{"duration.days": 30}``) and is
-    applied before validation.
+    applied before validation.  ``controller`` (a ``control.Controller`` of the
+    user's) validates the ``[controller]`` table against its ``fields`` instead
+    of those of the registered controller that ``controller.kind`` names.
     """
     text = read_text(name_or_path)
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ValueError(f"{name_or_path}: not valid TOML ({err})") from None
+    return from_dict(with_overrides(raw, overrides), controller)
+
+
+def with_overrides(raw: dict, overrides: dict | None) -> dict:
+    """``raw`` with dotted keys set (``{"thrusters.thrust_n": 0.3}``); a key must name a table and a field."""
+    raw = {k: dict(v) if isinstance(v, dict) else v for k, v in raw.items()}
     for dotted, value in (overrides or {}).items():
-        table, _, key = dotted.rpartition(".")
-        raw.setdefault(table, {})[key] = value
-    return from_dict(raw)
+        table, _, key = str(dotted).rpartition(".")
+        if not table or table not in SCHEMA:
+            raise ValueError(f"{dotted}: not a scenario key; write it as TABLE.KEY with a table of "
+                             f"{', '.join(t for t in SCHEMA if t)} (e.g. \"duration.days\")")
+        if not isinstance(raw.setdefault(table, {}), dict):
+            raise ValueError(f"{table}: must be a table")
+        raw[table][key] = value
+    return raw
 
 
 def read_toml_file(path: str | Path, kind: str) -> tuple[dict, str]:
@@ -245,9 +215,9 @@ def read_text(name_or_path: str | Path) -> str:
     return (importlib.resources.files("geojax") / "scenarios" / f"{name_or_path}.toml").read_text()
 
 
-def from_dict(raw: dict) -> Scenario:
-    """Validate a scenario table and build the ``Scenario``."""
-    config = _validate(raw)
+def from_dict(raw: dict, controller=None) -> Scenario:
+    """Validate a scenario table and build the ``Scenario`` (``controller``: as in ``load``)."""
+    config = _validate(raw, controller)
     utc = parse_utc(config["epoch"]["utc"])
     epoch_tt_s = tt_seconds_from_utc(utc)
     tt_minus_ut1_s = TT_MINUS_TAI_S + tai_minus_utc_s(utc.date()) - config["epoch"]["ut1_minus_utc_s"]
@@ -255,7 +225,7 @@ def from_dict(raw: dict) -> Scenario:
     return Scenario(config, epoch_tt_s, tt_minus_ut1_s, initial_mee, _force_model(config))
 
 
-def _validate(raw: dict) -> dict:
+def _validate(raw: dict, controller=None) -> dict:
     config: dict = {}
     unknown_tables = [t for t in raw if t not in SCHEMA and isinstance(raw[t], dict)]
     if unknown_tables:
@@ -265,65 +235,38 @@ def _validate(raw: dict) -> dict:
         given = raw if table == "" else raw.get(table, {})
         if not isinstance(given, dict):
             raise ValueError(f"{table}: must be a table")
+        if table == "controller":
+            fields = controller_fields(given, controller)
         out = check_table(f"{table}." if table else "", given, fields, ignore=SCHEMA if table == "" else ())
         if table:
             config[table] = out
         else:
             config.update(out)
     _check_orbit(config["orbit"])
-    if config["controller"]["kind"] == "lyapunov":
-        _check_lyapunov(config)
+    module = None if controller is not None else _registry()[config["controller"]["kind"]]
+    validate = getattr(module, "validate", None)
+    if validate is not None:
+        validate(config)
     t = config["thrusters"]
     arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
     return config
 
 
-def check_table(prefix: str, given: dict, fields: dict[str, Field], ignore=()) -> dict:
-    """Validate one table against its fields (names reported as ``prefix + key``); defaults filled in."""
-    for key in given:
-        if key not in fields and key not in ignore:
-            raise ValueError(f"{prefix}{key}: unknown key; allowed: {', '.join(fields)}")
-    out = {}
-    for key, field in fields.items():
-        name = f"{prefix}{key}"
-        if key not in given:
-            if field.default is REQUIRED:
-                raise ValueError(f"{name}: missing (required)")
-            out[key] = field.default
-            continue
-        out[key] = _check(name, given[key], field)
-    return out
+def _registry():
+    from geojax.control import REGISTRY  # the controllers import the parameter types, not the scenarios
+
+    return REGISTRY
 
 
-def _check(name: str, value: Any, field: Field) -> Any:
-    kinds = field.kind if isinstance(field.kind, tuple) else (field.kind,)
-    if isinstance(value, bool) and bool not in kinds:
-        raise ValueError(f"{name}: must be {_kind_name(kinds)}, got {value!r}")
-    if not isinstance(value, kinds):
-        raise ValueError(f"{name}: must be {_kind_name(kinds)}, got {type(value).__name__} {value!r}")
-    if field.length is not None:
-        if len(value) != field.length or not all(isinstance(x, _NUMBER) and not isinstance(x, bool) for x in value):
-            raise ValueError(f"{name}: must be a list of {field.length} numbers, got {value!r}")
-        return [float(x) for x in value]
-    if field.choices and value not in field.choices:
-        raise ValueError(f"{name}: must be {field.describe()}, got {value!r}")
-    if isinstance(value, _NUMBER) and not isinstance(value, bool):
-        if not math.isfinite(value):
-            raise ValueError(f"{name}: must be a finite number, got {value!r}")
-        low_bad = field.lower is not None and (value < field.lower or (value == field.lower and not field.lower_inclusive))
-        high_bad = field.upper is not None and value >= field.upper
-        if low_bad or high_bad:
-            raise ValueError(f"{name}: must be {field.describe()}, got {value!r}")
-        if float in kinds:
-            return float(value)
-    return value
-
-
-def _kind_name(kinds) -> str:
-    if float in kinds:
-        return "a number"
-    names = {int: "an integer", str: "a string", bool: "true or false", list: "a list"}
-    return " or ".join(names[k] for k in kinds)
+def controller_fields(table, controller=None) -> dict[str, Field]:
+    """The fields of a ``[controller]`` table: ``kind`` and those of the controller it names (or of ``controller``)."""
+    if controller is not None:
+        return {"kind": Field(str, "custom"), **controller.fields}
+    kind = table.get("kind", "none") if isinstance(table, dict) else "none"
+    registry = _registry()
+    if kind not in registry:
+        raise ValueError(f"controller.kind: must be one of {', '.join(map(repr, registry))}, got {kind!r}")
+    return {"kind": Field(str, "none", choices=tuple(registry)), **registry[kind].FIELDS}
 
 
 def _check_orbit(orbit: dict) -> None:
@@ -337,22 +280,6 @@ def _check_orbit(orbit: dict) -> None:
         raise ValueError(f"orbit.{extra[0]}: not used when orbit.elements = {kind!r}; give only {', '.join(needed)}")
     if kind == "mee" and math.hypot(orbit["f"], orbit["g"]) >= 1:
         raise ValueError(f"orbit.f, orbit.g: eccentricity sqrt(f^2 + g^2) must be < 1, got {math.hypot(orbit['f'], orbit['g']):g}")
-
-
-LYAPUNOV_GAINS = ("k_h_per_km2_s", "k_e_km2_per_s3", "k_lambda_km_per_rad", "lambda_b_deg")
-
-
-def _check_lyapunov(config: dict) -> None:
-    ctl = config["controller"]
-    missing = [k for k in LYAPUNOV_GAINS if ctl[k] is None]
-    if missing:
-        raise ValueError(f"controller.{missing[0]}: missing (required when controller.kind = 'lyapunov')")
-    if ctl["u0_km_per_s2"] is None:
-        ctl["u0_km_per_s2"] = config["thrusters"]["thrust_n"] / config["spacecraft"]["mass_kg"] / 1e3
-    if ctl["thrust_mode"] == "discrete":
-        if ctl["sigma_km_per_s2"] is None:
-            raise ValueError("controller.sigma_km_per_s2: missing (required when controller.thrust_mode = 'discrete')")
-        check_thresholds(ctl["u0_km_per_s2"], ctl["sigma_km_per_s2"])
 
 
 def _initial_mee(config: dict, epoch_tt_s: float, tt_minus_ut1_s: float) -> np.ndarray:

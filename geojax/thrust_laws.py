@@ -29,8 +29,6 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-MODES = ("continuous", "continuous-clipped", "discrete", "constant")
-
 # |u| below this (m/s^2) counts as zero when a direction is needed (1e-9 of u0 for 10 mN on 2205 kg).
 _TINY_MPS2 = 1e-15
 
@@ -42,21 +40,39 @@ class ThrustLimits(NamedTuple):
     sigma_mps2: jnp.ndarray  # [3], x, y, z of ECEF; used by "discrete" only
 
 
-def apply(mode: str, u, limits: ThrustLimits, smooth: bool = False, temperature=0.05):
-    """The acceleration [3] the thrusters deliver for a commanded ``u`` [3]; ``mode`` and ``smooth`` are static."""
-    if mode not in MODES:
-        raise ValueError(f"controller.thrust_mode: must be one of {', '.join(MODES)}, got {mode!r}")
+def continuous(u, limits: ThrustLimits, smooth: bool = False, temperature=0.05):
+    """Eq. (5) as printed: off where |u| > u0."""
     u0 = limits.u0_mps2
-    norm = safe_norm(u)
-    if mode == "continuous-clipped":
-        return u * jnp.minimum(1.0, u0 / norm)
-    if mode == "discrete":
-        sigma = limits.sigma_mps2
-        on = _step(jnp.abs(u) - sigma, sigma, smooth, temperature)
-        return sigma * jnp.sign(u) * on
-    if mode == "continuous":
-        return u * _step(u0 - norm, u0, smooth, temperature)
+    return u * _step(u0 - safe_norm(u), u0, smooth, temperature)
+
+
+def continuous_clipped(u, limits: ThrustLimits, smooth: bool = False, temperature=0.05):
+    """Saturation at |u| = u0 (smooth already: ``smooth`` and ``temperature`` are not used)."""
+    return u * jnp.minimum(1.0, limits.u0_mps2 / safe_norm(u))
+
+
+def discrete(u, limits: ThrustLimits, smooth: bool = False, temperature=0.05):
+    """Eq. (6): sigma_i sign(u_i) on each ECEF axis where |u_i| >= sigma_i."""
+    sigma = limits.sigma_mps2
+    return sigma * jnp.sign(u) * _step(jnp.abs(u) - sigma, sigma, smooth, temperature)
+
+
+def constant(u, limits: ThrustLimits, smooth: bool = False, temperature=0.05):
+    """Eq. (7): u0 u / |u| where |u| >= u0."""
+    u0, norm = limits.u0_mps2, safe_norm(u)
     return u0 * u / norm * _step(norm - u0, u0, smooth, temperature)
+
+
+LAWS = {"continuous": continuous, "continuous-clipped": continuous_clipped, "discrete": discrete, "constant": constant}
+MODES = tuple(LAWS)
+
+
+def law(mode: str):
+    """The implementation of a thrust mode, chosen once outside the traced loop:
+    ``law(mode)(u, limits, smooth, temperature)`` is the acceleration [3] delivered for a commanded ``u`` [3]."""
+    if mode not in LAWS:
+        raise ValueError(f"controller.thrust_mode: must be one of {', '.join(MODES)}, got {mode!r}")
+    return LAWS[mode]
 
 
 def safe_norm(u):

@@ -1,22 +1,24 @@
 """Gain tuning through differentiable rollouts (Katz 2025, eqs. (8)-(16)): ``geojax tune TUNE.toml``.
 
-Minimise the yearly Delta-V of a Milankovitch-Lyapunov scenario subject to the
+Minimise the yearly Delta-V of a scenario, with any controller, subject to the
 box |lambda - lambda_d| <= Delta_s, |latitude| <= Delta_s, by Adam (optax) on
 gradients of the whole rollout, from many starts at once (``vmap``; Katz reports
 a strong sensitivity to the initial guess).  A tuning file:
 
-    scenario = "katz2025-discrete"      # shipped name or .toml path (controller.kind = "lyapunov")
-    parameters = ["k_h", "k_e"]         # any of k_h, k_e, k_lambda, lambda_b, sigma
+    scenario = "katz2025-discrete"      # shipped name or .toml path, any controller
+    parameters = ["k_h", "k_e"]         # scenario keys with a tuning transform, e.g. "controller.k_h_per_km2_s",
+                                        # "thrusters.thrust_n"; k_h, k_e, k_lambda, lambda_b, sigma name Katz's gains
     starts = 16                         # start 0 is the scenario's own gains
     iterations = 40
     # optional: method ("sqp" or "adam"), days, step_s, spread_decades, spread_lambda_b_deg, temperature_start,
     # temperature_end, margin, seed, gradient ("forward" or "reverse"); for "sqp": trust_radius,
     # trust_radius_min, step_tolerance; for "adam": learning_rate, learning_rate_end, momentum, penalty_mps
 
-Parameters live in an unconstrained space: the natural log of the positive
-gains (k_h, k_e, k_lambda), lambda_b / 0.1 deg, and for the discrete
-thresholds three log-weights s with sigma = u0 exp(s) / |exp(s)|, so |sigma| =
-u0 holds by construction.  The box is Katz's eq. (10) normalised: one
+Parameters live in an unconstrained space given by each key's declared
+transform (``params.Field.transform``): the natural log of positive gains
+(k_h, k_e, k_lambda), lambda_b / 0.1 deg, and for the discrete thresholds
+three log-weights s with sigma = u0 exp(s) / |exp(s)|, so |sigma| = u0 holds
+by construction.  The box is Katz's eq. (10) normalised: one
 constraint per axis, g = max(excursion^2) / Delta_s^2 - 1 <= 0.  The
 discontinuous thrust laws are differentiated through their sigmoid surrogates
 at a temperature annealed geometrically from ``temperature_start`` to
@@ -61,6 +63,7 @@ import math
 import sys
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -68,11 +71,14 @@ import numpy as np
 import optax
 from scipy.optimize import minimize
 
-from geojax import feedback, run, scenario as scenario_mod, store
+from geojax import scenario as scenario_mod, store
 from geojax.control import lyapunov
+from geojax.control.base import Controller
+from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_NONFINITE
+from geojax.loop.rollout import rollout_fn
+from geojax.loop.setup import prepare, unstack
 from geojax.parallel import shard_batch
-from geojax.propagate import DYNAMICS
-from geojax.scenario import REQUIRED, Field
+from geojax.params import LEAF_TABLES, REQUIRED, Field, Params, check_table
 
 
 # Katz 2025, Table 1 and Secs. 3.1-3.3, per thrust mode ("+-" excursions as the paper states them).
@@ -87,8 +93,10 @@ PAPER = {
                  "k_h_per_km2_s": "2.7147e-15", "k_e_km2_per_s3": "1.043e-5"},
 }
 
-TUNABLE = ("k_h", "k_e", "k_lambda", "lambda_b", "sigma")
-LAMBDA_B_SCALE_RAD = math.radians(0.1)  # lambda_b enters the optimiser in units of 0.1 deg
+# Short names of Katz 2025's gains (tuning files before parameters were scenario keys).
+ALIASES = {"k_h": "controller.k_h_per_km2_s", "k_e": "controller.k_e_km2_per_s3",
+           "k_lambda": "controller.k_lambda_km_per_rad", "lambda_b": "controller.lambda_b_deg",
+           "sigma": "controller.sigma_km_per_s2"}
 # Iterates are kept within this many natural-log units of their start (about 3 decades).
 LOG_BOUND = 3 * math.log(10)
 
@@ -107,7 +115,10 @@ FIELDS = {
     "learning_rate_end": Field((int, float), 0.02, lower=0.0),
     "momentum": Field((int, float), 0.5, lower=0.0, upper=1.0, lower_inclusive=True),
     "spread_decades": Field((int, float), 0.3, lower=0.0, lower_inclusive=True),
-    "spread_lambda_b_deg": Field((int, float), 0.02, lower=0.0, lower_inclusive=True),
+    # Half-width of the starts' spread for keys tuned on a linear scale, in that scale's units
+    # (lambda_b: 0.1 deg, so 0.2 is +-0.02 deg); spread_lambda_b_deg sets it in degrees of lambda_b.
+    "spread_scaled": Field((int, float), 0.2, lower=0.0, lower_inclusive=True),
+    "spread_lambda_b_deg": Field((int, float), None, lower=0.0, lower_inclusive=True),
     "temperature_start": Field((int, float), 0.1, lower=0.0),
     "temperature_end": Field((int, float), 0.03, lower=0.0),
     "penalty_mps": Field((int, float), 200.0, lower=0.0),
@@ -122,6 +133,7 @@ class TuneSpec:
     config: dict  # the validated tuning table, defaults filled in
     scenario: scenario_mod.Scenario
     text: str  # the tuning file, stored in the results
+    controller: Controller | None = None  # a user's controller (None: the scenario's registered one)
 
     def __getattr__(self, name):
         try:
@@ -130,18 +142,20 @@ class TuneSpec:
             raise AttributeError(name) from None
 
 
-def load(path: str | Path) -> TuneSpec:
+def load(path: str | Path, controller: Controller | None = None) -> TuneSpec:
     """Read and validate a tuning file; ``ValueError`` with one line naming the fault."""
     path = Path(path)
     raw, text = scenario_mod.read_toml_file(path, "tuning")
-    return from_dict(raw, text)
+    return from_dict(raw, text, controller)
 
 
-def from_dict(raw: dict, text: str = "") -> TuneSpec:
-    config = scenario_mod.check_table("", raw, FIELDS)
+def from_dict(raw: dict, text: str = "", controller: Controller | None = None) -> TuneSpec:
+    """A ``TuneSpec`` from a tuning table (``controller``: a user's controller for the scenario)."""
+    config = check_table("", raw, FIELDS)
     names = config["parameters"]
-    if not names or any(n not in TUNABLE for n in names) or len(set(names)) != len(names):
-        raise ValueError(f"parameters: must be distinct names from {', '.join(TUNABLE)}, got {names!r}")
+    if not names or not all(isinstance(n, str) for n in names) or len(set(names)) != len(names):
+        raise ValueError(f"parameters: must be a list of distinct scenario keys, got {names!r}")
+    config["parameters"] = [ALIASES.get(n, n) for n in names]
     if None not in (config["trust_radius"], config["trust_radius_min"]) and \
             config["trust_radius_min"] > config["trust_radius"]:
         raise ValueError(f"trust_radius_min: must be <= trust_radius = {config['trust_radius']}, "
@@ -149,71 +163,105 @@ def from_dict(raw: dict, text: str = "") -> TuneSpec:
     if config["temperature_end"] > config["temperature_start"]:
         raise ValueError(f"temperature_end: must be <= temperature_start = {config['temperature_start']}, "
                          f"got {config['temperature_end']}")
+    if config["spread_lambda_b_deg"] is not None:
+        config["spread_scaled"] = config["spread_lambda_b_deg"] / math.degrees(lyapunov.LAMBDA_B_SCALE_RAD)
     overrides = {k: config[k] for k in ("days", "step_s") if config[k] is not None}
     overrides = {("duration." if k == "days" else "integration.") + k: float(v) for k, v in overrides.items()}
-    sc = scenario_mod.load(config["scenario"], overrides)
-    if sc.controller != "lyapunov":
-        raise ValueError(f"scenario: tuning needs controller.kind = 'lyapunov', got {sc.controller!r} in {sc.name}")
-    if "sigma" in names and sc.config["controller"]["thrust_mode"] != "discrete":
-        raise ValueError("parameters: 'sigma' is tuned only with controller.thrust_mode = 'discrete'")
-    return TuneSpec(config, sc, text)
+    sc = scenario_mod.load(config["scenario"], overrides, controller)
+    tuned(sc, controller, config["parameters"])  # every name tunable and set
+    return TuneSpec(config, sc, text, controller)
 
 
 # ---------------------------------------------------------------- parameter space
 
 
-def to_theta(params: feedback.FeedbackParams, names) -> np.ndarray:
-    """Unconstrained vector of the tuned parameters (see the module docstring)."""
-    g = params.gains
-    parts = {
-        "k_h": lambda: [math.log(float(g.k_h_per_m2_s))],
-        "k_e": lambda: [math.log(float(g.k_e_m2_per_s3))],
-        "k_lambda": lambda: [math.log(float(g.k_lambda_m_per_rad))],
-        "lambda_b": lambda: [float(g.lambda_b_rad) / LAMBDA_B_SCALE_RAD],
-        "sigma": lambda: list(np.log(np.asarray(params.limits.sigma_mps2) / float(params.limits.u0_mps2))),
-    }
-    return np.array([x for n in names for x in parts[n]()])
+class Tuned(NamedTuple):
+    """A tuned scenario key: its ``Params`` table, its field and its TOML name."""
+
+    name: str  # "controller.k_h_per_km2_s"
+    table: str
+    field: Field
 
 
-def from_theta(theta, base: feedback.FeedbackParams, names) -> feedback.FeedbackParams:
-    """The ``FeedbackParams`` of ``theta`` (jax-traceable): ``base`` with the tuned leaves replaced."""
-    gains, limits, i = base.gains, base.limits, 0
-    for n in names:
-        if n == "sigma":
-            w = jnp.exp(theta[i:i + 3])
-            limits = limits._replace(sigma_mps2=limits.u0_mps2 * w / jnp.linalg.norm(w))
-            i += 3
+def tuned(sc: scenario_mod.Scenario, controller: Controller | None, names) -> list[Tuned]:
+    """The declarations of the tuned keys; ``ValueError`` for a key that is not tunable or not set."""
+    fields = _fields(sc, controller)
+    tunable = [f"{t}.{k}" for t, table in fields.items() for k, f in table.items() if f.transform is not None]
+    out = []
+    for name in names:
+        table, _, key = name.rpartition(".")
+        field = fields.get(table, {}).get(key)
+        if field is None or field.transform is None:
+            raise ValueError(f"parameters: {name!r} is not tunable here; tunable: {', '.join(tunable)}")
+        if sc.config[table].get(key) is None:
+            raise ValueError(f"parameters: {name!r} is not set in scenario {sc.name} (it is not used there)")
+        out.append(Tuned(name, table, field))
+    return out
+
+
+def _fields(sc, controller) -> dict:
+    fields = {t: scenario_mod.SCHEMA[t] for t in LEAF_TABLES if t != "controller"}
+    fields["controller"] = controller.fields if controller is not None else \
+        scenario_mod.controller_fields(sc.config["controller"])
+    return fields
+
+
+def _leaves(params: Params, table: str) -> dict:
+    return getattr(params, table)
+
+
+def to_theta(params: Params, entries: list[Tuned]) -> np.ndarray:
+    """The unconstrained vector of the tuned leaves (each by its declared transform)."""
+    parts = []
+    for e in entries:
+        leaves = {k: np.asarray(v) for k, v in _leaves(params, e.table).items()}
+        parts.append(np.atleast_1d(e.field.transform.to_theta(leaves[e.field.si], leaves)))
+    return np.concatenate(parts).astype(float)
+
+
+def from_theta(theta, base: Params, entries: list[Tuned]) -> Params:
+    """``base`` with the tuned leaves replaced by those of ``theta`` (jax-traceable)."""
+    tables = {t: dict(_leaves(base, t)) for t in LEAF_TABLES}
+    i = 0
+    for e in entries:
+        leaves = tables[e.table]
+        size = int(np.size(leaves[e.field.si]))
+        value = e.field.transform.from_theta(theta[i:i + size] if np.ndim(leaves[e.field.si]) else theta[i], leaves)
+        leaves[e.field.si] = value
+        i += size
+    return base._replace(**tables)
+
+
+def reported(params: Params, entries_or_fields) -> dict[str, float]:
+    """Values of the controller's keys in their TOML units (list keys by component: ``_x``, ``_y``, ``_z``)."""
+    out = {}
+    for key, field in entries_or_fields.items():
+        if field.si is None or field.si not in params.controller or callable(field.to_si):
+            if field.si in params.controller and key.endswith("_deg"):
+                out[key] = math.degrees(float(params.controller[field.si]))
             continue
-        value = theta[i] * LAMBDA_B_SCALE_RAD if n == "lambda_b" else jnp.exp(theta[i])
-        gains = gains._replace(**{_GAIN_FIELD[n]: value})
-        i += 1
-    return base._replace(gains=gains, limits=limits)
+        value = field.from_si(params.controller[field.si])
+        if isinstance(value, list):
+            stem, _, unit = key.partition("_km") if "_km" in key else (key, "", "")
+            for axis, x in zip("xyz", value):
+                out[f"{stem}_{axis}{'_km' + unit if unit else ''}"] = x
+        else:
+            out[key] = value
+    return out
 
 
-_GAIN_FIELD = {"k_h": "k_h_per_m2_s", "k_e": "k_e_m2_per_s3", "k_lambda": "k_lambda_m_per_rad", "lambda_b": "lambda_b_rad"}
+def paper_units(params: Params, controller_fields=None) -> dict[str, float]:
+    """The controller's gains (and thresholds) in the scenario's (the paper's) units, for reports."""
+    return reported(params, controller_fields if controller_fields is not None else lyapunov.FIELDS)
 
 
-def paper_units(params: feedback.FeedbackParams) -> dict[str, float]:
-    """Gains (and thresholds) in the paper's units, for reports."""
-    g = params.gains
-    sigma = np.asarray(params.limits.sigma_mps2) / 1e3
-    return {
-        "k_h_per_km2_s": float(g.k_h_per_m2_s) / lyapunov.K_H_PAPER_TO_SI,
-        "k_e_km2_per_s3": float(g.k_e_m2_per_s3) / lyapunov.K_E_PAPER_TO_SI,
-        "k_lambda_km_per_rad": float(g.k_lambda_m_per_rad) / lyapunov.K_LAMBDA_PAPER_TO_SI,
-        "lambda_b_deg": math.degrees(float(g.lambda_b_rad)),
-        "sigma_x_km_per_s2": float(sigma[0]), "sigma_y_km_per_s2": float(sigma[1]),
-        "sigma_z_km_per_s2": float(sigma[2]),
-    }
-
-
-def start_points(spec: TuneSpec, center: np.ndarray) -> np.ndarray:
-    """[starts, P]: start 0 at ``center`` (the scenario's gains), the rest uniform around it."""
+def start_points(spec: TuneSpec, center: np.ndarray, entries: list[Tuned], sizes: list[int]) -> np.ndarray:
+    """[starts, P]: start 0 at ``center`` (the scenario's values), the rest uniform around it (``spread_decades``
+    for the keys tuned on a log scale, ``spread_scaled`` for the others)."""
     rng = np.random.default_rng(spec.seed)
     half = np.concatenate([
-        [spec.spread_lambda_b_deg / 0.1] if n == "lambda_b" else
-        [spec.spread_decades * math.log(10)] * (3 if n == "sigma" else 1)
-        for n in spec.parameters
+        [spec.spread_decades * math.log(10) if e.field.transform.name.startswith("log") else spec.spread_scaled] * n
+        for e, n in zip(entries, sizes)
     ])
     starts = center + rng.uniform(-1.0, 1.0, (spec.starts, center.size)) * half
     starts[0] = center
@@ -227,10 +275,15 @@ class Problem:
     """The tuning problem of one scenario: batched exact evaluation and surrogate gradients, compiled once."""
 
     def __init__(self, sc: scenario_mod.Scenario, names, penalty_mps: float = 200.0, margin: float = 0.02,
-                 gradient: str = "forward"):
-        self.setup = run.feedback_setup(sc)
+                 gradient: str = "forward", controller: Controller | None = None):
+        self.batch = prepare([sc], controller)
+        self.base = unstack(self.batch.params, 0)
+        self.entries = tuned(sc, controller, names)
         self.names = tuple(names)
-        self.fm = sc.force_model
+        self.sizes = [int(np.size(getattr(self.base, e.table)[e.field.si])) for e in self.entries]
+        self.box_half_width_rad = float(self.base.station["box_half_width_rad"])
+        self._rollouts = {False: rollout_fn(self.batch),
+                          True: rollout_fn(self.batch, controller=self.batch.controller.surrogate or self.batch.controller)}
         self.penalty_mps, self.margin = penalty_mps, margin
         self._exact = jax.jit(jax.vmap(lambda th: self.evaluate(th, smooth=False)[1]))
         self._single = jax.jit(lambda th: self.evaluate(th, smooth=False)[1])
@@ -239,20 +292,29 @@ class Problem:
 
     @property
     def exact_is_smooth(self) -> bool:
-        """The clipped continuous law has no surrogate: its gradient run already is the exact evaluation."""
-        return self.setup.mode == "continuous-clipped"
+        """A controller without a surrogate (the clipped continuous law) is smooth: its gradient run already is
+        the exact evaluation."""
+        return self.batch.controller.surrogate is None
+
+    @property
+    def days(self) -> int:
+        return self.batch.n_cycles
+
+    def params(self, theta) -> Params:
+        return from_theta(theta, self.base, self.entries)
 
     def evaluate(self, theta, smooth: bool, temperature=0.05):
         """(loss, (dv_per_year_mps, constraint [2] lon/lat, box_ok)) of one parameter vector."""
-        s = self.setup
-        params = from_theta(theta, s.params, self.names)._replace(temperature=jnp.asarray(temperature))
-        final, records = feedback.rollout(DYNAMICS[s.dynamics], s.state, s.env, self.fm, s.step_s, params, s.mode, smooth)
-        m = feedback.metrics(s.state, final, records, s.step_s, params.station.lon_rad, s.box_half_width_rad)
-        excursion = jnp.radians(jnp.stack([m.max_abs_dlon_deg, m.max_abs_dlat_deg]))
+        params = self.params(theta)
+        if "temperature" in params.controller:
+            params = params._replace(controller={**params.controller, "temperature": jnp.asarray(temperature)})
+        _, _, m = self._rollouts[smooth](params, jax.random.key(0))
+        excursion = jnp.radians(jnp.stack([m["max_abs_dlon_deg"], m["max_abs_dlat_deg"]]))
         # Katz eq. (10): delta^2 - Delta_s^2 <= 0, (lambda - lambda_d)^2 - Delta_s^2 <= 0, normalised.
-        constraint = (excursion / s.box_half_width_rad) ** 2 - 1.0
-        loss = m.dv_per_year_mps + self.penalty_mps * jnp.sum(jax.nn.relu(constraint + self.margin))
-        return loss, (m.dv_per_year_mps, constraint, m.box_ok)
+        constraint = (excursion / self.box_half_width_rad) ** 2 - 1.0
+        loss = m["dv_per_year_mps"] + self.penalty_mps * jnp.sum(jax.nn.relu(constraint + self.margin))
+        box_ok = ~jnp.isin(m["status"], jnp.array([STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE]))
+        return loss, (m["dv_per_year_mps"], constraint, box_ok.astype(float))
 
     def exact(self, thetas):
         """Exact-law (dv_per_year_mps [n], constraint [n, 2], box_ok [n]) of a batch of parameter vectors."""
@@ -325,7 +387,7 @@ class TuneResult:
     best_theta: np.ndarray | None  # None when no iterate kept the box
     best_dv_per_year_mps: float
     best_constraint: np.ndarray  # [2]
-    best_params: feedback.FeedbackParams | None
+    best_params: Params | None
     history: dict[str, np.ndarray]  # the /iterations datasets
     starts: np.ndarray
     message: str
@@ -340,8 +402,7 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
     if best["theta"] is None:
         message += "; no iterate kept the box with the exact law"
     wall_s = run_.elapsed()
-    best_params = None if best["theta"] is None else from_theta(jnp.asarray(best["theta"]), run_.problem.setup.params,
-                                                                 spec.parameters)
+    best_params = None if best["theta"] is None else run_.problem.params(jnp.asarray(best["theta"]))
     result = TuneResult(best["theta"], best["dv"], best["g"], best_params, _stack(run_.hist), run_.hist["theta"][0],
                         message, wall_s)
     if out:
@@ -362,7 +423,7 @@ def default_margin(spec: TuneSpec, sc: scenario_mod.Scenario) -> float:
         return spec.margin
     if spec.method == "adam":
         return 0.02
-    return 0.0 if sc.config["controller"]["thrust_mode"] == "continuous-clipped" else 0.01
+    return 0.0 if _smooth(spec) else 0.01
 
 
 def default_trust_radius(spec: TuneSpec, sc: scenario_mod.Scenario) -> float:
@@ -371,7 +432,12 @@ def default_trust_radius(spec: TuneSpec, sc: scenario_mod.Scenario) -> float:
     linearisation points the right way over a shorter range (both measured with benchmarks/tune.py)."""
     if spec.trust_radius is not None:
         return spec.trust_radius
-    return 2.0 if sc.config["controller"]["thrust_mode"] == "continuous-clipped" else 0.3
+    return 2.0 if _smooth(spec) else 0.3
+
+
+def _smooth(spec: TuneSpec) -> bool:
+    """Whether the scenario's controller is its own surrogate (the clipped continuous law)."""
+    return prepare([spec.scenario], spec.controller).controller.surrogate is None
 
 
 class _Run:
@@ -381,7 +447,7 @@ class _Run:
         self.start_wall = time.perf_counter()
         self.spec, self.out = spec, out
         self.problem = problem or Problem(spec.scenario, spec.parameters, spec.penalty_mps,
-                                          default_margin(spec, spec.scenario), spec.gradient)
+                                          default_margin(spec, spec.scenario), spec.gradient, spec.controller)
         self.margin = default_margin(spec, spec.scenario)
         self.noise_mps = 0.0 if self.problem.exact_is_smooth else SAMPLED_LAW_NOISE_MPS
         # The smallest trust region: for the sampled-and-held laws the scale below which they are noise (their
@@ -390,15 +456,15 @@ class _Run:
         if self.trust_radius_min is None:
             self.trust_radius_min = 1e-6 if self.problem.exact_is_smooth else 0.02
         self.trust_radius = max(default_trust_radius(spec, spec.scenario), self.trust_radius_min)
-        center = to_theta(self.problem.setup.params, spec.parameters)
-        self.theta0 = start_points(spec, center)
+        center = to_theta(self.problem.base, self.problem.entries)
+        self.theta0 = start_points(spec, center, self.problem.entries, self.problem.sizes)
         self.low, self.high = center - LOG_BOUND, center + LOG_BOUND
         self.best = {"dv": math.inf, "theta": None, "g": np.full(2, np.nan)}
         self.hist = {k: [] for k in ("dv_per_year_mps", "constraint", "loss", "step_norm", "theta", "temperature",
                                      "active", "trust_radius", "best_dv_per_year_mps", "wall_s")}
         self.say = print if verbose else (lambda *a, **k: None)
         self.say(f"tune {spec.scenario.name}: {', '.join(spec.parameters)} by {spec.method} from {spec.starts} starts, "
-                 f"{spec.iterations} iterations, {self.problem.setup.env.earth_angle_rad.shape[0]} days (compiling...)",
+                 f"{spec.iterations} iterations, {self.problem.days} days (compiling...)",
                  flush=True)
 
     def elapsed(self) -> float:
@@ -635,10 +701,12 @@ def _write(out, spec, problem, hist, theta_starts, best, message, wall_s):
     groups = {"iterations": _stack(hist), "starts": {"theta": np.asarray(theta_starts)}}
     groups["iterations"]["active"] = groups["iterations"]["active"].astype(np.int8)
     if best["theta"] is not None:
-        params = from_theta(jnp.asarray(best["theta"]), problem.setup.params, spec.parameters)
-        groups["best"] = {**paper_units(params), "theta": best["theta"]}
+        params = problem.params(jnp.asarray(best["theta"]))
+        groups["best"] = {**paper_units(params, scenario_mod.controller_fields(spec.scenario.config["controller"],
+                                                                                spec.controller)), "theta": best["theta"]}
         groups["metrics"] = {"dv_per_year_mps": best["dv"], "constraint_lon": best["g"][0],
                              "constraint_lat": best["g"][1]}
     attrs = {"kind": "tune", "scenario": spec.scenario.name, "parameters": ",".join(spec.parameters),
-             "status": message, "tune_toml": spec.text, "thrust_mode": problem.setup.mode}
+             "status": message, "tune_toml": spec.text,
+             "controller": spec.scenario.controller}
     store.write_h5(out, groups, scenario_mod.to_toml(spec.scenario.config), wall_s, attrs=attrs)

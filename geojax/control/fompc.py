@@ -31,16 +31,22 @@ Choices where the paper is silent:
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
-from geojax.control.plan import model_cycle
+from geojax.control import burns as burns_mod
+from geojax.control import qffc
+from geojax.control.base import Controller
+from geojax.control.qffc import model_cycle
+
+FIELDS = qffc.FIELDS
 
 
 class MpcParams(NamedTuple):
-    """FOMPC parameters a sweep can vary (array leaves)."""
+    """FOMPC parameters a sweep can vary (array leaves; ``params.controller`` holds them by the same names)."""
 
     horizon: jnp.ndarray = jnp.asarray(6)  # N, cycles (<= Annealing.n_max)
     di_max: jnp.ndarray = jnp.asarray(8e-5)  # Delta i_max, MEE (h, k)
@@ -128,3 +134,37 @@ def shifted(fractions, horizon):
     cycle.  Padded cycles at or beyond N (masked out of J, so never optimised) are not used."""
     n_max = fractions.shape[0]
     return fractions[jnp.minimum(jnp.arange(n_max) + 1, jnp.clip(horizon, 1, n_max) - 1)]
+
+
+def make(tables: list[dict]) -> Controller:
+    """The FOMPC for a batch of ``[controller]`` tables: its horizon padded to their largest N (so a sweep over
+    N compiles once; a single run plans over exactly its N: padded cycles are masked out of J but still
+    evaluated), the annealing's size shared."""
+    for key in ("chains", "iterations"):
+        if len({t[key] for t in tables}) > 1:
+            raise ValueError(f"controller.{key}: sets the size of the compiled annealing; one value per sweep, "
+                             f"got {sorted({t[key] for t in tables})}")
+    annealing = Annealing(n_max=max(t["horizon"] for t in tables), chains=tables[0]["chains"],
+                          iterations=tables[0]["iterations"])
+    return controller(annealing)
+
+
+@functools.lru_cache(maxsize=None)
+def controller(annealing: Annealing = Annealing()) -> Controller:
+    """The FOMPC with a static annealing schedule; its state is the last plan's sequence, shifted (warm start)."""
+
+    def init(params, context):
+        return jnp.ones(annealing.n_max)
+
+    def plan_cycle(params, warm_start, estimate, context, key):
+        c = params.controller
+        inputs = qffc.model_inputs(params, estimate, context)
+        prediction, _, _ = model_cycle(*inputs)
+        mpc = MpcParams(c["horizon"], c["di_max"], c["penalty"])
+        planned = plan(jax.random.fold_in(key, 1), *inputs, mpc, annealing, warm_start)
+        flown = burns_mod.fly(params, planned.burns, prediction, planned.fractions[0], estimate, context, key)
+        return flown, shifted(planned.fractions, c["horizon"])
+
+    # Plans N cycles ahead: the reference at the cycle's start boundary and the n_max + 1 after it.
+    return Controller(init, plan_cycle, burns_mod.thrust, FIELDS, reference_cycles=annealing.n_max + 2,
+                      record=burns_mod.record)

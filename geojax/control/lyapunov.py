@@ -32,21 +32,120 @@ Readings of the paper (Katz 2025 is terse; each choice is tested):
   position; lambda - lambda_d - lambda_b is wrapped to [-pi, pi).
 
 The law is a pure function of the ECEF state; time enters only through the
-frame rotation, which the closed loop (``geojax.feedback``) applies.
+frame rotation.  As a controller (``CONTROLLER`` / ``make``) it has no plan:
+at the start of each step it reads the true state, rotated into ECEF
+(position, and the inertial velocity in ECEF axes), commands u, the thrust
+implementation delivers part of it (``thrust_laws``), and the delivered
+acceleration is held constant in the orbit (RSW) frame for the step -- a
+sample-and-hold at the integration step, as a flight computer would apply it.
+For a synchronous orbit the RSW frame turns with the Earth, so this is also a
+hold in ECEF.  Holding the command makes the discontinuous laws (eqs.
+(5)-(7)) well defined within an RK4 step, and the delivered Delta-V is exactly
+sum |u_k| h.  The mass decreases with the scenario's Isp; the law commands
+accelerations, so the mass only enters the thrust bookkeeping.
 """
 
 from __future__ import annotations
 
+import functools
+import math
 from typing import NamedTuple
 
 import jax.numpy as jnp
+import numpy as np
 
+from geojax import thrust_laws
+from geojax.constants import OMEGA_EARTH_RAD_S
+from geojax.control.base import Controller, no_plan, stateless_init
+from geojax.dynamics import Thrust
 from geojax.elements import wrap_angle
+from geojax.frames import rotate_z, rsw_basis
+from geojax.params import LOG, NUMBER, REQUIRED, Field, Transform, scaled
 
-# Paper units to SI.
-K_H_PAPER_TO_SI = 1e-6  # 1/(km^2 s) -> 1/(m^2 s)
-K_E_PAPER_TO_SI = 1e6  # km^2/s^3 -> m^2/s^3
-K_LAMBDA_PAPER_TO_SI = 1e3  # km/rad -> m/rad
+
+LAMBDA_B_SCALE_RAD = math.radians(0.1)  # lambda_b enters the tuner in units of 0.1 deg
+
+
+def _sigma_to_theta(sigma_mps2, leaves):
+    return np.log(np.asarray(sigma_mps2) / float(leaves["u0_mps2"]))
+
+
+def _sigma_from_theta(theta, leaves):
+    w = jnp.exp(theta)
+    return leaves["u0_mps2"] * w / jnp.linalg.norm(w)
+
+
+# The thresholds as three log-weights s, sigma = u0 exp(s) / |exp(s)|: |sigma| = u0 holds by construction.
+SIGMA_WEIGHTS = Transform("log-weights", _sigma_to_theta, _sigma_from_theta)
+
+# The [controller] table, in the paper's units (see the module docstring for the reading of each).
+FIELDS = {
+    "k_h_per_km2_s": Field(NUMBER, REQUIRED, lower=0.0, si="k_h_per_m2_s", to_si=1e-6, transform=LOG),
+    "k_e_km2_per_s3": Field(NUMBER, REQUIRED, lower=0.0, si="k_e_m2_per_s3", to_si=1e6, transform=LOG),
+    "k_lambda_km_per_rad": Field(NUMBER, REQUIRED, lower=0.0, si="k_lambda_m_per_rad", to_si=1e3, transform=LOG),
+    "lambda_b_deg": Field(NUMBER, REQUIRED, si="lambda_b_rad", to_si=math.pi / 180,
+                          transform=scaled(LAMBDA_B_SCALE_RAD, "0.1 deg")),
+    "thrust_mode": Field(str, "continuous-clipped", choices=thrust_laws.MODES, static=True),
+    # u0: largest acceleration; default thrusters.thrust_n / spacecraft.mass_kg.
+    "u0_km_per_s2": Field(NUMBER, None, lower=0.0, si="u0_mps2", to_si=1e3),
+    # Discrete thresholds (eq. (6)) along ECEF x, y, z; their norm must be u0.
+    "sigma_km_per_s2": Field(list, None, length=3, si="sigma_mps2", to_si=1e3, transform=SIGMA_WEIGHTS),
+    # Temperature of the sigmoid surrogate the tuner differentiates (``thrust_laws``; exact runs ignore it).
+    "surrogate_temperature": Field(NUMBER, 0.05, lower=0.0, si="temperature"),
+}
+
+
+def validate(config: dict) -> None:
+    """Checks across tables, at load: u0 defaults to F / m; the discrete law needs thresholds of norm u0."""
+    ctl = config["controller"]
+    if ctl["u0_km_per_s2"] is None:
+        ctl["u0_km_per_s2"] = config["thrusters"]["thrust_n"] / config["spacecraft"]["mass_kg"] / 1e3
+    if ctl["thrust_mode"] == "discrete":
+        if ctl["sigma_km_per_s2"] is None:
+            raise ValueError("controller.sigma_km_per_s2: missing (required when controller.thrust_mode = 'discrete')")
+        thrust_laws.check_thresholds(ctl["u0_km_per_s2"], ctl["sigma_km_per_s2"])
+
+
+def make(tables: list[dict], smooth: bool = False) -> Controller:
+    """The feedback law for ``[controller]`` tables sharing one thrust mode; ``smooth``: the sigmoid surrogate
+    of the on/off laws (the continuous-clipped law is smooth already and is its own surrogate)."""
+    modes = {t["thrust_mode"] for t in tables}
+    if len(modes) > 1:
+        raise ValueError(f"controller.thrust_mode: one value per sweep (it selects the compiled law), got {sorted(modes)}")
+    return controller(modes.pop(), smooth)
+
+
+@functools.lru_cache(maxsize=None)
+def controller(mode: str, smooth: bool = False) -> Controller:
+    """The feedback law with thrust implementation ``mode`` (``thrust_laws.MODES``), exact or its surrogate."""
+    deliver = thrust_laws.law(mode)
+
+    def thrust(params, plan, t, state, environment) -> Thrust:
+        c = params.controller
+        angle = environment.env.earth_angle_rad[0]
+        r_eci, v_eci = environment.r_eci_m, environment.v_eci_mps
+        r_ecef = rotate_z(r_eci, angle)
+        u_cmd = accel(gains(c), station(params), r_ecef, rotate_z(v_eci, angle))
+        limits = thrust_laws.ThrustLimits(c["u0_mps2"], c.get("sigma_mps2", jnp.zeros(3)))
+        u_ecef = deliver(u_cmd, limits, smooth, c["temperature"])
+        u_rsw = rsw_basis(r_eci, v_eci) @ rotate_z(u_ecef, -angle)
+        u_norm = thrust_laws.safe_norm(u_rsw)
+        return Thrust(u_rsw / u_norm, u_norm * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
+
+    surrogate = None if smooth or mode == "continuous-clipped" else controller(mode, smooth=True)
+    return Controller(stateless_init, no_plan, thrust, FIELDS, surrogate=surrogate)
+
+
+def gains(controller: dict) -> "LyapunovGains":
+    """The ``LyapunovGains`` of a ``Params.controller`` table."""
+    return LyapunovGains(controller["k_h_per_m2_s"], controller["k_e_m2_per_s3"], controller["k_lambda_m_per_rad"],
+                         controller["lambda_b_rad"])
+
+
+def station(params) -> "Station":
+    """The slot of eq. (4) from a sample's ``Params``."""
+    return Station(params.station["lon_rad"], params.station["radius_m"], jnp.asarray(OMEGA_EARTH_RAD_S),
+                   params.forces.mu_m3_s2)
 
 
 class LyapunovGains(NamedTuple):

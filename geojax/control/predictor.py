@@ -1,7 +1,8 @@
 """State predictor (Li 2022, Sec. 4.1, eqs. (24)-(27)) and the mean-element estimate it starts from.
 
-One uncontrolled propagation from the initial state, done once per scenario
-and shared by a batch, gives at every cycle boundary the osculating elements
+One uncontrolled propagation from the initial state (``geojax.loop.reference``:
+the closed loop with the null controller), done once per scenario and shared
+by a batch, gives at every cycle boundary the osculating elements
 and the mean elements (eq. (9)).  From it:
 
 * the natural drift of the mean elements over a cycle, Delta x_d (eq. (26)),
@@ -21,12 +22,9 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import jax
 import jax.numpy as jnp
 
 from geojax.elements import semi_major_axis_m, wrap_angle
-from geojax.integrate import propagate_steps
-from geojax.propagate import MEE, cycle_means
 
 
 class Reference(NamedTuple):
@@ -46,29 +44,6 @@ def boundary_elements(mee, earth_angle_rad):
     true_lon = mee[5]
     lon = wrap_angle(true_lon - 2 * mee[1] * jnp.sin(true_lon) + 2 * mee[2] * jnp.cos(true_lon) - earth_angle_rad)
     return jnp.stack([lon, semi_major_axis_m(mee), mee[1], mee[2], mee[3], mee[4]])
-
-
-def reference(state, env_grid, fm, step_s) -> Reference:
-    """Propagate without control over ``env_grid``; elements at each of its cycle boundaries but the last."""
-    n_steps = env_grid.earth_angle_rad.shape[1]
-    cycle_s = n_steps * step_s
-    mu = fm.mu_m3_s2
-
-    def one_cycle(carry, xs):
-        k, env_steps = xs
-        osc = boundary_elements(carry.orbit, env_steps.earth_angle_rad[0, 0])
-        final, starts = propagate_steps(MEE.rhs, carry, env_steps, fm, step_s, k * cycle_s)
-        orbits = jnp.concatenate([starts.orbit, final.orbit[None]], axis=0)
-        angles = jnp.concatenate([env_steps.earth_angle_rad[:, 0], env_steps.earth_angle_rad[-1:, 2]])
-        m = cycle_means(orbits, angles, mu, cycle_s, 0.0)
-        return final, (osc, jnp.stack([m.lon_rad, m.drift_rad_s, m.a_m, m.ex, m.ey, m.ix, m.iy]))
-
-    n_cycles = env_grid.earth_angle_rad.shape[0]
-    _, (osc, mid) = jax.lax.scan(one_cycle, state, (jnp.arange(n_cycles), env_grid))
-    mid = mid.at[:, 0].set(jnp.unwrap(mid[:, 0]))
-    first = 1.5 * mid[0] - 0.5 * mid[1]
-    boundary = jnp.concatenate([first[None], 0.5 * (mid[:-1] + mid[1:])], 0)
-    return Reference(osc, boundary.at[:, 0].set(wrap_angle(boundary[:, 0])))
 
 
 def estimate_mean(osc, osc_ref, mean_ref, mu):

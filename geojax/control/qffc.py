@@ -1,4 +1,4 @@
-"""Quick feedforward controller, the per-cycle solve (Li 2022, Sec. 4.2, eqs. (28)-(39)).
+"""Quick feedforward controller (Li 2022, Sec. 4.2, eqs. (28)-(39)): the per-cycle solve and the controller.
 
 Given the predictive deviation dx = (d lambda, d lambda_dot, d e_x, d e_y, d i_x, d i_y)
 of eq. (28) (target minus predicted, lambda in rad, lambda_dot in rad/s, e and i
@@ -51,8 +51,27 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
+from geojax.control import burns as burns_mod
+from geojax.control.base import Controller, stateless_init
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_matrix, remaining_fraction
-from geojax.propulsion import ArmLimits
+from geojax.control.predictor import predict_next
+from geojax.elements import wrap_angle
+from geojax.params import LOG, NUMBER, Field, station_target
+from geojax.propulsion import ArmLimits, arm_limits
+
+# The [controller] keys of Li 2022's planners.  The QFFC reads vdt_estimate only; it accepts the FOMPC's keys
+# (and ignores them) so that one scenario and one sweep file run both controllers on the same grid.
+FIELDS = {
+    # Start V_DT from the estimate of Li 2022, eqs. (37)-(39), instead of the drift target.
+    "vdt_estimate": Field(bool, False, si="vdt_estimate"),
+    # FOMPC (Li 2022, eqs. (40)-(42)): horizon N <= 10 cycles, Delta i_max in MEE (h, k), penalty P in
+    # (m/s)^2 per unit (h, k)^2; simulated annealing with `chains` chains of `iterations` moves.
+    "horizon": Field(int, 6, lower=1, upper=11, lower_inclusive=True, si="horizon"),
+    "di_max": Field(NUMBER, 8e-5, lower=0.0, si="di_max", transform=LOG),
+    "penalty": Field(NUMBER, 1e8, lower=0.0, si="penalty", transform=LOG),
+    "chains": Field(int, 8, lower=1, upper=1025, lower_inclusive=True, static=True),
+    "iterations": Field(int, 64, lower=0, upper=100001, lower_inclusive=True, static=True),
+}
 
 
 class BurnPair(NamedTuple):
@@ -189,3 +208,52 @@ def effect(burns: BurnPair, l_start_rad, coast_offset_s=0.0):
     coast = cycle_coast_s(burns.l_rad, l_start_rad) + coast_offset_s
     matrices = effect_matrix(burns.l_rad, coast)  # [2, 6, 3]
     return jnp.einsum("nij,nj->i", matrices, burns.dv_rsw_mps)
+
+
+def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_estimate=0.0, v_n_fraction=None):
+    """Plan one cycle on the predictor model: eq. (25) with the QFFC's solution (eqs. (25)-(40)).
+
+    Both planners use it: the QFFC once per cycle with the full inclination
+    correction, the FOMPC N times per candidate sequence of north-south
+    corrections (eq. (41)).  ``x_prev`` [6] is the mean state at the cycle's
+    start; ``ref_window`` [3, 7] the uncontrolled reference's mean (lon, drift,
+    a, f, g, h, k) at the cycle's start boundary and the two after it: the
+    natural drift of this cycle (eqs. (26)-(27)) and of the next one (for the
+    V_DT estimate of eqs. (37)-(39)).  ``vdt_estimate`` (0 or 1, or a blend)
+    sets the drift goal: 0 cancels the drift (target drift), 1 leaves the drift
+    of eqs. (37)-(38).  ``v_n_fraction`` scales the north-south correction (the
+    FOMPC's action, eq. (40)): |V_N| = fraction * 2 V_s |di|; ``None`` is the
+    QFFC's full correction.
+
+    Returns (prediction without burns [6], BurnPair, predicted state after the burns [6]).
+    An infeasible cycle flies nothing (eq. (40): S = 0).
+    """
+    prediction = predict_next(x_prev, ref_window[0], ref_window[1], cycle_s)
+    prediction = prediction.at[0].set(wrap_angle(prediction[0]))
+    deviation = target - prediction  # eq. (28)
+    next_deviation = jnp.zeros(6).at[2:].set(ref_window[1, 3:] - ref_window[2, 3:])
+    drift_goal = target[1] + vdt_estimate * (estimated_drift_rad_s(next_deviation, l_start_rad) - target[1])
+    deviation = deviation.at[0].set(wrap_angle(deviation[0])).at[1].set(drift_goal - prediction[1])
+    v_n = None if v_n_fraction is None else v_n_fraction * full_correction_mps(deviation)
+    burns = solve(deviation, l_start_rad, limits, v_n_mps=v_n)
+    after = prediction + jnp.where(burns.feasible, effect(burns, l_start_rad), 0.0)
+    return prediction, burns, after.at[0].set(wrap_angle(after[0]))
+
+
+def model_inputs(params, estimate, context):
+    """The arguments of ``model_cycle`` that a planner reads from the loop: (x, window, target, l, limits, cycle, vdt)."""
+    return (estimate.mean, context.reference, station_target(params.station), estimate.fix_mee[5],
+            arm_limits(params.thrusters), context.cycle_s, params.controller["vdt_estimate"])
+
+
+def _plan(params, controller_state, estimate, context, key):
+    prediction, burns, _ = model_cycle(*model_inputs(params, estimate, context))
+    return burns_mod.fly(params, burns, prediction, jnp.asarray(1.0), estimate, context, key), controller_state
+
+
+# Reads the reference at the cycle's start boundary and the two after it (``model_cycle``).
+CONTROLLER = Controller(stateless_init, _plan, burns_mod.thrust, FIELDS, reference_cycles=3, record=burns_mod.record)
+
+
+def make(tables: list[dict]) -> Controller:
+    return CONTROLLER

@@ -1,0 +1,84 @@
+"""The controller protocol (DESIGN.md layer 4): data plus pure functions, in the optax manner.
+
+A controller is a ``Controller(init, plan, thrust)`` of pure functions that the
+one closed loop (``geojax.loop.simulate``) calls:
+
+* ``init(params, context) -> controller_state``: once, before the first cycle
+  (``context`` is the first cycle's ``CycleContext``);
+* ``plan(params, controller_state, estimate, context, key) -> (plan, controller_state)``:
+  once per control cycle, from the on-board ``Estimate`` (never the true state);
+* ``thrust(params, plan, t, state, environment) -> Thrust``: once per
+  integration step; ``t`` is the step's start (s since the start of the run),
+  ``state`` the true ``SpacecraftState`` and ``environment`` a ``StepEnvironment``
+  (a feedback law reads its sensors here; a planner flies its plan).
+
+``params`` is the sample's ``geojax.params.Params`` pytree: the controller's own
+settings are ``params.controller`` (a dict of SI array leaves named by
+``fields``), and everything else (thrusters, station, errors) is there too.
+
+Optional parts: ``fields`` declares the keys of the scenario's ``[controller]``
+table (TOML key, unit conversion, bounds, tuning transform: ``params.Field``);
+``reference_cycles`` > 0 asks the loop for the shared uncontrolled reference and
+the mean-element estimate it enables (Li 2022 eqs. (24)-(27)), that many cycle
+boundaries from the cycle's start on; ``record(plan) -> {name: array}`` adds
+per-cycle records (a ``"solved"`` bool counts cycles without a solution, the
+burn records of ``control.burns`` feed the burn metrics); ``surrogate`` is a
+smooth stand-in used for derivatives (``geojax.tune``).
+
+No controller name is compared inside the traced loop: the loop only calls
+these functions.  A new controller is one module under ``control/`` that
+defines ``FIELDS`` and ``make(tables) -> Controller`` and one line in
+``control.REGISTRY`` -- or, in a user's own script, a ``Controller`` passed to
+``geojax.simulate`` / ``sweep`` / ``tune`` directly.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Callable, Mapping, NamedTuple
+
+import jax.numpy as jnp
+
+from geojax.dynamics import Thrust, no_thrust
+
+
+class Estimate(NamedTuple):
+    """What the controller knows at the start of a cycle (from the orbit-determination fix)."""
+
+    fix_mee: jnp.ndarray  # [6] osculating MEE (p m, f, g, h, k, L rad) of the fix, L continuous with the truth
+    mean: jnp.ndarray  # [6] mean (lon rad, drift rad/s, e_x, e_y, i_x, i_y); zeros without a reference
+    mass_kg: jnp.ndarray  # [] on-board mass (the propellant gauge is taken as exact)
+    t_s: jnp.ndarray  # [] cycle start, s since the start of the run
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Controller:
+    """A controller: pure functions and what the loop must know about them (static under ``jit``).
+
+    Compared and hashed by identity, so a compiled rollout is reused for as long as the same
+    ``Controller`` object is passed (the factories of ``control.REGISTRY`` return the same object for
+    the same static settings).
+    """
+
+    init: Callable
+    plan: Callable
+    thrust: Callable
+    fields: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    reference_cycles: int = 0
+    record: Callable | None = None
+    surrogate: Any = None  # a Controller, or None: the controller is its own surrogate
+
+
+def stateless_init(params, context):
+    """``init`` of a controller with no memory between cycles."""
+    return jnp.zeros(())
+
+
+def no_plan(params, controller_state, estimate, context, key):
+    """``plan`` of a feedback law: nothing is planned; the thrust is computed per step."""
+    return jnp.zeros(()), controller_state
+
+
+def coast(params, plan, t, state, environment) -> Thrust:
+    """``thrust`` of the null controller."""
+    return no_thrust()

@@ -1,0 +1,82 @@
+"""Flying a planned pair of burns (Li 2022, Sec. 3.2): the ``thrust`` and the records of the planners.
+
+A planner (QFFC, FOMPC) plans two burns per cycle (``qffc.BurnPair``); this
+module turns them into thrust.  Each burn is centred on its right ascension
+(the orbit turns 2 pi per cycle), lasts V m / F (eq. (13)) and is not fired
+when shorter than ``thrusters.min_burn_s``.  A burn that meets the Earth's
+shadow is suspended and resumed until it has fired its full time (constraint
+6): it runs on a clock that only advances in sunlight
+(``propulsion.sunlit_clock``), with the shadow taken at the station's nominal
+position (within +-0.05 deg of the satellite, a few seconds of eclipse
+timing); a suspended burn that would run past the end of the cycle is cut
+there.  Each burn is flown with Gaussian yaw and pitch errors (1-sigma
+``errors.h_att`` x 0.05 deg / 3, Li 2022 eqs. (47)-(48)), drawn as row 1 of
+``normal(key_k, (2, 6))`` (the loop's orbit-determination fix takes row 0).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from geojax.control.effects import R_SYNC_M
+from geojax.dynamics import Thrust
+from geojax.forces import shadow_fraction
+from geojax.propulsion import delta_v_direction_rsw, firing_fraction, sunlit_clock
+
+NOMINAL_3SIGMA_ATT_DEG = 0.05  # Li 2022, eq. (48)
+
+
+class BurnPlan(NamedTuple):
+    """A cycle's two burns as flown."""
+
+    burns: object  # qffc.BurnPair: the planned solution
+    burn_s: jnp.ndarray  # [2] firing time of each burn (0: not fired)
+    clock: jnp.ndarray  # [n_steps + 1] sunlit time at every step boundary of the cycle
+    clock_start: jnp.ndarray  # [2] sunlit-clock time at which each burn starts
+    directions_rsw: jnp.ndarray  # [2, 3] unit velocity increments, attitude errors included
+    prediction: jnp.ndarray  # [6] predicted mean elements at the end of the cycle, without burns
+    ns_fraction: jnp.ndarray  # [] north-south correction flown, as a fraction of the QFFC's (1 for the QFFC)
+
+
+def fly(params, burns, prediction, ns_fraction, estimate, context, key) -> BurnPlan:
+    """The ``BurnPlan`` of ``burns`` [qffc.BurnPair] planned at the start of the cycle of ``context``."""
+    thrusters = params.thrusters
+    cycle_s, step_s = context.cycle_s, context.step_s
+    n_steps = context.env.earth_angle_rad.shape[0]
+    l_start = estimate.fix_mee[5]
+    t_mid = jnp.mod(burns.l_rad - l_start, 2 * jnp.pi) / (2 * jnp.pi) * cycle_s
+    burn_s = burns.v_mps * estimate.mass_kg / thrusters["thrust_n"]  # eq. (13)
+    burn_s = jnp.where((burn_s >= thrusters["min_burn_s"]) & burns.feasible, burn_s, 0.0)
+    start = jnp.clip(t_mid - burn_s / 2, 0.0, cycle_s - burn_s)
+    sigma_att_rad = jnp.deg2rad(params.errors["h_att"] * NOMINAL_3SIGMA_ATT_DEG / 3)
+    attitude_error = sigma_att_rad * jax.random.normal(key, (2, 6))[1, :4].reshape(2, 2)
+    directions = delta_v_direction_rsw(burns.alpha_rad + attitude_error[0], burns.beta_rad + attitude_error[1])
+    clock = sunlit_clock(sunlit_fraction(context.env, params.station["lon_rad"], context.force_model), step_s)
+    clock_start = jnp.interp(start, jnp.arange(n_steps + 1) * step_s, clock)
+    return BurnPlan(burns, burn_s, clock, clock_start, directions, prediction, ns_fraction)
+
+
+def thrust(params, plan: BurnPlan, t, state, environment) -> Thrust:
+    """The thrust of one step: the burns are half a cycle apart, so a step meets at most one of them."""
+    j, step_s = environment.index, environment.step_s
+    fraction = firing_fraction(plan.clock[j], plan.clock[j + 1], plan.clock_start, plan.burn_s, step_s)
+    direction = jnp.where(fraction[0] > 0, plan.directions_rsw[0], plan.directions_rsw[1])
+    return Thrust(direction, params.thrusters["thrust_n"], params.thrusters["isp_s"], jnp.sum(fraction))
+
+
+def record(plan: BurnPlan) -> dict:
+    """Per-cycle records of a planner (read by ``loop.metrics``)."""
+    fired_s = jnp.maximum(jnp.minimum(plan.burn_s, plan.clock[-1] - plan.clock_start), 0.0)
+    return {"burns": plan.burns, "fired_s": fired_s, "prediction": plan.prediction,
+            "ns_fraction": plan.ns_fraction, "solved": plan.burns.feasible}
+
+
+def sunlit_fraction(env_steps, station_lon_rad, fm):
+    """Sunlit fraction [n_steps] at the mid-step of each step, at the station's nominal position."""
+    angle = env_steps.earth_angle_rad[:, 1] + station_lon_rad
+    r_station = R_SYNC_M * jnp.stack([jnp.cos(angle), jnp.sin(angle), jnp.zeros_like(angle)], -1)
+    lit = shadow_fraction(r_station, env_steps.r_sun_eci_m[:, 1], fm.r_earth_m)
+    return 1.0 - fm.shadow_on * (1.0 - lit)

@@ -1,0 +1,140 @@
+"""Metrics and status of a rollout, in JAX so a batch computes them inside ``vmap`` (DESIGN.md "Contracts").
+
+One function, ``summarize``, for every controller: units are in the names,
+Delta-V per year is scaled here and nowhere else, and the status code is
+computed here, inside the rollout's ``jit``:
+
+    0 ok
+    1 cycles without a solution (the controller's ``"solved"`` record was false in some cycle)
+    2 left the longitude box  (|lambda - lambda_station| > station.box_half_width_deg at some step start)
+    3 left the latitude box   (|geocentric latitude| > station.box_half_width_deg at some step start)
+    4 non-finite or non-physical state (NaN / inf, or the mass exhausted)
+
+in that order of precedence (4, then 2, 3, 1).  The box is checked on the
+osculating sub-satellite point at every step start of the whole run, the
+acquisition included (Katz 2025 eq. (10)); a sample with status 4 gets
+finite placeholders (0) for its non-finite metrics, so no NaN reaches a
+neighbour's statistics.  Burn metrics (Li 2022 eqs. (45)-(46)) are added
+for the planners, whose records carry ``control.burns`` records.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+
+from geojax.constants import SECONDS_PER_DAY
+from geojax.elements import wrap_angle
+from geojax.params import station_target
+
+SECONDS_PER_YEAR = 365.25 * SECONDS_PER_DAY
+STATUS_OK, STATUS_NO_SOLUTION, STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE = 0, 1, 2, 3, 4
+STATUS_MEANINGS = ("ok", "cycles without a solution", "left the longitude box", "left the latitude box",
+                   "non-finite or non-physical state")
+STATUS_TEXT = ", ".join(f"{code} {text}" for code, text in enumerate(STATUS_MEANINGS))
+
+# Per-cycle series a sweep may keep (``cycles = true``).
+CYCLE_NAMES = ("lon_deg", "ex", "ey", "ix", "iy", "dv_mps", "ns_fraction")
+
+
+def summarize(params, final, records, step_s: float, steps_per_cycle: int) -> dict:
+    """{name: scalar} of one rollout (``loop.simulate``'s final state and records), ``"status"`` included."""
+    cycles = records.cycles
+    m = cycles.means
+    n_cycles = m.lon_rad.shape[0]
+    cycle_s = steps_per_cycle * step_s
+    n_steps_total = n_cycles * steps_per_cycle
+    first = 1 if n_cycles > 1 else 0  # the first cycle is acquisition for the mean-element metrics
+    target = station_target(params.station)
+    dlon_max, dlon_min = jnp.max(cycles.dlon_max_rad), jnp.min(cycles.dlon_min_rad)
+    lat_max, lat_min = jnp.max(cycles.lat_max_rad), jnp.min(cycles.lat_min_rad)
+    abs_dlon = jnp.maximum(jnp.abs(dlon_max), jnp.abs(dlon_min))
+    abs_lat = jnp.maximum(jnp.abs(lat_max), jnp.abs(lat_min))
+    duty = jnp.sum(cycles.firing_steps, axis=0) / n_steps_total
+    solved = cycles.controller.get("solved", jnp.ones(n_cycles, bool))
+    out = {
+        "dv_per_year_mps": (final.dv_mps - params.initial.dv_mps) * SECONDS_PER_YEAR / (n_cycles * cycle_s),
+        "mass_used_kg": params.initial.mass_kg - final.mass_kg,
+        "max_abs_dlon_deg": jnp.degrees(abs_dlon),
+        "max_abs_dlat_deg": jnp.degrees(abs_lat),
+        "mean_dlon_deg": jnp.degrees(jnp.sum(cycles.dlon_sum_rad) / n_steps_total),
+        "dlon_half_range_deg": jnp.degrees(dlon_max - dlon_min) / 2,
+        "dlat_half_range_deg": jnp.degrees(lat_max - lat_min) / 2,
+        "max_abs_mean_dlon_deg": jnp.max(jnp.abs(jnp.degrees(wrap_angle(m.lon_rad[first:] - target[0])))),
+        "max_abs_de": jnp.max(jnp.hypot(m.ex[first:] - target[2], m.ey[first:] - target[3])),
+        "max_abs_di": jnp.max(jnp.hypot(m.ix[first:] - target[4], m.iy[first:] - target[5])),
+        "duty_x": duty[0], "duty_y": duty[1], "duty_z": duty[2],
+        "cycles_without_solution": jnp.sum(~solved).astype(float),
+    }
+    if "fired_s" in cycles.controller:
+        out.update(burn_metrics(cycles.controller, n_cycles))
+    finite = jnp.all(jnp.isfinite(final.orbit)) & (final.mass_kg > 0)
+    for value in out.values():
+        finite &= jnp.isfinite(value)
+    box = params.station["box_half_width_rad"]
+    status = jnp.where(~finite, STATUS_NONFINITE,
+                       jnp.where(abs_dlon > box, STATUS_LEFT_LON_BOX,
+                                 jnp.where(abs_lat > box, STATUS_LEFT_LAT_BOX,
+                                           jnp.where(out["cycles_without_solution"] > 0, STATUS_NO_SOLUTION,
+                                                     STATUS_OK))))
+    out = {k: jnp.where(jnp.isfinite(v), v, 0.0) for k, v in out.items()}
+    return {**out, "status": status.astype(jnp.int8)}
+
+
+def burn_metrics(rec: dict, n_cycles: int) -> dict:
+    """Li 2022: burns fired, per thruster per orbit, and the mean pitch of eq. (46) over the cycles that burn."""
+    fired = rec["fired_s"] > 0
+    burns = rec["burns"]
+    v_sum = jnp.sum(jnp.where(fired, burns.v_mps, 0.0), axis=1)
+    dv_ns = ns_delta_v_mps(rec)
+    with_burns = v_sum > 0
+    beta = jnp.degrees(jnp.arcsin(jnp.clip(dv_ns / jnp.where(with_burns, v_sum, 1.0), 0.0, 1.0)))
+    return {
+        "burns_total": jnp.sum(fired).astype(float),
+        "burns_per_thruster_per_orbit": jnp.sum(fired) / (2 * n_cycles),
+        "mean_beta_deg": jnp.sum(jnp.where(with_burns, beta, 0.0)) / jnp.maximum(jnp.sum(with_burns), 1),
+    }
+
+
+def ns_delta_v_mps(rec: dict):
+    """North-south Delta-V of each cycle's fired burns (Li 2022, eq. (45)), [n_cycles]."""
+    fired = rec["fired_s"] > 0
+    return jnp.sum(jnp.where(fired, jnp.abs(rec["burns"].dv_rsw_mps[..., 2]), 0.0), axis=1)
+
+
+def cycle_series(records) -> dict:
+    """The per-cycle series of ``CYCLE_NAMES`` (JAX): mean longitude (deg), e and i vectors (MEE f, g, h, k),
+    the Delta-V delivered in the cycle (m/s) and the north-south fraction flown (1 without a planner)."""
+    c = records.cycles
+    m = c.means
+    return {"lon_deg": jnp.degrees(m.lon_rad), "ex": m.ex, "ey": m.ey, "ix": m.ix, "iy": m.iy, "dv_mps": c.dv_mps,
+            "ns_fraction": c.controller.get("ns_fraction", jnp.ones_like(c.dv_mps))}
+
+
+def cycle_table(records) -> dict[str, np.ndarray]:
+    """Every per-cycle record in its edge units (the ``/cycles`` datasets): mean elements, and for a planner
+    its burns."""
+    c = records.cycles
+    m = c.means
+    table = {
+        "t_s": m.t_s, "lon_deg": np.degrees(m.lon_rad), "drift_deg_per_day": np.degrees(m.drift_rad_s) * SECONDS_PER_DAY,
+        "ex": m.ex, "ey": m.ey, "ix": m.ix, "iy": m.iy, "a_m": m.a_m,
+        "max_abs_lat_deg": np.degrees(np.maximum(np.abs(c.lat_min_rad), np.abs(c.lat_max_rad))),
+        "dv_mps": c.dv_mps,
+    }
+    rec = c.controller
+    if "fired_s" in rec:
+        burns, fired = rec["burns"], rec["fired_s"] > 0
+        table.update({
+            "v1_mps": np.where(fired[:, 0], burns.v_mps[:, 0], 0.0),
+            "v2_mps": np.where(fired[:, 1], burns.v_mps[:, 1], 0.0),
+            "alpha1_deg": np.degrees(burns.alpha_rad[:, 0]), "beta1_deg": np.degrees(burns.beta_rad[:, 0]),
+            "alpha2_deg": np.degrees(burns.alpha_rad[:, 1]), "beta2_deg": np.degrees(burns.beta_rad[:, 1]),
+            "l1_deg": np.degrees(np.mod(burns.l_rad[:, 0], 2 * np.pi)),
+            "dv_ns_mps": np.asarray(ns_delta_v_mps(rec)),
+            "burn1_s": rec["fired_s"][:, 0], "burn2_s": rec["fired_s"][:, 1],
+            "ns_fraction": rec["ns_fraction"],
+        })
+    if "solved" in rec:
+        table["status"] = np.where(rec["solved"], 0, 1).astype(np.int8)
+    return {k: np.asarray(v) for k, v in table.items()}

@@ -1,0 +1,133 @@
+"""Rollouts of scenarios: one (``simulate``) or a batch (``simulate_batch``), compiled once and reused.
+
+``rollout_fn(batch)`` is the pure per-sample function that ``sweep`` and
+``tune`` vmap: ``(params, key) -> (final state, records, metrics)``.
+``simulate`` and ``simulate_batch`` wrap it for a scenario, with results as
+numpy arrays.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from geojax.control.base import Controller
+from geojax.dynamics import SpacecraftState
+from geojax.loop.metrics import cycle_table, summarize
+from geojax.loop.setup import Batch, prepare, reference, unstack
+from geojax.loop.simulate import Records, Shared, simulate as closed_loop
+from geojax.params import Params
+from geojax.propagate import Dynamics
+from geojax.scenario import Scenario
+
+
+class Result(NamedTuple):
+    """A rollout's results (numpy leaves; a batch has a leading sample axis on every leaf).
+
+    ``metrics`` maps the names of ``loop.metrics.summarize`` (units in the names) to values,
+    ``status`` is the status code (``loop.metrics.STATUS_MEANINGS``), ``records`` the per-cycle (and, if
+    kept, per-step) records, ``params`` the parameters the rollout ran with (SI).
+    """
+
+    metrics: dict
+    status: np.ndarray
+    records: Records
+    final: SpacecraftState
+    params: Params
+    step_s: float
+    wall_s: float
+
+    def cycles(self) -> dict[str, np.ndarray]:
+        """The per-cycle records in edge units (``/cycles``) of a single rollout."""
+        return cycle_table(self.records)
+
+
+def rollout(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,
+            dynamics: Dynamics, keep_steps: bool = False):
+    """One sample's closed loop and its metrics: ``(final state, records, metrics)``; pure, vmappable.
+
+    ``reference_env`` (an environment grid) makes the sample run its own uncontrolled reference
+    (``loop.setup.reference``) instead of ``shared.reference``; ``controller``, ``step_s``,
+    ``dynamics`` and ``keep_steps`` are static.
+    """
+    if reference_env is not None:
+        shared = shared._replace(reference=reference(params, reference_env, step_s, dynamics))
+    final, records = closed_loop(controller, params, shared, key, step_s=step_s, dynamics=dynamics,
+                                 keep_steps=keep_steps)
+    return final, records, summarize(params, final, records, step_s, shared.env.earth_angle_rad.shape[1])
+
+
+def rollout_fn(batch: Batch, keep_steps: bool = False, controller: Controller | None = None):
+    """The pure rollout of one sample of ``batch``: ``(params, key) -> (final, records, metrics)``.
+
+    ``controller`` replaces the batch's (a tuning differentiates through the surrogate).
+    """
+    return functools.partial(rollout, shared=batch.shared, reference_env=_reference_env(batch),
+                             controller=batch.controller if controller is None else controller,
+                             step_s=batch.step_s, dynamics=batch.dynamics, keep_steps=keep_steps)
+
+
+def _reference_env(batch: Batch):
+    return batch.reference_env if batch.reference_per_sample else None
+
+
+@functools.partial(jax.jit, static_argnames=("controller", "step_s", "dynamics", "keep_steps"))
+def _batched(params, keys, shared, reference_env, controller, step_s, dynamics, keep_steps):
+    """``rollout`` vmapped over (params, keys), compiled once per (shapes, controller, step, dynamics)."""
+    one = functools.partial(rollout, controller=controller, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps)
+    return jax.vmap(one, in_axes=(0, 0, None, None))(params, keys, shared, reference_env)
+
+
+def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None = None, keep_steps: bool = False,
+             key=None) -> Result:
+    """One closed-loop rollout of ``scenario`` (its registered controller, or ``controller``).
+
+    ``seed`` (or a ``jax.random`` ``key``) draws the orbit-determination and attitude errors
+    and any randomness of the controller; same seed, same result.  ``keep_steps`` also returns
+    the per-step records (``records.steps``, leaves [n_cycles, n_steps, ...]).
+    """
+    result = simulate_batch([scenario], seeds=[seed], controller=controller, keep_steps=keep_steps,
+                            keys=None if key is None else jnp.stack([key]))
+    first = lambda tree: jax.tree_util.tree_map(lambda x: x[0], tree)  # noqa: E731
+    return result._replace(metrics=first(result.metrics), status=result.status[0], records=first(result.records),
+                           final=first(result.final), params=first(result.params))
+
+
+def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None = None, *, seeds=None, keys=None,
+                   controller: Controller | None = None, keep_steps: bool = False) -> Result:
+    """A batch of rollouts, vmapped in one compiled call.
+
+    Either a list of scenarios (one sample each), or one scenario with ``params`` whose leaves carry a
+    leading batch axis (e.g. 100 initial states: start from ``prepare_params(scenario, n)`` and replace
+    ``params.initial``).  ``seeds`` [n] (default 0, 1, ...) or ``keys`` [n] draw each sample's errors.
+    """
+    start = time.perf_counter()
+    scenarios = [scenarios] if isinstance(scenarios, Scenario) else list(scenarios)
+    batch = prepare(scenarios, controller)
+    if params is None:
+        params = batch.params
+    elif len(scenarios) != 1:
+        raise ValueError("params: give one scenario with a batch of params, or a list of scenarios")
+    n = jax.tree_util.tree_leaves(params)[0].shape[0]
+    if keys is None:
+        seeds = range(n) if seeds is None else seeds
+        keys = jnp.stack([jax.random.key(int(s)) for s in seeds])
+    final, records, metrics = _batched(params, keys, batch.shared, _reference_env(batch), batch.controller,
+                                       batch.step_s, batch.dynamics, keep_steps)
+    metrics = {k: np.asarray(v) for k, v in metrics.items()}
+    status = metrics.pop("status")
+    to_numpy = lambda tree: jax.tree_util.tree_map(np.asarray, tree)  # noqa: E731
+    return Result(metrics, status, to_numpy(records), to_numpy(final), to_numpy(params), batch.step_s,
+                  time.perf_counter() - start)
+
+
+def prepare_params(scenario: Scenario, n: int, controller: Controller | None = None) -> Params:
+    """``n`` copies of a scenario's ``Params`` (leading axis n), to edit leaves per sample."""
+    params = unstack(prepare([scenario], controller).params, 0)
+    return jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (n, *jnp.shape(x))), params)
+

@@ -1,0 +1,206 @@
+"""One closed loop for every controller (DESIGN.md layer 5).
+
+``simulate`` is an outer ``lax.scan`` over control cycles (one sidereal day
+each, ``jax.checkpoint``ed, so reverse-mode memory grows with cycles, not
+steps) around an inner ``lax.scan`` over RK4 steps (each checkpointed too).
+Every closed loop runs through it, and so do uncontrolled propagation and the
+predictor's reference run (the null controller, ``control.none``).
+
+Per cycle, at its start:
+
+1. the orbit-determination fix: the true position and velocity with Gaussian
+   errors (Li 2022 eqs. (47)-(48): 1-sigma ``errors.h_rv`` x 0.3 m / 3 and
+   x 5e-5 m/s / 3 per axis), drawn as row 0 of ``normal(key_k, (2, 6))`` with
+   ``key_k = fold_in(key, k)``;
+2. the estimate: the fix, and for a controller that asks for the shared
+   reference (``reference_cycles > 0``) the mean elements of Li 2022 eqs.
+   (24)-(27) (``control.predictor``);
+3. ``controller.plan`` with ``key_k`` (a controller draws its own noise from it:
+   ``control.burns`` takes row 1 for attitude errors, the FOMPC ``fold_in(key_k, 1)``).
+
+Then per step ``controller.thrust`` gives the thrust held over the step, and
+the loop records, from the true state at each step start, the osculating
+sub-satellite point relative to the station and the delivered acceleration.
+A cycle's record (``CycleRecord``) holds the one-cycle mean elements (Li 2022
+eq. (9)), the boundary elements the reference needs, the Delta-V delivered,
+the extremes of the step records (so box checks cover every step without
+keeping the steps) and the controller's own records.  Per-step records are
+kept only on request (``keep_steps``).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from geojax.control.base import Controller, Estimate
+from geojax.control.predictor import Reference, boundary_elements, estimate_mean
+from geojax.dynamics import SpacecraftState
+from geojax.elements import cartesian_to_mee, wrap_angle
+from geojax.forces import Environment, ForceModel
+from geojax.frames import rotate_z, rsw_to_eci, subsatellite_lon_lat_rad
+from geojax.integrate import rk4_step
+from geojax.params import Params
+from geojax.propagate import MEE, CycleMeans, Dynamics, cycle_means
+
+# Li 2022, eq. (48): nominal 3-sigma errors, scaled by H_rv and H_att.
+NOMINAL_3SIGMA_R_M = 0.3
+NOMINAL_3SIGMA_V_MPS = 5e-5
+NOMINAL_3SIGMA_ATT_DEG = 0.05
+# A component of the delivered acceleration counts as firing when it exceeds this fraction of the
+# acceleration's norm: the RSW -> ECEF rotations leave ~1e-16 of it on an axis a law did not fire.
+FIRING_COMPONENT_RTOL = 1e-9
+
+
+class CycleContext(NamedTuple):
+    """What the loop tells a controller about the cycle it plans (shared by the batch but ``force_model``)."""
+
+    index: jnp.ndarray  # [] int, cycle number from 0
+    t_s: jnp.ndarray  # [] cycle start, s since the start of the run
+    cycle_s: float  # cycle length (n_steps x step_s)
+    step_s: float
+    env: Environment  # the cycle's environment at every RK4 stage, leaves [n_steps, 3, ...]
+    reference: jnp.ndarray  # [reference_cycles, 7] uncontrolled mean (lon, drift, a, f, g, h, k) at boundaries k, k+1, ...
+    force_model: ForceModel
+
+
+class StepEnvironment(NamedTuple):
+    """What the loop tells ``thrust`` about a step."""
+
+    env: Environment  # at the step's three RK4 stage times (start, middle, end)
+    step_s: float
+    index: jnp.ndarray  # [] int, step number within the cycle
+    r_eci_m: jnp.ndarray  # [3] true position at the step start
+    v_eci_mps: jnp.ndarray  # [3] true velocity at the step start
+
+
+class CycleRecord(NamedTuple):
+    """Per cycle (leading axis: cycle)."""
+
+    means: CycleMeans  # one-cycle mean elements
+    boundary: jnp.ndarray  # [6] true (lon, a, f, g, h, k) at the cycle start (``predictor.boundary_elements``)
+    dv_mps: jnp.ndarray  # [] Delta-V delivered in the cycle
+    dlon_min_rad: jnp.ndarray  # extremes over the cycle's step starts of the osculating sub-satellite
+    dlon_max_rad: jnp.ndarray  # longitude less the station's, wrapped
+    dlon_sum_rad: jnp.ndarray
+    lat_min_rad: jnp.ndarray  # and of the geocentric latitude
+    lat_max_rad: jnp.ndarray
+    firing_steps: jnp.ndarray  # [3] steps whose delivered acceleration has an ECEF x, y, z component
+    controller: dict  # ``controller.record(plan)``
+
+
+class StepRecord(NamedTuple):
+    """Per step (leading axes [cycle, step]): at the step start, and the acceleration held over the step."""
+
+    lon_rad: jnp.ndarray  # geocentric sub-satellite longitude
+    lat_rad: jnp.ndarray  # geocentric sub-satellite latitude
+    accel_ecef_mps2: jnp.ndarray  # [..., 3] delivered thrust acceleration, ECEF axes
+
+
+class Records(NamedTuple):
+    cycles: CycleRecord
+    steps: StepRecord | None
+
+
+class Shared(NamedTuple):
+    """Arrays every sample of a batch shares (computed once per scenario)."""
+
+    env: Environment  # leaves [n_cycles, n_steps, 3, ...]
+    reference: Reference | None  # at n_cycles + reference_cycles - 1 boundaries or more; None if unused
+
+
+def simulate(controller: Controller, params: Params, shared: Shared, key, *, step_s: float,
+             dynamics: Dynamics = MEE, keep_steps: bool = False):
+    """Closed loop over the cycles of ``shared.env``; returns (final ``SpacecraftState``, ``Records``).
+
+    Pure: vmap it over ``params`` and ``key`` for a batch, differentiate it with respect to ``params``.
+    ``controller``, ``step_s``, ``dynamics`` and ``keep_steps`` are static.
+    """
+    env = shared.env
+    n_cycles, n_steps = env.earth_angle_rad.shape[:2]
+    cycle_s = n_steps * step_s
+    fm = params.forces
+    mu = fm.mu_m3_s2
+    width = controller.reference_cycles
+    if width:
+        if shared.reference is None or shared.reference.mean.shape[0] < n_cycles + width - 1:
+            have = 0 if shared.reference is None else shared.reference.mean.shape[0]
+            raise ValueError(f"reference: the controller reads {width} boundaries per cycle, so {n_cycles} cycles "
+                             f"need {n_cycles + width - 1}, got {have}")
+        windows = shared.reference.mean[jnp.arange(n_cycles)[:, None] + jnp.arange(width)[None, :]]
+        osc_ref = shared.reference.osc[:n_cycles]
+    else:
+        windows, osc_ref = jnp.zeros((n_cycles, 0, 7)), jnp.zeros((n_cycles, 6))
+    station_lon = params.station["lon_rad"]
+
+    def context(k, env_steps, window):
+        return CycleContext(k, k * cycle_s, cycle_s, step_s, env_steps, window, fm)
+
+    def one_cycle(carry, xs):
+        state, controller_state = carry
+        k, env_steps, osc_ref_k, window = xs
+        cycle_key = jax.random.fold_in(key, k)
+        ctx = context(k, env_steps, window)
+        fix = measured_mee(dynamics, state.orbit, jax.random.normal(cycle_key, (2, 6))[0], params.errors, mu)
+        if width:
+            mean = estimate_mean(boundary_elements(fix, env_steps.earth_angle_rad[0, 0]), osc_ref_k, window[0], mu)
+        else:
+            mean = jnp.zeros(6)
+        estimate = Estimate(fix, mean, state.mass_kg, ctx.t_s)
+        plan, controller_state = controller.plan(params, controller_state, estimate, ctx, cycle_key)
+
+        def step(state, xs):
+            j, env3 = xs
+            r, v = position_velocity(dynamics, state.orbit, mu)
+            thrust = controller.thrust(params, plan, ctx.t_s + j * step_s, state,
+                                       StepEnvironment(env3, step_s, j, r, v))
+            angle = env3.earth_angle_rad[0]
+            lon, lat = subsatellite_lon_lat_rad(rotate_z(r, angle))
+            accel_rsw = thrust.direction_rsw * (thrust.on_fraction * thrust.thrust_n / state.mass_kg)
+            accel_ecef = rotate_z(rsw_to_eci(accel_rsw, r, v), angle)
+            return rk4_step(dynamics.rhs, state, env3, fm, thrust, step_s), (state.orbit, lon, lat, accel_ecef)
+
+        final, (orbits, lon, lat, accel) = jax.lax.scan(jax.checkpoint(step), state, (jnp.arange(n_steps), env_steps))
+        orbits = jnp.concatenate([orbits, final.orbit[None]], axis=0)
+        angles = jnp.concatenate([env_steps.earth_angle_rad[:, 0], env_steps.earth_angle_rad[-1:, 2]])
+        means = cycle_means(dynamics.to_mee(orbits, mu), angles, mu, cycle_s, ctx.t_s + cycle_s / 2)
+        dlon = wrap_angle(lon - station_lon)
+        norm = jnp.linalg.norm(accel, axis=-1, keepdims=True)
+        firing = jnp.sum(jnp.abs(accel) > FIRING_COMPONENT_RTOL * norm, axis=0)
+        record = CycleRecord(
+            means, boundary_elements(dynamics.to_mee(state.orbit, mu), env_steps.earth_angle_rad[0, 0]),
+            final.dv_mps - state.dv_mps, jnp.min(dlon), jnp.max(dlon), jnp.sum(dlon), jnp.min(lat), jnp.max(lat),
+            firing, {} if controller.record is None else controller.record(plan))
+        steps = StepRecord(lon, lat, accel) if keep_steps else None
+        return (final, controller_state), (record, steps)
+
+    initial_state = controller.init(params, context(jnp.asarray(0), jax.tree_util.tree_map(lambda x: x[0], env),
+                                                    windows[0]))
+    xs = (jnp.arange(n_cycles), env, osc_ref, windows)
+    (final, _), (cycles, steps) = jax.lax.scan(jax.checkpoint(one_cycle), (params.initial, initial_state), xs)
+    return final, Records(cycles, steps)
+
+
+def position_velocity(dynamics: Dynamics, orbit, mu):
+    """ECI position and velocity [3] of an orbit state of ``dynamics`` (Cartesian or MEE)."""
+    rv = dynamics.to_cartesian(orbit, mu)
+    return rv[:3], rv[3:]
+
+
+def measured_mee(dynamics: Dynamics, orbit, noise, errors: dict, mu):
+    """The orbit-determination fix as MEE: the true r and v with Gaussian errors (``noise`` [6] ~ N(0, 1))."""
+    r, v = position_velocity(dynamics, orbit, mu)
+    h_rv = errors["h_rv"]
+    r = r + h_rv * NOMINAL_3SIGMA_R_M / 3 * noise[:3]
+    v = v + h_rv * NOMINAL_3SIGMA_V_MPS / 3 * noise[3:]
+    fix = cartesian_to_mee(r, v, mu)
+    # Keep the true longitude continuous with the state's (cartesian_to_mee wraps it).
+    true_lon = dynamics.to_mee(orbit, mu)[5]
+    return fix.at[5].set(true_lon + wrap_angle(fix[5] - true_lon))
+
+
+def uncontrolled(state: SpacecraftState, params: Params) -> Params:
+    """``params`` starting from ``state`` (the null controller needs nothing else)."""
+    return params._replace(initial=state)
