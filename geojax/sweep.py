@@ -96,6 +96,7 @@ class Sweep:
     text: str  # the sweep file, stored in the results
     cycles: bool = False  # keep the per-cycle records (loop.metrics.CYCLE_NAMES)
     dispersion: dict = dataclasses.field(default_factory=lambda: {k: f.default for k, f in DISPERSION_FIELDS.items()})
+    custom: dict = dataclasses.field(default_factory=dict)  # {name: Controller} of a user's own controllers
 
     @property
     def dispersed(self) -> bool:
@@ -110,16 +111,18 @@ class Sweep:
         return math.prod(self.shape)
 
 
-def load(path: str | Path, changes: dict | None = None) -> Sweep:
+def load(path: str | Path, changes: dict | None = None, controllers: dict | None = None) -> Sweep:
     """Read and validate a sweep file; ``ValueError`` with one line naming the fault.
 
     ``changes`` replaces top-level keys and adds to ``[set]`` (a study's quick
     run: ``{"repetitions": 2, "set": {"duration.days": 30}}``); the sweep then
-    stores its changed text.
+    stores its changed text.  ``controllers`` ({name: Controller}) adds a user's own controllers, named
+    in the file's ``controllers`` list like the registered ones.
     """
     from geojax.control import REGISTRY
 
     path = Path(path)
+    controllers_arg = controllers
     raw, text = scenario_mod.read_toml_file(path, "sweep")
     if changes:
         raw = {**raw, **changes, "set": {**raw.get("set", {}), **changes.get("set", {})}}
@@ -131,9 +134,10 @@ def load(path: str | Path, changes: dict | None = None) -> Sweep:
     if "scenario" not in raw:
         raise ValueError("scenario: missing (the base scenario, a shipped name or a .toml path)")
     controllers = raw.get("controllers", ["qffc"])
-    if not (isinstance(controllers, list) and controllers and all(c in REGISTRY for c in controllers)
+    known = {**REGISTRY, **(controllers_extra := dict(controllers_arg or {}))}
+    if not (isinstance(controllers, list) and controllers and all(c in known for c in controllers)
             and len(set(controllers)) == len(controllers)):
-        raise ValueError(f"controllers: must be a non-empty list of distinct names from {', '.join(REGISTRY)}, "
+        raise ValueError(f"controllers: must be a non-empty list of distinct names from {', '.join(known)}, "
                          f"got {controllers!r}")
     reps, seed = raw.get("repetitions", 1), raw.get("seed", 0)
     if not (isinstance(reps, int) and not isinstance(reps, bool) and 1 <= reps <= MAX_SAMPLES):
@@ -159,7 +163,8 @@ def load(path: str | Path, changes: dict | None = None) -> Sweep:
         raise ValueError(f"grid: {n_samples} samples in all, more than {MAX_SAMPLES}; split the sweep")
     dispersion = check_table("dispersion.", raw.get("dispersion", {}), DISPERSION_FIELDS)
     sweep = Sweep(str(raw.get("name", path.stem)), str(raw["scenario"]), tuple(controllers), reps, seed, dict(fixed),
-                  {k: list(v) for k, v in grid.items()}, text, raw.get("cycles", False), dispersion)
+                  {k: list(v) for k, v in grid.items()}, text, raw.get("cycles", False), dispersion,
+                  {k: v for k, v in controllers_extra.items() if k in controllers})
     for controller in sweep.controllers:  # every value within its range, every batch compilable
         prepare_check(sweep, controller)
     return sweep
@@ -172,7 +177,7 @@ def prepare_check(sweep: Sweep, controller: str) -> None:
 
     scenarios = [_scenario(sweep, controller, p) for p in _points(sweep)]
     try:
-        _check_static(scenarios, controller_of(scenarios))
+        _check_static(scenarios, sweep.custom.get(controller) or controller_of(scenarios))
     except ValueError as err:
         raise ValueError(f"grid.{err}") from None
 
@@ -187,7 +192,7 @@ def _scenario(sweep: Sweep, controller: str, point: dict):
     overrides = {**sweep.fixed, **point, "controller.kind": controller}
     if isinstance(point.get("controller.vdt_estimate"), (int, float)):
         overrides["controller.vdt_estimate"] = bool(point["controller.vdt_estimate"])  # 0 / 1 on a numeric axis
-    return scenario_mod.load(sweep.scenario, overrides)
+    return scenario_mod.load(sweep.scenario, overrides, sweep.custom.get(controller))
 
 
 def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | None = None,
@@ -290,7 +295,7 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int):
     """(function of (params [width], sample indices [width]) -> metrics, params of every grid point [n_points],
     compilation seconds)."""
     scenarios = [_scenario(sweep, controller, p) for p in _points(sweep)]
-    batch = prepare(scenarios)
+    batch = prepare(scenarios, sweep.custom.get(controller))
     one_rollout = rollout_fn(batch)
     base_key = jax.random.key(sweep.seed)
     first = scenarios[0]

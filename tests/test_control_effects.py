@@ -18,7 +18,8 @@ from geojax.dynamics import SpacecraftState
 from geojax.elements import semi_major_axis_m
 from geojax.forces import ForceModel
 from geojax.integrate import ThrustWindow, window_thrust
-from geojax.propagate import MEE, environment_grid, propagate_cycles
+from geojax.loop.simulate import propagate as propagate_cycles
+from geojax.propagate import MEE, environment_grid
 
 MU = c.MU_EARTH_M3_S2
 TWO_BODY = ForceModel(j2_on=0.0, sun_on=0.0, moon_on=0.0, srp_on=0.0)

@@ -10,7 +10,8 @@ from geojax import constants as c
 from geojax.dynamics import SpacecraftState, mee_gauss_rates, no_thrust
 from geojax.elements import cartesian_to_mee, mee_to_cartesian
 from geojax.forces import ForceModel
-from geojax.propagate import CARTESIAN, MEE, environment_grid, propagate_cycles, steps_per_cycle
+from geojax.loop.simulate import propagate as propagate_cycles
+from geojax.propagate import CARTESIAN, MEE, environment_grid, steps_per_cycle
 from geojax.frames import rsw_to_eci
 
 EPOCH = 7305 * 86400.0 + 69.184  # 2020-01-01 12:00 UTC

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 from geojax import constants as c
-from geojax import feedback, run, scenario, tune
+from geojax import scenario, tune
 from geojax.control import lyapunov
-from geojax.forces import ForceModel
 from geojax.frames import rotate_z
-from geojax.propagate import DYNAMICS
-
-TWO_BODY = ForceModel(j2_on=0.0, sun_on=0.0, moon_on=0.0, srp_on=0.0)
+from geojax.loop.rollout import simulate
+from geojax.loop.setup import prepare, unstack
+from geojax.loop.simulate import position_velocity
+from geojax.loop.simulate import simulate as closed_loop
 
 
 def test_unperturbed_closed_loop_descends_the_lyapunov_function():
@@ -22,23 +22,25 @@ def test_unperturbed_closed_loop_descends_the_lyapunov_function():
     k_lambda = 0), and Keplerian motion keeps h and e, so on an unperturbed orbit W must fall every day,
     also with saturation (the clipped law only shortens u)."""
     sc = scenario.load("katz2025-continuous", {"duration.days": 1.0, "controller.thrust_mode": "continuous-clipped",
-                                               "integration.step_s": 900.0})
-    setup = run.feedback_setup(sc)
-    params = setup.params._replace(gains=setup.params.gains._replace(k_lambda_m_per_rad=jnp.asarray(0.0)))
-    station = params.station
-    day = jax.jit(lambda state, env: feedback.rollout(DYNAMICS["mee"], state, env, TWO_BODY, setup.step_s, params,
-                                                      "continuous-clipped")[0])
+                                               "integration.step_s": 900.0, "controller.k_lambda_km_per_rad": 0.0,
+                                               "forces.j2": False, "forces.sun": False, "forces.moon": False,
+                                               "forces.srp": False})
+    batch = prepare([sc])
+    params = unstack(batch.params, 0)
+    station, gains = lyapunov.station(params), lyapunov.gains(params.controller)
+    day = jax.jit(lambda p: closed_loop(batch.controller, p, batch.shared, jax.random.key(0), step_s=batch.step_s,
+                                        dynamics=batch.dynamics)[0])
+    angle = batch.shared.env.earth_angle_rad[0, 0, 0]
 
-    def w(state, angle):
-        r, v = feedback.position_velocity(DYNAMICS["mee"], state.orbit, c.MU_EARTH_M3_S2)
+    def w(state):
+        r, v = position_velocity(batch.dynamics, state.orbit, c.MU_EARTH_M3_S2)
         vh, ve = lyapunov.lyapunov_terms(station, rotate_z(r, angle), rotate_z(v, angle), station.radius_m)
-        return float(params.gains.k_h_per_m2_s * vh + params.gains.k_e_m2_per_s3 * ve)
+        return float(gains.k_h_per_m2_s * vh + gains.k_e_m2_per_s3 * ve)
 
-    state, env = setup.state, setup.env
-    values = [w(state, env.earth_angle_rad[0, 0, 0])]
+    values = [w(params.initial)]
     for _ in range(6):
-        state = day(state, env)  # the environment's Earth angle repeats every sidereal day
-        values.append(w(state, env.earth_angle_rad[0, 0, 0]))
+        params = params._replace(initial=day(params))  # the environment's Earth angle repeats every sidereal day
+        values.append(w(params.initial))
     assert np.all(np.diff(values) < 0), values
     assert values[-1] < 0.5 * values[0]
 
@@ -49,14 +51,15 @@ def test_delta_v_is_the_integral_of_the_delivered_acceleration_and_obeys_the_roc
     |u| m at the step's start, so the delivered F/m exceeds |u| by the mass spent within the step: a
     relative excess below u0 h / (2 Isp g0) = 2.8e-7."""
     sc = scenario.load("katz2025-discrete", {"duration.days": 5.0})
-    setup = run.feedback_setup(sc)
-    final, records, _ = run.run_feedback(setup, sc.force_model)
-    u = np.asarray(records.u_ecef_mps2).reshape(-1, 3)
-    integral = np.sum(np.linalg.norm(u, axis=1)) * setup.step_s
+    result = simulate(sc, keep_steps=True)
+    final, steps = result.final, result.records.steps
+    u = np.asarray(steps.accel_ecef_mps2).reshape(-1, 3)
+    integral = np.sum(np.linalg.norm(u, axis=1)) * result.step_s
     assert integral > 0
-    bound = float(setup.params.limits.u0_mps2) * setup.step_s / (2 * float(setup.params.isp_s) * c.G0_MPS2)
-    assert 0 <= float(final.dv_mps) / integral - 1 < bound
-    m0, isp = float(setup.state.mass_kg), float(setup.params.isp_s)
+    u0, isp = float(result.params.controller["u0_mps2"]), float(result.params.thrusters["isp_s"])
+    bound = u0 * result.step_s / (2 * isp * c.G0_MPS2)
+    assert 0 <= float(final.dv_mps) / integral - 1 < bound + 1e-12
+    m0 = float(result.params.initial.mass_kg)
     expected_mass = m0 * math.exp(-float(final.dv_mps) / (isp * c.G0_MPS2))
     assert float(final.mass_kg) == pytest.approx(expected_mass, rel=1e-12)
 
@@ -64,19 +67,17 @@ def test_delta_v_is_the_integral_of_the_delivered_acceleration_and_obeys_the_roc
 def test_paper_discrete_gains_never_fire_the_x_axis():
     """Published behaviour (Katz Sec. 3.2, Fig. 4): with the discrete law at the paper's gains the ECEF x
     component (near-radial at 10 deg E) is never used, while z (north-south) is."""
-    sc = scenario.load("katz2025-discrete", {"duration.days": 30.0})
-    setup = run.feedback_setup(sc)
-    _, _, m = run.run_feedback(setup, sc.force_model)
-    assert float(m.duty_x) == 0.0
-    assert float(m.duty_z) > 0.1
+    m = simulate(scenario.load("katz2025-discrete", {"duration.days": 30.0})).metrics
+    assert float(m["duty_x"]) == 0.0
+    assert float(m["duty_z"]) > 0.1
 
 
 def test_gradient_of_delta_v_matches_central_differences():
     """Independent check: jax.grad of the 30-day Delta-V with respect to log k_h and log k_e (continuous
     clipped law, full force model) against central finite differences, 1e-4 relative."""
     sc = scenario.load("katz2025-continuous", {"duration.days": 30.0, "controller.thrust_mode": "continuous-clipped"})
-    problem = tune.Problem(sc, ["k_h", "k_e"])
-    theta = jnp.asarray(tune.to_theta(problem.setup.params, ["k_h", "k_e"]))
+    problem = tune.Problem(sc, [tune.ALIASES["k_h"], tune.ALIASES["k_e"]])
+    theta = jnp.asarray(tune.to_theta(problem.base, problem.entries))
     dv = jax.jit(lambda th: problem.evaluate(th, smooth=False)[1][0])
     grad = np.asarray(jax.jit(jax.grad(lambda th: problem.evaluate(th, smooth=False)[1][0]))(theta))
     step = 1e-4

@@ -8,9 +8,11 @@ import numpy as np
 import pytest
 
 from geojax import constants as c
-from geojax import run, scenario
+from geojax import scenario
+from geojax.control import none
+from geojax.loop.setup import params_of, reference
+from geojax.propagate import MEE
 from geojax.control import fompc
-from geojax.control.predictor import reference
 from geojax.propagate import environment_grid, steps_per_cycle
 from geojax.propulsion import PRESETS_DEG, arm_limits_deg
 
@@ -26,7 +28,7 @@ def windows():
     n = steps_per_cycle(sc.step_s)
     h = c.SIDEREAL_DAY_S / n
     env = environment_grid(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s, h, ANNEALING.n_max + 2, n)
-    ref = jax.jit(lambda s, e: reference(s, e, sc.force_model, h))(run.initial_state(sc), env)
+    ref = jax.jit(lambda p, e: reference(p, e, h, MEE))(params_of(sc, none.CONTROLLER), env)
     return ref.mean, n * h
 
 

@@ -9,7 +9,8 @@ from geojax import constants as c
 from geojax.dynamics import SpacecraftState
 from geojax.forces import ForceModel
 from geojax.integrate import ThrustWindow, overlap_fraction, window_thrust
-from geojax.propagate import MEE, environment_grid, propagate_cycles
+from geojax.loop.simulate import propagate as propagate_cycles
+from geojax.propagate import MEE, environment_grid
 
 MU = c.MU_EARTH_M3_S2
 TWO_BODY = ForceModel(j2_on=0.0, sun_on=0.0, moon_on=0.0, srp_on=0.0)

@@ -94,14 +94,14 @@ def test_thrust_laws_follow_eqs_5_to_7(scale):
     direction /= np.linalg.norm(direction)
     u = jnp.asarray(scale * U0 * direction)
     below = scale <= 1
-    np.testing.assert_allclose(thrust_laws.apply("continuous", u, LIMITS), u if below else 0 * u, atol=1e-20)
-    np.testing.assert_allclose(thrust_laws.apply("continuous-clipped", u, LIMITS),
+    np.testing.assert_allclose(thrust_laws.law("continuous")(u, LIMITS), u if below else 0 * u, atol=1e-20)
+    np.testing.assert_allclose(thrust_laws.law("continuous-clipped")(u, LIMITS),
                                u if below else U0 * direction, rtol=1e-12)
-    np.testing.assert_allclose(thrust_laws.apply("constant", u, LIMITS), 0 * u if scale < 1 else U0 * direction,
+    np.testing.assert_allclose(thrust_laws.law("constant")(u, LIMITS), 0 * u if scale < 1 else U0 * direction,
                                rtol=1e-12, atol=1e-20)
     sigma = np.asarray(LIMITS.sigma_mps2)
     expected = np.where(np.abs(u) >= sigma, sigma * np.sign(u), 0.0)
-    np.testing.assert_allclose(thrust_laws.apply("discrete", u, LIMITS), expected, atol=1e-20)
+    np.testing.assert_allclose(thrust_laws.law("discrete")(u, LIMITS), expected, atol=1e-20)
 
 
 @pytest.mark.parametrize("mode", ["continuous", "discrete", "constant"])
@@ -111,14 +111,14 @@ def test_surrogates_tend_to_the_exact_laws(mode):
     rng = np.random.default_rng(2)
     for u in rng.normal(0, U0, (20, 3)):
         u = jnp.asarray(u)
-        exact = thrust_laws.apply(mode, u, LIMITS)
-        smooth = thrust_laws.apply(mode, u, LIMITS, smooth=True, temperature=1e-4)
+        exact = thrust_laws.law(mode)(u, LIMITS)
+        smooth = thrust_laws.law(mode)(u, LIMITS, smooth=True, temperature=1e-4)
         margin = {"continuous": abs(float(jnp.linalg.norm(u)) - U0) / U0,
                   "constant": abs(float(jnp.linalg.norm(u)) - U0) / U0,
                   "discrete": float(jnp.min(jnp.abs(jnp.abs(u) - LIMITS.sigma_mps2) / LIMITS.sigma_mps2))}[mode]
         if margin > 1e-2:
             np.testing.assert_allclose(smooth, exact, rtol=1e-12, atol=1e-20)
-    jac = jax.jacobian(lambda u: thrust_laws.apply(mode, u, LIMITS, smooth=True, temperature=0.1))(jnp.zeros(3))
+    jac = jax.jacobian(lambda u: thrust_laws.law(mode)(u, LIMITS, smooth=True, temperature=0.1))(jnp.zeros(3))
     assert np.all(np.isfinite(np.asarray(jac)))
 
 

@@ -8,8 +8,9 @@ import pytest
 from geojax import constants as c
 from geojax.dynamics import SpacecraftState
 from geojax.forces import ForceModel
-from geojax.propagate import MEE, CycleMeans, environment_grid, propagate_cycles, steps_per_cycle
-from geojax.run import cycle_count, drift_summary
+from geojax.loop.simulate import propagate as propagate_cycles
+from geojax.propagate import MEE, CycleMeans, environment_grid, steps_per_cycle
+from geojax.uncontrolled import cycle_count, drift_summary
 
 EPOCH = 7305 * 86400.0 + 69.184
 

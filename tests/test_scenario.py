@@ -62,7 +62,8 @@ def test_overrides_and_path(tmp_path):
         ({"orbit.a_km": 42164.0}, "orbit.a_km: not used when orbit.elements = 'mee'"),
         ({"forces.sun": 1}, "forces.sun: must be true or false, got int 1"),
         ({"epoch.utc": "yesterday"}, "epoch.utc: 'yesterday' is not an ISO 8601 date-time"),
-        ({"bogus.x": 1}, "bogus: unknown table; allowed: epoch, orbit"),
+        ({"bogus.x": 1}, "bogus.x: not a scenario key; write it as TABLE.KEY"),
+        ({"days": 5.0}, "days: not a scenario key"),
     ],
 )
 def test_bad_input_names_the_field(overrides, message):

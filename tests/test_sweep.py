@@ -12,7 +12,7 @@ import pytest
 
 from geojax import cli, store, sweep
 from geojax.constants import SIDEREAL_DAY_S
-from geojax.metrics import CYCLE_NAMES
+from geojax.loop.metrics import CYCLE_NAMES
 
 SPEC = """
 name = "test"

@@ -45,15 +45,17 @@ def test_bad_tuning_files_name_the_field(raw, message):
 def test_parameter_space_round_trip_keeps_threshold_norm():
     """The unconstrained vector maps back to the same gains, and any threshold weights give |sigma| = u0."""
     sc = scenario.load("katz2025-discrete")
-    params = tune.run.feedback_params(sc)
-    names = ["k_h", "k_e", "k_lambda", "lambda_b", "sigma"]
-    theta = tune.to_theta(params, names)
-    back = tune.from_theta(theta, params, names)
-    for a, b in zip(back.gains, params.gains):
-        assert float(a) == pytest.approx(float(b), rel=1e-12)
-    np.testing.assert_allclose(back.limits.sigma_mps2, params.limits.sigma_mps2, rtol=1e-7)
-    moved = tune.from_theta(theta + np.array([0, 0, 0, 0, 1.0, -2.0, 0.5]), params, names)
-    assert float(np.linalg.norm(moved.limits.sigma_mps2)) == pytest.approx(float(params.limits.u0_mps2), rel=1e-12)
+    names = [tune.ALIASES[n] for n in ["k_h", "k_e", "k_lambda", "lambda_b", "sigma"]]
+    problem = tune.Problem(sc, names)
+    params = problem.base
+    theta = tune.to_theta(params, problem.entries)
+    back = tune.from_theta(theta, params, problem.entries)
+    for key in ("k_h_per_m2_s", "k_e_m2_per_s3", "k_lambda_m_per_rad", "lambda_b_rad"):
+        assert float(back.controller[key]) == pytest.approx(float(params.controller[key]), rel=1e-12)
+    np.testing.assert_allclose(back.controller["sigma_mps2"], params.controller["sigma_mps2"], rtol=1e-7)
+    moved = tune.from_theta(theta + np.array([0, 0, 0, 0, 1.0, -2.0, 0.5]), params, problem.entries)
+    assert float(np.linalg.norm(moved.controller["sigma_mps2"])) == pytest.approx(
+        float(params.controller["u0_mps2"]), rel=1e-12)
 
 
 @pytest.mark.parametrize("method", ["sqp", "adam"])

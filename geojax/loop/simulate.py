@@ -201,6 +201,17 @@ def measured_mee(dynamics: Dynamics, orbit, noise, errors: dict, mu):
     return fix.at[5].set(true_lon + wrap_angle(fix[5] - true_lon))
 
 
-def uncontrolled(state: SpacecraftState, params: Params) -> Params:
-    """``params`` starting from ``state`` (the null controller needs nothing else)."""
-    return params._replace(initial=state)
+def propagate(dynamics: Dynamics, state: SpacecraftState, env: Environment, force_model: ForceModel, step_s: float,
+              thrust_fn=None):
+    """Open-loop propagation through the same loop: ``thrust_fn(step_start_s, step_s) -> Thrust`` per step
+    (none if omitted).  Returns (final state, ``CycleMeans`` [n_cycles])."""
+    from geojax.control import none
+    from geojax.control.base import no_plan, stateless_init
+
+    controller = none.CONTROLLER if thrust_fn is None else Controller(
+        stateless_init, no_plan, lambda params, plan, t, state, environment: thrust_fn(t, environment.step_s))
+    zero = jnp.asarray(0.0)
+    params = Params(state, force_model, {}, {"lon_rad": zero}, {"h_rv": zero}, {})
+    final, records = simulate(controller, params, Shared(env, None), jax.random.key(0), step_s=step_s,
+                              dynamics=dynamics)
+    return final, records.cycles.means

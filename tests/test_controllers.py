@@ -1,0 +1,116 @@
+"""The controller protocol from a user's side, status codes computed in the rollout, sweeps over any leaf."""
+
+import h5py
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from geojax import scenario, sweep, tune
+from geojax.control import Controller
+from geojax.control.base import no_plan, stateless_init
+from geojax.dynamics import Thrust
+from geojax.elements import wrap_angle
+from geojax.frames import rotate_z
+from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_OK
+from geojax.loop.rollout import simulate
+from geojax.params import LOG, Field
+
+
+def proportional_thrust(params, plan, t, state, environment):
+    """East of the station: thrust along +S (raises a, so the satellite drifts west) and the reverse;
+    out of plane: thrust against the velocity's ECEF z, damping the daily north-south swing."""
+    c = params.controller
+    r_ecef = rotate_z(environment.r_eci_m, environment.env.earth_angle_rad[0])
+    dlon = wrap_angle(jnp.arctan2(r_ecef[1], r_ecef[0]) - params.station["lon_rad"])
+    accel = jnp.stack([0.0, c["k_lon"] * dlon, -c["k_inc"] * environment.v_eci_mps[2]])
+    u_max = params.thrusters["thrust_n"] / state.mass_kg
+    norm = jnp.maximum(jnp.linalg.norm(accel), 1e-30)
+    magnitude = jnp.minimum(norm, u_max)
+    return Thrust(accel / norm, magnitude * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
+
+
+MINE = Controller(stateless_init, no_plan, proportional_thrust, fields={
+    "k_lon_mps2_per_rad": Field((int, float), 1e-3, lower=0.0, si="k_lon", transform=LOG),
+    "k_inc_per_s": Field((int, float), 1e-5, lower=0.0, si="k_inc", transform=LOG),
+})
+
+
+def test_a_controller_written_in_a_test_runs_through_simulate_sweep_and_tune(tmp_path):
+    """Conservation check: with no thrust the same loop gives no Delta-V; with the law, the Delta-V equals
+    the mass spent through the rocket equation (m0 (1 - exp(-dv / (Isp g0)))), and a stiffer inclination
+    gain spends more."""
+    from geojax.constants import G0_MPS2
+
+    sc = scenario.load("li2022", {"duration.days": 3, "controller.k_inc_per_s": 1e-5}, controller=MINE)
+    result = simulate(sc, controller=MINE)
+    dv = float(result.metrics["dv_per_year_mps"]) * 3 * 86164.0905 / (365.25 * 86400)
+    m0, isp = float(result.params.initial.mass_kg), float(result.params.thrusters["isp_s"])
+    assert float(result.metrics["mass_used_kg"]) == pytest.approx(m0 * (1 - np.exp(-dv / (isp * G0_MPS2))), rel=1e-6)
+    assert dv > 0
+
+    spec_path = tmp_path / "s.toml"
+    spec_path.write_text('scenario = "li2022"\ncontrollers = ["mine"]\n[set]\n"duration.days" = 2.0\n'
+                         '[grid]\n"controller.k_inc_per_s" = [1e-6, 1e-4]\n')
+    spec = sweep.load(spec_path, controllers={"mine": MINE})
+    with h5py.File(sweep.run_sweep(spec, tmp_path / "s.h5", progress=False)) as f:
+        dv = f["metrics/dv_per_year_mps"][0, :, 0]
+    assert dv[1] > dv[0] > 0
+
+    raw = {"scenario": "li2022", "parameters": ["controller.k_lon_mps2_per_rad", "controller.k_inc_per_s"],
+           "starts": 2, "iterations": 2, "days": 2.0, "method": "adam"}
+    result = tune.tune(tune.from_dict(raw, controller=MINE), verbose=False)
+    assert result.history["theta"].shape[-1] == 2
+
+
+def status_sweep(tmp_path, grid: str, name: str, controller: str = "qffc", days: float = 4.0):
+    path = tmp_path / f"{name}.toml"
+    path.write_text(f'scenario = "li2022-qffc"\ncontrollers = ["{controller}"]\nrepetitions = 2\nseed = 1\n'
+                    f'[set]\n"duration.days" = {days}\n[grid]\n{grid}\n')
+    with h5py.File(sweep.run_sweep(sweep.load(path), tmp_path / f"{name}.h5", progress=False)) as f:
+        return {k: f[f"metrics/{k}"][()] for k in f["metrics"]}, f["status/code"][()]
+
+
+def test_box_exits_get_their_own_status_and_leave_neighbours_unchanged(tmp_path):
+    """A station 0.2 deg east of where the satellite is held leaves the longitude box at once; an uncontrolled
+    start inclined 0.069 deg (MEE k = 6e-4; the latitude swings by i every orbit) leaves the latitude box
+    within two days while the longitude drifts < 0.03 deg; the neighbouring grid point's metrics equal a sweep
+    of that point alone, bit for bit (each sample's key is (seed, index))."""
+    metrics, status = status_sweep(tmp_path, '"station.lon_deg" = [96.0, 96.2]', "lon")
+    assert np.all(status[0, 0] == STATUS_OK) and np.all(status[0, 1] == STATUS_LEFT_LON_BOX)
+    alone, alone_status = status_sweep(tmp_path, '"station.lon_deg" = [96.0]', "alone")
+    for k, v in alone.items():
+        np.testing.assert_array_equal(metrics[k][:, :1], v, err_msg=k)
+    _, status = status_sweep(tmp_path, '"orbit.k" = [5e-5, 6e-4]', "lat", controller="none", days=2.0)
+    assert np.all(status[0, 0] == STATUS_OK) and np.all(status[0, 1] == STATUS_LEFT_LAT_BOX)
+
+
+def test_sweeps_over_srp_area_and_an_initial_state_dispersion(tmp_path):
+    """Second method: a sweep over the SRP area runs each sample's own predictor reference inside the batch;
+    at the scenario's own area it must give the single run's Delta-V (shared reference), and without SRP
+    another.  A dispersed initial position gives each repetition its own orbit and Delta-V, no other error."""
+    path = tmp_path / "srp.toml"
+    path.write_text('scenario = "li2022-qffc"\nrepetitions = 1\n[set]\n"duration.days" = 3.0\n'
+                    '[grid]\n"spacecraft.srp_area_m2" = [200.0, 0.0]\n')
+    spec = sweep.load(path)
+    with h5py.File(sweep.run_sweep(spec, tmp_path / "srp.h5", progress=False)) as f:
+        dv = f["metrics/dv_per_year_mps"][0, :, 0]
+        assert np.all(f["status/code"][()] == STATUS_OK)
+    single = simulate(scenario.load("li2022-qffc", {"duration.days": 3.0}))
+    assert dv[0] == pytest.approx(float(single.metrics["dv_per_year_mps"]), rel=1e-9)
+    assert abs(dv[1] - dv[0]) > 1e-3
+    path = tmp_path / "disp.toml"
+    path.write_text('scenario = "li2022-qffc"\nrepetitions = 3\n[set]\n"duration.days" = 2.0\n'
+                    '[grid]\n"thrusters.thrust_n" = [0.5]\n[dispersion]\noffset_ecef_1sigma_km = [1.0, 1.0, 1.0]\n')
+    with h5py.File(sweep.run_sweep(sweep.load(path), tmp_path / "disp.h5", progress=False)) as f:
+        dv = f["metrics/dv_per_year_mps"][0, 0]
+    assert len(set(np.round(dv, 9))) == 3
+
+
+def test_shape_setting_keys_cannot_be_swept(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text('scenario = "li2022-qffc"\n[grid]\n"integration.step_s" = [900.0, 1800.0]\n')
+    with pytest.raises(ValueError, match="integration.step_s: sets the shape"):
+        sweep.load(path)
+    path.write_text('scenario = "li2022-fompc"\ncontrollers = ["fompc"]\n[grid]\n"controller.horizon" = [2.5]\n')
+    with pytest.raises(ValueError, match="controller.horizon: must be an integer"):
+        sweep.load(path)
