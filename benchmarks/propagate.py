@@ -23,7 +23,7 @@ with the ``hy.select`` shadow and its steps capped at 20 s in eclipse seasons.
 
 Batch samples: sample 0 is the scenario's initial state, the others perturb p
 by up to +-1 km and L by up to +-0.01 rad (uniform, seeded).  "One year" is
-``geojax.run.cycle_count(365.25)`` sidereal days (cycles), for every implementation.
+``geojax.uncontrolled.cycle_count(365.25)`` sidereal days (cycles), for every implementation.
 
 Accuracy: the one-year change of the mean inclination vector
 i (cos Omega, sin Omega) [deg] from the first to the last one-cycle mean
@@ -76,9 +76,10 @@ from geojax.constants import SIDEREAL_DAY_S
 from geojax.dynamics import SpacecraftState
 from geojax.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian
 from geojax.forces import ForceModel, perturbing_acceleration, point_mass
-from geojax.propagate import MEE, environment_at, environment_grid, propagate_cycles, steps_per_cycle
+from geojax.loop.simulate import propagate as propagate_cycles
+from geojax.propagate import MEE, environment_at, environment_grid, steps_per_cycle
 from geojax.parallel import replicate, shard_batch
-from geojax.run import cycle_count, inclination_vector_deg
+from geojax.uncontrolled import cycle_count, inclination_vector_deg
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from baselines import heyoka_model, numpy_model  # noqa: E402
@@ -298,7 +299,7 @@ def mean_inclination_change_deg(cartesian_samples: np.ndarray, mu: float) -> np.
 
     ``cartesian_samples`` is [2, n + 1, 6]: osculating ECI states over the first
     and last cycle.  Mean (h, k) with ``geojax.elements.cycle_mean``, then
-    ``geojax.run.inclination_vector_deg``, exactly as geojax does per cycle.
+    ``geojax.uncontrolled.inclination_vector_deg``, exactly as geojax does per cycle.
     """
     samples = jnp.asarray(cartesian_samples)
     mee = cartesian_to_mee(samples[..., :3], samples[..., 3:], mu)

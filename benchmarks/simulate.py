@@ -26,9 +26,10 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 from geojax import constants as c  # noqa: E402
-from geojax import run, scenario  # noqa: E402
+from geojax import scenario  # noqa: E402
+from geojax.loop.rollout import rollout_fn  # noqa: E402
+from geojax.loop.setup import prepare  # noqa: E402
 from geojax.parallel import replicate, shard_batch  # noqa: E402
-from geojax.simulate import rollout  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 PAPER_S_PER_ORBIT = {"qffc": 0.09, "fompc": 57.4}
@@ -43,12 +44,12 @@ def main() -> None:
     rows = []
     for controller in args.controllers:
         sc = scenario.load(f"li2022-{controller}", {"duration.days": args.days, "errors.h_rv": 1.0, "errors.h_att": 1.0})
-        loop = run.closed_loop_setup(sc)
-        fm, h, state0 = sc.force_model, loop.step_s, loop.state
-        cycles, ref, params = replicate(loop.cycles_env), replicate(loop.reference), loop.params
-        batched = jax.jit(jax.vmap(lambda s, k: rollout(s, cycles, fm, h, ref, params, k, controller, loop.annealing)))
+        setup = prepare([sc])
+        setup = setup._replace(shared=replicate(setup.shared))
+        one = rollout_fn(setup)
+        batched = jax.jit(jax.vmap(lambda p, k: one(p, k)[:2]))
         for batch in args.batches:
-            states = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (batch,) + x.shape), state0)
+            states = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x[0], (batch,) + x.shape[1:]), setup.params)
             keys = jax.vmap(lambda i: jax.random.fold_in(jax.random.key(0), i))(jnp.arange(batch))
             if batch % jax.device_count() == 0:
                 states, keys = shard_batch((states, keys))
@@ -58,7 +59,7 @@ def main() -> None:
             t = time.perf_counter()
             final, rec = jax.block_until_ready(compiled(states, keys))
             run_s = time.perf_counter() - t
-            dv_year = np.asarray(final.dv_mps) * 365.25 * 86400 / (loop.n_cycles * c.SIDEREAL_DAY_S)
+            dv_year = np.asarray(final.dv_mps) * 365.25 * 86400 / (setup.n_cycles * c.SIDEREAL_DAY_S)
             per_orbit = run_s / (loop.n_cycles * batch)
             rows.append({"controller": controller, "batch": batch, "cycles": loop.n_cycles, "compile_s": compile_s,
                          "run_s": run_s, "s_per_orbit_per_sample": per_orbit,

@@ -9,7 +9,7 @@ For every batch size B, a fresh process runs a sweep of B repetitions with
 the batch sharded over one XLA CPU device per core) and reports its wall time,
 compilation included, and its peak resident memory.  The baseline runs the same
 samples (the same keys) one after another in a Python loop over the compiled
-single rollout (``run.run_closed_loop``, compiled once and reused), as a user
+single rollout (``loop.rollout.rollout_fn``, compiled once and reused), as a user
 without ``vmap`` would; it runs ``--loop`` samples (all of them if B is smaller)
 and its rate is per sample, so it does not depend on B.  Both in one run.
 Results: ``benchmarks/results/sweep.json`` and ``.md``.
@@ -106,16 +106,19 @@ def measure_sweep(controller: str, days: float, batch: int) -> dict:
 def measure_loop(controller: str, days: float, n: int) -> dict:
     import jax
 
-    from geojax import run, scenario
+    from geojax import scenario
+    from geojax.loop.rollout import rollout_fn
+    from geojax.loop.setup import prepare, unstack
 
     sc = scenario.load(f"li2022-{controller}", {"duration.days": days, "errors.h_rv": 1.0, "errors.h_att": 1.0})
-    loop = run.closed_loop_setup(sc)
+    batch = prepare([sc])
+    params, one = unstack(batch.params, 0), jax.jit(rollout_fn(batch))
     key = jax.random.key(7)
     start = time.perf_counter()
-    jax.block_until_ready(run.run_closed_loop(loop, sc.force_model, jax.random.fold_in(key, 0)))
+    jax.block_until_ready(one(params, jax.random.fold_in(key, 0)))
     compile_s = time.perf_counter() - start
     start = time.perf_counter()
-    dv = [float(run.run_closed_loop(loop, sc.force_model, jax.random.fold_in(key, j))[0].dv_mps) for j in range(n)]
+    dv = [float(one(params, jax.random.fold_in(key, j))[0].dv_mps) for j in range(n)]
     wall_s = time.perf_counter() - start
     return {"samples": n, "compile_s": compile_s, "wall_s": wall_s, "sample_years_per_s": n * days / 365.25 / wall_s,
             "peak_rss_mb": _peak_rss_mb(), "dv_first_mps": dv[0]}

@@ -1,6 +1,44 @@
-"""geojax: closed-loop GEO station keeping in JAX."""
+"""geojax: closed-loop GEO station keeping in JAX (float64): thousands of rollouts at once, differentiable.
+
+The public API (shapes and units in each docstring):
+
+* ``load_scenario(name_or_path, overrides=None, controller=None) -> Scenario``: a shipped scenario by name
+  (``available_scenarios()``) or a TOML file, validated; ``overrides`` maps dotted keys to values.
+* ``simulate(scenario, seed=0, controller=None, keep_steps=False) -> Result``: one closed-loop rollout;
+  ``Result.metrics`` (units in the names), ``Result.status`` (``STATUS_MEANINGS``), ``Result.records``.
+* ``simulate_batch(scenario, params, seeds=...) -> Result``: a batch in one compiled call (leading axis on
+  every leaf); ``prepare_params(scenario, n)`` gives n copies of a scenario's ``Params`` to edit.
+* ``load_sweep`` / ``run_sweep``: Monte Carlo sweeps to HDF5, resumable; ``read_results`` reads a file back.
+* ``load_tuning`` / ``tune_gains``: gains tuned by derivatives through rollouts.
+* ``Controller`` (``init``, ``plan``, ``thrust`` and their ``Field`` declarations), ``Thrust``, ``Params``:
+  to write a controller of one's own (see the README).
+"""
+
 import jax
 
 jax.config.update("jax_enable_x64", True)
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
+
+from geojax.control.base import Controller, Estimate  # noqa: E402
+from geojax.dynamics import SpacecraftState, Thrust  # noqa: E402
+from geojax.loop.metrics import STATUS_MEANINGS  # noqa: E402
+from geojax.loop.rollout import Result, prepare_params, simulate, simulate_batch  # noqa: E402
+from geojax.loop.simulate import CycleContext, StepEnvironment  # noqa: E402
+from geojax.params import LOG, Field, Params  # noqa: E402
+from geojax.scenario import Scenario  # noqa: E402
+from geojax.scenario import available as available_scenarios  # noqa: E402
+from geojax.scenario import load as load_scenario  # noqa: E402
+from geojax.store import read_h5 as read_results  # noqa: E402
+from geojax.sweep import load as load_sweep  # noqa: E402
+from geojax.sweep import run_sweep  # noqa: E402
+from geojax.tune import from_dict as tuning_from_dict  # noqa: E402
+from geojax.tune import load as load_tuning  # noqa: E402
+from geojax.tune import tune as tune_gains  # noqa: E402
+
+__all__ = [
+    "Controller", "CycleContext", "Estimate", "Field", "LOG", "Params", "Result", "STATUS_MEANINGS", "Scenario",
+    "SpacecraftState", "StepEnvironment", "Thrust", "available_scenarios", "load_scenario", "load_sweep",
+    "load_tuning", "prepare_params", "read_results", "run_sweep", "simulate", "simulate_batch", "tune_gains",
+    "tuning_from_dict",
+]

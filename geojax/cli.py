@@ -202,18 +202,9 @@ def _status_text() -> str:
 
 
 def _steps_table(result) -> dict:
-    """The ``/steps`` datasets of a run with per-step records: time, offsets from the station, acceleration."""
-    import numpy as np
+    from geojax.loop.metrics import step_table
 
-    from geojax.elements import wrap_angle
-
-    steps = result.records.steps
-    u = steps.accel_ecef_mps2.reshape(-1, 3)
-    lon0 = float(result.params.station["lon_rad"])
-    return {"t_s": np.arange(u.shape[0]) * result.step_s,
-            "dlon_deg": np.degrees(np.asarray(wrap_angle(steps.lon_rad.ravel() - lon0))),
-            "lat_deg": np.degrees(steps.lat_rad.ravel()),
-            "ux_mps2": u[:, 0], "uy_mps2": u[:, 1], "uz_mps2": u[:, 2]}
+    return step_table(result.records, result.step_s, float(result.params.station["lon_rad"]))
 
 
 def _reference_and_target(sc, result):

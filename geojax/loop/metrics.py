@@ -138,3 +138,14 @@ def cycle_table(records) -> dict[str, np.ndarray]:
     if "solved" in rec:
         table["status"] = np.where(rec["solved"], 0, 1).astype(np.int8)
     return {k: np.asarray(v) for k, v in table.items()}
+
+
+def step_table(records, step_s: float, station_lon_rad: float) -> dict[str, np.ndarray]:
+    """The per-step records of a single rollout kept with ``keep_steps`` (the ``/steps`` datasets): time since
+    the start (s), longitude offset from the station and latitude (deg), delivered acceleration (ECEF, m/s^2)."""
+    steps = records.steps
+    u = np.asarray(steps.accel_ecef_mps2).reshape(-1, 3)
+    return {"t_s": np.arange(u.shape[0]) * step_s,
+            "dlon_deg": np.degrees(np.asarray(wrap_angle(np.asarray(steps.lon_rad).ravel() - station_lon_rad))),
+            "lat_deg": np.degrees(np.asarray(steps.lat_rad).ravel()),
+            "ux_mps2": u[:, 0], "uy_mps2": u[:, 1], "uz_mps2": u[:, 2]}

@@ -14,11 +14,24 @@ import argparse
 import json
 from pathlib import Path
 
-from geojax import run, scenario
+from types import SimpleNamespace
+
+import geojax
+from geojax import scenario
+from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_NONFINITE, step_table
 
 STEPS_S = (450.0, 900.0, 1800.0, 3600.0)
 MODES = ("continuous", "discrete", "constant")
 
+
+
+def simulate_feedback(sc):
+    """One run with its per-step records: metrics (``box_ok``: the box kept, status not 2, 3 or 4), ``/steps``."""
+    r = geojax.simulate(sc, keep_steps=True)
+    metrics = {k: float(v) for k, v in r.metrics.items()}
+    metrics["box_ok"] = float(int(r.status) not in (STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE))
+    steps = step_table(r.records, r.step_s, float(r.params.station["lon_rad"]))
+    return SimpleNamespace(metrics=metrics, steps=steps, wall_s=r.wall_s)
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -28,7 +41,7 @@ def main() -> None:
     rows = []
     for mode in MODES:
         for step in STEPS_S:
-            result = run.simulate_feedback(scenario.load(f"katz2025-{mode}", {"integration.step_s": step}))
+            result = simulate_feedback(scenario.load(f"katz2025-{mode}", {"integration.step_s": step}))
             rows.append({"mode": mode, "step_s": step, **result.metrics, "wall_s": result.wall_s})
             print(rows[-1], flush=True)
     (out / "step.json").write_text(json.dumps(rows, indent=1))

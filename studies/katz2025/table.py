@@ -33,9 +33,13 @@ import json  # noqa: E402
 import math  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from types import SimpleNamespace
+
+import geojax
 import numpy as np  # noqa: E402
 
-from geojax import plots, run, scenario, tune  # noqa: E402
+from geojax import plots, scenario, tune  # noqa: E402
+from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_NONFINITE, step_table
 
 SHORT = ["k_h", "k_e", "k_lambda", "lambda_b"]
 # Per mode: (parameters, extra tuning keys, thrust-mode override).  Eq. (5) as printed (zero thrust above
@@ -52,6 +56,15 @@ PAPER_TUNING = ["k_h", "k_e"]
 BENCHMARK = Path(__file__).resolve().parents[2] / "benchmarks" / "results" / "tune.json"
 
 
+
+def simulate_feedback(sc):
+    """One run with its per-step records: metrics (``box_ok``: the box kept, status not 2, 3 or 4), ``/steps``."""
+    r = geojax.simulate(sc, keep_steps=True)
+    metrics = {k: float(v) for k, v in r.metrics.items()}
+    metrics["box_ok"] = float(int(r.status) not in (STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE))
+    steps = step_table(r.records, r.step_s, float(r.params.station["lon_rad"]))
+    return SimpleNamespace(metrics=metrics, steps=steps, wall_s=r.wall_s)
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--days", type=float, default=365.25)
@@ -66,7 +79,7 @@ def main() -> None:
     rows = []
     for mode in args.modes:
         sc = scenario.load(f"katz2025-{mode}", {"duration.days": args.days})
-        paper = run.simulate_feedback(sc)
+        paper = simulate_feedback(sc)
         plots.plot_feedback(paper.steps, 0.05, out / f"{mode}-paper-gains", title=f"{mode}, Katz's gains")
         row = {"mode": mode, "paper": tune.PAPER[mode], "ours_at_paper_gains": paper.metrics, "tunings": []}
         best = None
@@ -121,7 +134,7 @@ def from_benchmark(mode: str, sc) -> list[dict]:
     if r["geojax_k_h_per_km2_s"] is not None:
         ctl = sc.config["controller"]
         lambda_b = r.get("geojax_lambda_b_deg") if r.get("geojax_lambda_b_deg") is not None else ctl["lambda_b_deg"]
-        check = run.simulate_feedback(scenario.from_dict(_with(sc.config, {
+        check = simulate_feedback(scenario.from_dict(_with(sc.config, {
             "controller.k_h_per_km2_s": r["geojax_k_h_per_km2_s"], "controller.k_e_km2_per_s3": r["geojax_k_e_km2_per_s3"],
             "controller.lambda_b_deg": lambda_b, "controller.thrust_mode": r["mode"], "duration.days": sc.days})))
         entry.update(gains={"k_h_per_km2_s": r["geojax_k_h_per_km2_s"], "k_e_km2_per_s3": r["geojax_k_e_km2_per_s3"],
@@ -132,12 +145,13 @@ def from_benchmark(mode: str, sc) -> list[dict]:
 
 def verify(sc, params):
     """An independent exact-law run of the tuned gains through ``geojax simulate``'s path (not the tuner's)."""
-    gains, limits = tune.paper_units(params), params.limits
-    overrides = {f"controller.{k}": v for k, v in gains.items() if not k.startswith("sigma")}
+    gains = tune.paper_units(params)
+    overrides = {f"controller.{k}": v for k, v in gains.items()
+                 if not k.startswith("sigma") and k not in ("u0_km_per_s2", "surrogate_temperature")}
     if sc.config["controller"]["thrust_mode"] == "discrete":
-        overrides["controller.sigma_km_per_s2"] = [float(x) / 1e3 for x in np.asarray(limits.sigma_mps2)]
+        overrides["controller.sigma_km_per_s2"] = [float(x) / 1e3 for x in np.asarray(params.controller["sigma_mps2"])]
     overrides["duration.days"] = sc.days
-    return run.simulate_feedback(scenario.from_dict(_with(sc.config, overrides)))
+    return simulate_feedback(scenario.from_dict(_with(sc.config, overrides)))
 
 
 def _with(config: dict, overrides: dict) -> dict:

@@ -13,7 +13,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from geojax import plots, run, scenario
+from geojax import plots, scenario
+from geojax import uncontrolled as run
 
 CASES = [("mee", 7200.0), ("mee", 3600.0), ("mee", 1800.0), ("mee", 900.0), ("mee", 300.0), ("cartesian", 30.0)]
 
