@@ -82,7 +82,7 @@ SIGMA_WEIGHTS = Transform("log-weights", _sigma_to_theta, _sigma_from_theta)
 FIELDS = {
     "k_h_per_km2_s": Field(NUMBER, REQUIRED, lower=0.0, si="k_h_per_m2_s", to_si=1e-6, transform=LOG),
     "k_e_km2_per_s3": Field(NUMBER, REQUIRED, lower=0.0, si="k_e_m2_per_s3", to_si=1e6, transform=LOG),
-    "k_lambda_km_per_rad": Field(NUMBER, REQUIRED, lower=0.0, si="k_lambda_m_per_rad", to_si=1e3, transform=LOG),
+    "k_lambda_km_per_rad": Field(NUMBER, REQUIRED, lower=0.0, lower_inclusive=True, si="k_lambda_m_per_rad", to_si=1e3, transform=LOG),
     "lambda_b_deg": Field(NUMBER, REQUIRED, si="lambda_b_rad", to_si=math.pi / 180,
                           transform=scaled(LAMBDA_B_SCALE_RAD, "0.1 deg")),
     "thrust_mode": Field(str, "continuous-clipped", choices=thrust_laws.MODES, static=True),
