@@ -28,9 +28,9 @@ def test_missing_gain_is_an_error(tmp_path):
 
 
 @pytest.mark.parametrize("raw, message", [
-    ({"scenario": "katz2025-discrete", "parameters": ["k_h", "gain"]}, "parameters: must be distinct names"),
-    ({"scenario": "katz2025-continuous", "parameters": ["sigma"]}, "'sigma' is tuned only"),
-    ({"scenario": "li2022-qffc"}, "tuning needs controller.kind = 'lyapunov'"),
+    ({"scenario": "katz2025-discrete", "parameters": ["k_h", "gain"]}, "parameters: 'gain' is not tunable here; tunable: thrusters.thrust_n"),
+    ({"scenario": "katz2025-continuous", "parameters": ["sigma"]}, "'controller.sigma_km_per_s2' is not set in scenario"),
+    ({"scenario": "li2022-qffc"}, "'controller.k_h_per_km2_s' is not tunable here"),
     ({"scenario": "katz2025-discrete", "starts": 0}, "starts: must be >= 1"),
     ({"scenario": "katz2025-discrete", "temperature_start": 0.01, "temperature_end": 0.1}, "temperature_end"),
     ({"scenario": "katz2025-discrete", "step": 3}, "step: unknown key"),

@@ -14,24 +14,12 @@ import argparse
 import json
 from pathlib import Path
 
-from types import SimpleNamespace
-
-import geojax
 from geojax import scenario
-from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_NONFINITE, step_table
+from table import simulate_feedback  # this folder: one run with its per-step records
 
 STEPS_S = (450.0, 900.0, 1800.0, 3600.0)
 MODES = ("continuous", "discrete", "constant")
 
-
-
-def simulate_feedback(sc):
-    """One run with its per-step records: metrics (``box_ok``: the box kept, status not 2, 3 or 4), ``/steps``."""
-    r = geojax.simulate(sc, keep_steps=True)
-    metrics = {k: float(v) for k, v in r.metrics.items()}
-    metrics["box_ok"] = float(int(r.status) not in (STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE))
-    steps = step_table(r.records, r.step_s, float(r.params.station["lon_rad"]))
-    return SimpleNamespace(metrics=metrics, steps=steps, wall_s=r.wall_s)
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
