@@ -9,7 +9,7 @@ from geojax import cli, scenario, store, tune
 @pytest.mark.parametrize("key, value, message", [
     ("controller.k_h_per_km2_s", 0.0, "controller.k_h_per_km2_s: must be > 0"),
     ("controller.k_e_km2_per_s3", -1e-6, "controller.k_e_km2_per_s3: must be > 0"),
-    ("controller.k_lambda_km_per_rad", 0.0, "controller.k_lambda_km_per_rad: must be > 0"),
+    ("controller.k_lambda_km_per_rad", -1.0, "controller.k_lambda_km_per_rad: must be >= 0"),
     ("station.box_half_width_deg", 0.0, "station.box_half_width_deg: must be > 0"),
     ("controller.sigma_km_per_s2", [6.62e-10, 1.1e-9, 4.14e-9], "norm of the thresholds must equal u0"),
     ("controller.thrust_mode", "bang-bang", "controller.thrust_mode: must be one of"),
