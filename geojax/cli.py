@@ -138,7 +138,7 @@ PAPER = {
 def _simulate(args) -> int:
     from geojax import plots, scenario, store
     from geojax.loop.metrics import STATUS_MEANINGS
-    from geojax.loop.rollout import simulate
+    from geojax.loop.rollout import reference_and_target, simulate
     from geojax.tune import PAPER as KATZ
 
     overrides = _overrides(args)
@@ -176,7 +176,7 @@ def _simulate(args) -> int:
     if steps is not None:
         groups["steps"] = steps
     else:
-        groups["reference"], groups["target"] = _reference_and_target(sc, result)
+        groups["reference"], groups["target"] = reference_and_target(sc, len(result.records.cycles.dv_mps))
     if args.out:
         path = store.write_h5(args.out, groups, scenario.to_toml(sc.config), result.wall_s,
                               attrs={"kind": "simulate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s,
@@ -205,24 +205,6 @@ def _steps_table(result) -> dict:
     from geojax.loop.metrics import step_table
 
     return step_table(result.records, result.step_s, float(result.params.station["lon_rad"]))
-
-
-def _reference_and_target(sc, result):
-    """The uncontrolled reference at cycle boundaries (``/reference``) and the station's targets (``/target``)."""
-    import numpy as np
-
-    from geojax.constants import SIDEREAL_DAY_S
-    from geojax.loop.setup import prepare
-
-    batch = prepare([sc], reference_pad=1)
-    n = len(result.records.cycles.dv_mps)
-    ref = np.asarray(batch.shared.reference.mean)[: n + 1]
-    uncontrolled = {"t_s": np.arange(n + 1) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
-                    "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}
-    st = sc.config["station"]
-    goals = {"lon_deg": float(st["lon_deg"]), "drift_deg_per_day": 0.0,
-             **{k: float(st[k]) for k in ("ex", "ey", "ix", "iy")}}
-    return uncontrolled, goals
 
 
 def _check_outputs(args) -> None:

@@ -108,13 +108,14 @@ class Params(NamedTuple):
 
     initial: SpacecraftState  # the initial state, in the scenario's orbit representation
     forces: ForceModel  # switches and coefficients (SRP area, reflectivity, ...)
+    spacecraft: dict
     thrusters: dict
     station: dict
     errors: dict
     controller: dict
 
 
-LEAF_TABLES = ("thrusters", "station", "errors", "controller")
+LEAF_TABLES = ("spacecraft", "thrusters", "station", "errors", "controller")
 
 
 def table_leaves(config_table: dict, fields: dict[str, Field]) -> dict:
@@ -153,6 +154,10 @@ def check_table(prefix: str, given: dict, fields: dict[str, Field], ignore=()) -
     return out
 
 
+# No quantity of geojax is this large in its unit (gains are 1e-15 to 1e8): a larger number is a typo.
+MAX_MAGNITUDE = 1e20
+
+
 def check_value(name: str, value: Any, field: Field) -> Any:
     kinds = field.kind if isinstance(field.kind, tuple) else (field.kind,)
     if isinstance(value, bool) and bool not in kinds:
@@ -169,8 +174,8 @@ def check_value(name: str, value: Any, field: Field) -> Any:
     if field.choices and value not in field.choices:
         raise ValueError(f"{name}: must be {field.describe()}, got {value!r}")
     if isinstance(value, NUMBER) and not isinstance(value, bool):
-        if not math.isfinite(value):
-            raise ValueError(f"{name}: must be a finite number, got {value!r}")
+        if not math.isfinite(value) or abs(value) > MAX_MAGNITUDE:
+            raise ValueError(f"{name}: must be a finite number of magnitude at most {MAX_MAGNITUDE:g}, got {value!r}")
         low_bad = field.lower is not None and (value < field.lower or (value == field.lower and not field.lower_inclusive))
         high_bad = field.upper is not None and value >= field.upper
         if low_bad or high_bad:

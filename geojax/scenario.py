@@ -35,6 +35,11 @@ from geojax.params import NUMBER as _NUMBER  # noqa: E402
 
 
 
+MAX_ORBIT_KM = 2.0e6  # beyond Earth's Hill sphere (1.5e6 km)
+MAX_ANGLE_RAD, MAX_ANGLE_DEG = 1.0e3, 1.0e5  # about 160 and 280 turns: more is a unit slip
+MAX_MASS_KG = 1.0e6  # twice the ISS
+MAX_DAYS = 36526.0  # a hundred years
+
 SCHEMA: dict[str, dict[str, Field]] = {
     "": {"name": Field(str, REQUIRED), "description": Field(str, "")},
     "epoch": {
@@ -44,52 +49,57 @@ SCHEMA: dict[str, dict[str, Field]] = {
     "orbit": {
         "elements": Field(str, REQUIRED, choices=("mee", "kepler", "station_offset")),
         # elements = "mee": Li 2022, eq. (5)
-        "p_km": Field(_NUMBER, None, lower=0.0),
-        "f": Field(_NUMBER, None), "g": Field(_NUMBER, None),
-        "h": Field(_NUMBER, None), "k": Field(_NUMBER, None),
-        "L_rad": Field(_NUMBER, None),
+        # Bounds catch unit slips, not physics: an orbit beyond Earth's Hill sphere (1.5e6 km), |h|, |k| of
+        # 100 (i = 178.9 deg, near the retrograde singularity of MEE), angles of tens of turns.
+        "p_km": Field(_NUMBER, None, lower=0.0, upper=MAX_ORBIT_KM),
+        "f": Field(_NUMBER, None, lower=-1.0, upper=1.0), "g": Field(_NUMBER, None, lower=-1.0, upper=1.0),
+        "h": Field(_NUMBER, None, lower=-100.0, upper=100.0), "k": Field(_NUMBER, None, lower=-100.0, upper=100.0),
+        "L_rad": Field(_NUMBER, None, lower=-MAX_ANGLE_RAD, upper=MAX_ANGLE_RAD),
         # elements = "kepler"
-        "a_km": Field(_NUMBER, None, lower=0.0),
+        "a_km": Field(_NUMBER, None, lower=0.0, upper=MAX_ORBIT_KM),
         "e": Field(_NUMBER, None, lower=0.0, upper=1.0, lower_inclusive=True),
         "i_deg": Field(_NUMBER, None, lower=0.0, upper=180.0, lower_inclusive=True),
-        "raan_deg": Field(_NUMBER, None), "argp_deg": Field(_NUMBER, None),
-        "true_anomaly_deg": Field(_NUMBER, None),
+        "raan_deg": Field(_NUMBER, None, lower=-MAX_ANGLE_DEG, upper=MAX_ANGLE_DEG),
+        "argp_deg": Field(_NUMBER, None, lower=-MAX_ANGLE_DEG, upper=MAX_ANGLE_DEG),
+        "true_anomaly_deg": Field(_NUMBER, None, lower=-MAX_ANGLE_DEG, upper=MAX_ANGLE_DEG),
         # elements = "station_offset": at the station, displaced in ECEF, with the station's inertial velocity
         "offset_ecef_km": Field(list, None, length=3),
     },
     "station": {
         "lon_deg": Field(_NUMBER, REQUIRED, lower=-180.0, upper=360.0, lower_inclusive=True, si="lon_rad",
                          to_si=degrees),
-        "radius_km": Field(_NUMBER, 42164.16, lower=0.0, si="radius_m", to_si=1e3),
-        # Target mean e and i vectors, MEE (f, g) and (h, k) (Li 2022 eq. (10)).
-        "ex": Field(_NUMBER, 0.0, si="ex"), "ey": Field(_NUMBER, 0.0, si="ey"),
-        "ix": Field(_NUMBER, 0.0, si="ix"), "iy": Field(_NUMBER, 0.0, si="iy"),
+        "radius_km": Field(_NUMBER, 42164.16, lower=0.0, upper=MAX_ORBIT_KM, si="radius_m", to_si=1e3),
+        # Target mean e and i vectors, MEE (f, g) and (h, k) (Li 2022 eq. (10)): e < 1, i < 90 deg.
+        "ex": Field(_NUMBER, 0.0, lower=-1.0, upper=1.0, si="ex"), "ey": Field(_NUMBER, 0.0, lower=-1.0, upper=1.0, si="ey"),
+        "ix": Field(_NUMBER, 0.0, lower=-1.0, upper=1.0, si="ix"), "iy": Field(_NUMBER, 0.0, lower=-1.0, upper=1.0, si="iy"),
         # The box: a sample whose sub-satellite point leaves +-this in longitude or latitude at any step
         # start gets status 2 or 3 (``geojax.loop.metrics``).
-        "box_half_width_deg": Field(_NUMBER, 0.05, lower=0.0, si="box_half_width_rad", to_si=degrees),
+        "box_half_width_deg": Field(_NUMBER, 0.05, lower=0.0, upper=90.0, si="box_half_width_rad", to_si=degrees),
     },
     "spacecraft": {
-        "mass_kg": Field(_NUMBER, REQUIRED, lower=0.0),
-        "srp_area_m2": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True),
+        "mass_kg": Field(_NUMBER, REQUIRED, lower=0.0, upper=MAX_MASS_KG),
+        # The mass without propellant: the thrusters stop when it is reached (status 5).  0: no limit set.
+        "dry_mass_kg": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=MAX_MASS_KG, si="dry_mass_kg"),
+        "srp_area_m2": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6),
         "reflectivity": Field(_NUMBER, 0.0, lower=0.0, upper=1.0 + 1e-12, lower_inclusive=True),
     },
     "thrusters": {
-        "count": Field(int, 2, lower=1, lower_inclusive=True),
-        "thrust_n": Field(_NUMBER, REQUIRED, lower=0.0, si="thrust_n", transform=LOG),
-        "isp_s": Field(_NUMBER, REQUIRED, lower=0.0, si="isp_s", transform=LOG),
+        "count": Field(int, 2, lower=1, upper=65, lower_inclusive=True),
+        "thrust_n": Field(_NUMBER, REQUIRED, lower=0.0, upper=1e5, si="thrust_n", transform=LOG),
+        "isp_s": Field(_NUMBER, REQUIRED, lower=0.0, upper=1e6, si="isp_s", transform=LOG),
         # Robotic-arm limits, Li 2022 eq. (1); defaults: the "normal" level of Table 1.
         "beta_max_deg": Field(_NUMBER, 70.0, si="beta_max_rad", to_si=degrees),
         "beta_min_deg": Field(_NUMBER, 0.0, si="beta_min_rad", to_si=degrees),
         "alpha_max_deg": Field(_NUMBER, 60.0, si="alpha_max_rad", to_si=degrees),
         "alpha_min_deg": Field(_NUMBER, 30.0, si="alpha_min_rad", to_si=degrees),
-        "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True, si="min_burn_s"),
+        "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True, upper=c.SIDEREAL_DAY_S, si="min_burn_s"),
     },
     # The [controller] table: `kind` here, the other keys from the controller's module (control.REGISTRY).
     "controller": {"kind": Field(str, "none")},
     # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors (0.3 m, 5e-5 m/s, 0.05 deg).
     "errors": {
-        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, si="h_rv"),
-        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, si="h_att"),
+        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_rv"),
+        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_att"),
     },
     "forces": {
         "j2": Field(bool, True),
@@ -98,13 +108,13 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "moon": Field(bool, True),
         "srp": Field(bool, True),
         "shadow": Field(str, "conical", choices=("conical", "none")),
-        "srp_pressure_n_m2": Field(_NUMBER, 4.5605e-6, lower=0.0, lower_inclusive=True),
+        "srp_pressure_n_m2": Field(_NUMBER, 4.5605e-6, lower=0.0, lower_inclusive=True, upper=1e-2),
     },
     "integration": {
         "step_s": Field(_NUMBER, 900.0, lower=0.0, upper=c.SIDEREAL_DAY_S + 1.0),
         "dynamics": Field(str, "mee", choices=("mee", "cartesian")),
     },
-    "duration": {"days": Field(_NUMBER, 365.25, lower=0.0)},
+    "duration": {"days": Field(_NUMBER, 365.25, lower=0.0, upper=MAX_DAYS)},
 }
 
 _ORBIT_KEYS = {
@@ -249,7 +259,24 @@ def _validate(raw: dict, controller=None) -> dict:
         validate(config)
     t = config["thrusters"]
     arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
+    _check_propellant(config)
     return config
+
+
+def _check_propellant(config: dict) -> None:
+    """The propellant (mass less dry mass) must last at least one step of every thruster at full thrust: a run
+    that cannot is a typo (an Isp in hours, a mass in tonnes), not a scenario.  Running out later is data
+    (status 5, the thrusters stop)."""
+    craft, t = config["spacecraft"], config["thrusters"]
+    propellant_kg = craft["mass_kg"] - craft["dry_mass_kg"]
+    if propellant_kg <= 0:
+        raise ValueError(f"spacecraft.dry_mass_kg: must be less than spacecraft.mass_kg = {craft['mass_kg']:g}, "
+                         f"got {craft['dry_mass_kg']:g}")
+    per_step_kg = t["count"] * t["thrust_n"] * config["integration"]["step_s"] / (t["isp_s"] * c.G0_MPS2)
+    if per_step_kg >= propellant_kg:
+        raise ValueError(f"thrusters.isp_s: {t['count']} thrusters of {t['thrust_n']:g} N at Isp {t['isp_s']:g} s "
+                         f"burn {per_step_kg:.4g} kg in one {config['integration']['step_s']:g} s step, more than the "
+                         f"{propellant_kg:.4g} kg of propellant (spacecraft.mass_kg - spacecraft.dry_mass_kg)")
 
 
 def _registry():
@@ -264,7 +291,7 @@ def controller_fields(table, controller=None) -> dict[str, Field]:
         return {"kind": Field(str, "custom"), **controller.fields}
     kind = table.get("kind", "none") if isinstance(table, dict) else "none"
     registry = _registry()
-    if kind not in registry:
+    if not isinstance(kind, str) or kind not in registry:
         raise ValueError(f"controller.kind: must be one of {', '.join(map(repr, registry))}, got {kind!r}")
     return {"kind": Field(str, "none", choices=tuple(registry)), **registry[kind].FIELDS}
 

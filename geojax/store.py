@@ -2,13 +2,19 @@
 
 Every file carries the attributes ``geojax_version``, ``config_toml``,
 ``created_utc``, ``wall_s`` and ``device``.  Files are written to a temporary
-name in the same folder and renamed, so a reader never sees a half-written file.
+name in the same folder (``.NAME.tmp-PID``) and renamed, so a reader never sees
+a half-written file; folders are removed by renaming them first
+(``.NAME.trash-PID``), so a kill never leaves half a folder under its name.
+What a killed process left under those names is removed by the next write
+beside it (``remove_stale``).
 """
 
 from __future__ import annotations
 
 import datetime as _dt
+import glob
 import os
+import shutil
 from pathlib import Path
 
 import h5py
@@ -28,7 +34,8 @@ def write_h5(path: str | Path, groups: dict[str, dict[str, np.ndarray]], config_
     path = Path(path)
     if path.parent and not path.parent.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    remove_stale(path)
+    tmp = temporary(path)
     try:
         with h5py.File(tmp, "w") as f:
             f.attrs["geojax_version"] = geojax.__version__
@@ -74,3 +81,71 @@ def check_output_file(path: str | Path) -> Path:
     if not os.access(parent, os.W_OK):
         raise ValueError(f"--out {str(path)!r}: {str(parent)!r} is not writable")
     return path
+
+
+def temporary(path: Path, tag: str = "tmp") -> Path:
+    """This process's temporary name for ``path``: ``.NAME.TAG-PID`` in the same folder."""
+    return path.with_name(f".{path.name}.{tag}-{os.getpid()}")
+
+
+def atomic_write(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` whole or not at all (temporary file, fsync, rename)."""
+    tmp = temporary(path)
+    try:
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def discard_folder(path: Path) -> None:
+    """Remove a folder so that a kill at any moment leaves it whole or gone: rename, then delete."""
+    trash = temporary(path, "trash")
+    os.replace(path, trash)
+    shutil.rmtree(trash)
+
+
+def remove_stale(path: Path) -> None:
+    """Remove the temporaries (``.NAME.tmp-PID``, ``.NAME.trash-PID``) that killed processes left beside
+    ``path``; those of a live process other than this one are left alone."""
+    _remove_stale(path.parent, glob.escape(f".{path.name}.") + "*-*")
+
+
+def remove_stale_in(folder: Path) -> None:
+    """``remove_stale`` for every name in ``folder``."""
+    _remove_stale(folder, ".*-*")
+
+
+def _remove_stale(folder: Path, pattern: str) -> None:
+    for stale in folder.glob(pattern):
+        tag, _, pid = stale.name.rpartition("-")
+        if tag.rpartition(".")[2] in ("tmp", "trash") and pid.isdigit() and not _other_live_process(int(pid)):
+            shutil.rmtree(stale, ignore_errors=True) if stale.is_dir() else stale.unlink(missing_ok=True)
+
+
+def _other_live_process(pid: int) -> bool:
+    if pid == os.getpid():
+        return False  # ours, from an earlier run in this process that was interrupted
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def read_attrs(path: str | Path, what: str = "--resume") -> dict:
+    """The attributes of a geojax results file; ``ValueError`` with one line if ``path`` is not one."""
+    try:
+        with h5py.File(path, "r") as f:
+            attrs = dict(f.attrs)
+    except OSError:
+        raise ValueError(f"{what}: {str(path)!r} is not an HDF5 file; choose another --out") from None
+    if "config_toml" not in attrs:
+        raise ValueError(f"{what}: {str(path)!r} is not a geojax results file; choose another --out")
+    return attrs

@@ -50,7 +50,6 @@ import hashlib
 import itertools
 import math
 import os
-import shutil
 import time
 from pathlib import Path
 
@@ -64,7 +63,7 @@ from geojax.loop.metrics import CYCLE_NAMES, STATUS_TEXT, cycle_series
 from geojax.loop.rollout import rollout_fn
 from geojax.loop.setup import disperse, prepare
 from geojax.params import Field, check_table
-from geojax.parallel import shard_batch
+from geojax.parallel import per_device
 from geojax.progress import Progress
 
 
@@ -133,9 +132,13 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
         raise ValueError(f"{unknown[0]}: unknown key; allowed: {', '.join(sorted(allowed))}")
     if "scenario" not in raw:
         raise ValueError("scenario: missing (the base scenario, a shipped name or a .toml path)")
+    if not isinstance(raw.get("name", ""), str) or not isinstance(raw["scenario"], str):
+        key = "name" if not isinstance(raw.get("name", ""), str) else "scenario"
+        raise ValueError(f"{key}: must be a string, got {raw[key]!r}")
     controllers = raw.get("controllers", ["qffc"])
     known = {**REGISTRY, **(controllers_extra := dict(controllers_arg or {}))}
-    if not (isinstance(controllers, list) and controllers and all(c in known for c in controllers)
+    if not (isinstance(controllers, list) and controllers
+            and all(isinstance(c, str) and c in known for c in controllers)
             and len(set(controllers)) == len(controllers)):
         raise ValueError(f"controllers: must be a non-empty list of distinct names from {', '.join(known)}, "
                          f"got {controllers!r}")
@@ -198,38 +201,60 @@ def _scenario(sweep: Sweep, controller: str, point: dict):
 def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | None = None,
               progress: bool | None = None) -> Path:
     """Run every sample not yet saved, then write ``out`` (HDF5).  Returns its path."""
-    out = Path(out)
+    out = store.check_output_file(out)
     parts = out.with_name(out.name + ".parts")
     digest = hashlib.sha256(sweep.text.encode()).hexdigest()
-    if out.exists() and not resume:
-        raise ValueError(f"--out {str(out)!r}: exists; pass --resume to continue it or choose another file")
-    if out.exists() and not parts.exists():
-        if store.read_h5(out)[1].get("config_toml") != sweep.text:
-            raise ValueError(f"--resume: {str(out)!r} holds the results of a different sweep file")
-        return out  # finished earlier
-    n_samples = sweep.n_points * sweep.repetitions
     if chunk is not None and chunk < 1:
         raise ValueError(f"--chunk: must be >= 1, got {chunk}")
+    if (out.exists() or parts.exists()) and not resume:
+        where = str(out) if out.exists() else f"{str(parts)!r} (an unfinished sweep)"
+        raise ValueError(f"--out {str(out)!r}: {where} exists; pass --resume to continue it or choose another file")
+    store.remove_stale(out)
+    store.remove_stale(parts)
+    if out.exists():
+        if store.read_attrs(out).get("config_toml") != sweep.text:
+            raise ValueError(f"--resume: {str(out)!r} holds the results of a different sweep file")
+        if parts.exists():  # killed while removing its parts after the file was written
+            store.discard_folder(parts)
+        return out  # finished earlier
+    n_samples = sweep.n_points * sweep.repetitions
     if parts.exists():
-        if not resume:
-            raise ValueError(f"--out {str(out)!r}: an unfinished sweep is in {str(parts)!r}; pass --resume")
-        if (parts / "sweep.sha256").read_text().strip() != digest:
-            raise ValueError(f"--resume: {str(parts)!r} belongs to a different sweep file")
-        # The chunks on disk fix the cut: a resumed sweep keeps it, whatever the device count.
-        started = int((parts / "chunk").read_text())
-        if chunk is not None and chunk != started:
-            raise ValueError(f"--chunk: the unfinished sweep in {str(parts)!r} was cut into chunks of {started}; "
-                             f"resume with --chunk {started} or without --chunk")
-        chunk = started
+        chunk = _resumed_chunk(parts, digest, chunk)
     else:
         chunk = chunk or default_chunk(n_samples)
-        fresh = parts.with_name(f".{parts.name}.tmp-{os.getpid()}")  # complete before it is visible
-        shutil.rmtree(fresh, ignore_errors=True)
+        fresh = store.temporary(parts)  # complete before it is visible
         fresh.mkdir(parents=True)
-        _atomic_write(fresh / "chunk", str(chunk).encode())
-        _atomic_write(fresh / "sweep.sha256", digest.encode())
+        store.atomic_write(fresh / "chunk", str(chunk).encode())
+        store.atomic_write(fresh / "sweep.sha256", digest.encode())
         os.replace(fresh, parts)
+    try:
+        return _run_chunks(sweep, out, parts, chunk, progress)
+    except BaseException:
+        if parts.exists() and not any(parts.glob("*.npz")):
+            store.discard_folder(parts)  # nothing computed: leave nothing behind
+        raise
 
+
+def _resumed_chunk(parts: Path, digest: str, chunk: int | None) -> int:
+    """The chunk size an unfinished sweep in ``parts`` was cut with (``ValueError`` if it is not ours)."""
+    try:
+        saved_digest = (parts / "sweep.sha256").read_text().strip()
+        started = int((parts / "chunk").read_text())
+    except (OSError, ValueError):
+        raise ValueError(f"--resume: {str(parts)!r} is not the parts folder of a geojax sweep; "
+                         f"remove it or choose another --out") from None
+    if saved_digest != digest:
+        raise ValueError(f"--resume: {str(parts)!r} belongs to a different sweep file")
+    # The chunks on disk fix the cut: a resumed sweep keeps it, whatever the device count.
+    if chunk is not None and chunk != started:
+        raise ValueError(f"--chunk: the unfinished sweep in {str(parts)!r} was cut into chunks of {started}; "
+                         f"resume with --chunk {started} or without --chunk")
+    store.remove_stale_in(parts)  # chunk files a killed run was writing
+    return started
+
+
+def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool | None) -> Path:
+    n_samples = sweep.n_points * sweep.repetitions
     start = time.perf_counter()
     results, compile_s = {}, 0.0
     total = len(sweep.controllers) * n_samples
@@ -250,7 +275,7 @@ def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | 
                     pieces.append({k: np.asarray(v) for k, v in out_lanes.items()})
                     bar.update(min(width, s + _chunk_len(s, chunk, n_samples) - lane0))
                 values = {k: np.concatenate([p[k] for p in pieces])[: _chunk_len(s, chunk, n_samples)] for k in pieces[0]}
-                _atomic_write(parts / f"{controller}_{s:09d}.npz", _npz_bytes(values))
+                store.atomic_write(parts / f"{controller}_{s:09d}.npz", _npz_bytes(values))
             files = sorted(parts.glob(f"{controller}_*.npz"))
             pieces = [dict(np.load(f)) for f in files]
             results[controller] = {k: np.concatenate([p[k] for p in pieces]) for k in pieces[0]}
@@ -274,7 +299,7 @@ def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | 
                    attrs={"kind": "sweep", "name": sweep.name, "grid_axes": ",".join(["controller", *sweep.grid]),
                           "compile_s": compile_s,
                           "status_codes": STATUS_TEXT})
-    shutil.rmtree(parts)
+    store.discard_folder(parts)
     return out
 
 
@@ -312,14 +337,9 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int):
             out.update({f"cycles__{k}": v for k, v in cycle_series(records).items()})
         return out
 
-    def placed(p, idx):
-        args = (p, jnp.asarray(idx))
-        return shard_batch(args) if jax.device_count() > 1 else args
-
-    start = time.perf_counter()
     lanes = np.zeros(width, dtype=int)
-    compiled = jax.jit(jax.vmap(one)).lower(*placed(_lanes(batch.params, lanes), lanes)).compile()
-    return lambda p, idx: compiled(*placed(p, idx)), batch.params, time.perf_counter() - start
+    run, compile_s = per_device(jax.vmap(one), (_lanes(batch.params, lanes), lanes))
+    return lambda p, idx: run(p, np.asarray(idx)), batch.params, compile_s
 
 
 def _lanes(params, point_index):
@@ -334,11 +354,3 @@ def _npz_bytes(values: dict) -> bytes:
     np.savez(buffer, **values)
     return buffer.getvalue()
 
-
-def _atomic_write(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)

@@ -114,3 +114,32 @@ def test_shape_setting_keys_cannot_be_swept(tmp_path):
     path.write_text('scenario = "li2022-fompc"\ncontrollers = ["fompc"]\n[grid]\n"controller.horizon" = [2.5]\n')
     with pytest.raises(ValueError, match="controller.horizon: must be an integer"):
         sweep.load(path)
+
+
+def test_the_thrusters_stop_when_the_propellant_is_gone():
+    """Issue 19, defect 5 (the mass went negative at Isp 1e-3 s).  Conservation: with 0.5 kg of propellant the
+    QFFC spends it, the thrusters stop at the dry mass (overshoot below one step's flow), the sample gets
+    status 5, and the Delta-V delivered is the rocket equation's for the mass used."""
+    from geojax.constants import G0_MPS2
+    from geojax.loop.metrics import STATUS_NO_PROPELLANT
+
+    days = 20.0
+    sc = scenario.load("li2022-qffc", {"duration.days": days, "spacecraft.dry_mass_kg": 4999.5})
+    result = simulate(sc)
+    used = float(result.metrics["mass_used_kg"])
+    thrusters = sc.config["thrusters"]
+    one_step_kg = thrusters["count"] * thrusters["thrust_n"] * sc.step_s / (thrusters["isp_s"] * G0_MPS2)
+    assert int(result.status) == STATUS_NO_PROPELLANT
+    assert 0.5 <= used < 0.5 + one_step_kg
+    dv = np.sum(result.records.cycles.dv_mps)
+    assert dv == pytest.approx(thrusters["isp_s"] * G0_MPS2 * np.log(5000.0 / (5000.0 - used)), rel=1e-6)
+    assert np.all(result.records.cycles.dv_mps[-3:] == 0.0)  # nothing flies once the propellant is gone
+
+
+@pytest.mark.parametrize("overrides, message", [
+    ({"thrusters.isp_s": 1e-3}, "thrusters.isp_s: 2 thrusters of 0.5 N at Isp 0.001 s burn 9.177e+04 kg in one"),
+    ({"spacecraft.dry_mass_kg": 5000.0}, "spacecraft.dry_mass_kg: must be less than spacecraft.mass_kg = 5000"),
+])
+def test_a_propellant_that_cannot_last_one_step_is_refused_at_load(overrides, message):
+    with pytest.raises(ValueError, match=message.replace("+", r"\+").replace(".", r"\.")):
+        scenario.load("li2022-qffc", overrides)

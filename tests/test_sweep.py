@@ -69,20 +69,20 @@ def test_chunk_size_does_not_change_results(straight, tmp_path):
 def test_killed_sweep_resumes_to_the_same_data(straight, tmp_path, monkeypatch):
     spec, d = straight
     out = tmp_path / "resumed.h5"
-    real_write = sweep._atomic_write
+    real_write = store.atomic_write
     calls = []
 
     def dies_after_first_chunk(path, payload):
         calls.append(path)
-        if len(calls) == 3:  # sweep.sha256, chunk 0, then "killed" while writing chunk 1
+        if len(calls) == 4:  # chunk, sweep.sha256, chunk 0, then "killed" while writing chunk 1
             path.with_name(f".{path.name}.tmp-999").write_bytes(payload[:10])  # a torn temporary file
             raise KeyboardInterrupt
         real_write(path, payload)
 
-    monkeypatch.setattr(sweep, "_atomic_write", dies_after_first_chunk)
+    monkeypatch.setattr(store, "atomic_write", dies_after_first_chunk)
     with pytest.raises(KeyboardInterrupt):
         sweep.run_sweep(spec, out, chunk=3, progress=False)
-    monkeypatch.setattr(sweep, "_atomic_write", real_write)
+    monkeypatch.setattr(store, "atomic_write", real_write)
     assert not out.exists()
     with pytest.raises(ValueError, match="pass --resume"):
         sweep.run_sweep(spec, out, chunk=3, progress=False)
@@ -174,3 +174,95 @@ def test_per_cycle_records_agree_with_the_metrics(tmp_path):
                                rtol=1e-9)
     per_year = 365.25 * 86400.0 / (3 * SIDEREAL_DAY_S)
     np.testing.assert_allclose(np.sum(cycles["dv_mps"], axis=-1) * per_year, metrics["dv_per_year_mps"], rtol=1e-9)
+
+
+FOMPC_SPEC = """
+name = "fompc-devices"
+scenario = "li2022-qffc"
+controllers = ["fompc"]
+repetitions = 2
+seed = 3
+[set]
+"duration.days" = 20.0
+[grid]
+"controller.di_max" = [8e-5, 2e-3]
+"""
+
+
+def test_fompc_results_do_not_depend_on_the_device_count(tmp_path):
+    """Issue 19, defect 4: with the batch sharded by a plain ``jit``, XLA's SPMD pipeline fused the FOMPC's
+    annealing differently on two devices and sample (0, 1) moved by 1.4e-14 m/s/yr from cycle 17 on.  Each
+    device now runs the one-device program on its share (``parallel.per_device``): bit for bit."""
+    spec_path = write_spec(tmp_path, FOMPC_SPEC.replace('seed = 3', 'seed = 3\ncycles = true'), "fompc.toml")
+    one = sweep.run_sweep(sweep.load(spec_path), tmp_path / "one.h5", progress=False)
+    env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=2"}
+    two = tmp_path / "two.h5"
+    code = ("import jax; from geojax import sweep; assert jax.device_count() == 2; "
+            f"sweep.run_sweep(sweep.load({str(spec_path)!r}), {str(two)!r}, progress=False)")
+    subprocess.run([sys.executable, "-c", code], check=True, env=env)
+    a, b = store.read_h5(one)[0], store.read_h5(two)[0]
+    assert a["status"]["code"][0, 1].tolist() == [3, 3]  # the wide Delta-i limit leaves the latitude box
+    for group in ("metrics", "cycles", "status"):
+        for name in a[group]:
+            np.testing.assert_array_equal(b[group][name], a[group][name], err_msg=f"{group}/{name}")
+
+
+def test_a_stray_parts_folder_is_refused_in_one_line(tmp_path, capsys):
+    """Issue 19, defect 2: a parts folder that is not a geojax sweep's (no sweep.sha256) used to crash
+    ``--resume`` with FileNotFoundError; it is left alone and named."""
+    out = tmp_path / "x.h5"
+    parts = out.with_name(out.name + ".parts")
+    parts.mkdir()
+    (parts / "chunk").write_text("1")
+    assert cli.main(["sweep", str(write_spec(tmp_path)), "--out", str(out), "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert "is not the parts folder of a geojax sweep" in err and err.count("\n") == 1
+    assert sorted(p.name for p in parts.iterdir()) == ["chunk"]
+
+
+@pytest.mark.parametrize("content", [b"not hdf5 at all", None])
+def test_resume_onto_a_file_that_is_not_ours_is_refused_in_one_line(tmp_path, capsys, content):
+    out = tmp_path / "y.h5"
+    if content is None:
+        store.write_h5(out, {"g": {"x": np.zeros(2)}}, "", 0.0)
+        with h5py.File(out, "a") as f:
+            del f.attrs["config_toml"]
+        expected = "is not a geojax results file"
+    else:
+        out.write_bytes(content)
+        expected = "is not an HDF5 file"
+    assert cli.main(["sweep", str(write_spec(tmp_path)), "--out", str(out), "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert expected in err and err.count("\n") == 1
+
+
+def test_a_kill_after_the_final_write_or_during_clean_up_resumes_to_the_finished_file(straight, tmp_path):
+    """Issue 19, defects 2 and 3: the parts folder is renamed before it is deleted, so a kill during the
+    clean-up leaves it whole (or a hidden ``.trash-PID`` folder), never a folder without ``sweep.sha256``;
+    ``--resume`` then returns the finished file and removes what the killed run left, its half-written
+    ``.NAME.tmp-PID`` included."""
+    spec, d = straight
+    out = sweep.run_sweep(spec, tmp_path / "done.h5", chunk=64, progress=False)
+    before = out.read_bytes()
+    parts = out.with_name(out.name + ".parts")  # as if killed between the final write and the clean-up
+    parts.mkdir()
+    (parts / "sweep.sha256").write_text("whatever")
+    (parts / "chunk").write_text("64")
+    dead = 2 ** 22 + 12345  # above the default pid_max of 4194304: no process has it
+    trash = tmp_path / f".done.h5.parts.trash-{dead}"  # as if killed while deleting
+    trash.mkdir()
+    (trash / "qffc_000000000.npz").write_bytes(b"x")
+    torn = tmp_path / f".done.h5.tmp-{dead}"  # as if killed during the final write
+    torn.write_bytes(b"half")
+    assert sweep.run_sweep(spec, out, resume=True, progress=False) == out
+    assert out.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["done.h5"]
+
+
+def test_stale_temporaries_are_removed_by_the_next_write_beside_them(tmp_path):
+    dead = 2 ** 22 + 12345
+    path = tmp_path / "r.h5"
+    (tmp_path / f".r.h5.tmp-{dead}").write_bytes(b"torn")
+    (tmp_path / f".r.h5.tmp-{os.getppid()}").write_bytes(b"a live process's")  # not ours to remove
+    store.write_h5(path, {"g": {"x": np.arange(3.0)}}, "x = 1", 0.0)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f".r.h5.tmp-{os.getppid()}", "r.h5"]

@@ -8,9 +8,10 @@ computed here, inside the rollout's ``jit``:
     1 cycles without a solution (the controller's ``"solved"`` record was false in some cycle)
     2 left the longitude box  (|lambda - lambda_station| > station.box_half_width_deg at some step start)
     3 left the latitude box   (|geocentric latitude| > station.box_half_width_deg at some step start)
-    4 non-finite or non-physical state (NaN / inf, or the mass exhausted)
+    4 non-finite or non-physical state (NaN / inf, or no mass left)
+    5 propellant exhausted (the mass reached spacecraft.dry_mass_kg; the thrusters stopped there)
 
-in that order of precedence (4, then 2, 3, 1).  The box is checked on the
+in that order of precedence (4, 5, then 2, 3, 1).  The box is checked on the
 osculating sub-satellite point at every step start of the whole run, the
 acquisition included (Katz 2025 eq. (10)); a sample with status 4 gets
 finite placeholders (0) for its non-finite metrics, so no NaN reaches a
@@ -28,9 +29,9 @@ from geojax.elements import wrap_angle
 from geojax.params import station_target
 
 SECONDS_PER_YEAR = 365.25 * SECONDS_PER_DAY
-STATUS_OK, STATUS_NO_SOLUTION, STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE = 0, 1, 2, 3, 4
+STATUS_OK, STATUS_NO_SOLUTION, STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE, STATUS_NO_PROPELLANT = range(6)
 STATUS_MEANINGS = ("ok", "cycles without a solution", "left the longitude box", "left the latitude box",
-                   "non-finite or non-physical state")
+                   "non-finite or non-physical state", "propellant exhausted")
 STATUS_TEXT = ", ".join(f"{code} {text}" for code, text in enumerate(STATUS_MEANINGS))
 
 # Per-cycle series a sweep may keep (``cycles = true``).
@@ -73,10 +74,11 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int) -> di
         finite &= jnp.isfinite(value)
     box = params.station["box_half_width_rad"]
     status = jnp.where(~finite, STATUS_NONFINITE,
+                       jnp.where(final.mass_kg <= params.spacecraft["dry_mass_kg"], STATUS_NO_PROPELLANT,
                        jnp.where(abs_dlon > box, STATUS_LEFT_LON_BOX,
                                  jnp.where(abs_lat > box, STATUS_LEFT_LAT_BOX,
                                            jnp.where(out["cycles_without_solution"] > 0, STATUS_NO_SOLUTION,
-                                                     STATUS_OK))))
+                                                     STATUS_OK)))))
     out = {k: jnp.where(jnp.isfinite(v), v, 0.0) for k, v in out.items()}
     return {**out, "status": status.astype(jnp.int8)}
 

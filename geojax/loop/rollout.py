@@ -16,6 +16,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from geojax.constants import SIDEREAL_DAY_S
 from geojax.control.base import Controller
 from geojax.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
@@ -131,3 +132,16 @@ def prepare_params(scenario: Scenario, n: int, controller: Controller | None = N
     params = unstack(prepare([scenario], controller).params, 0)
     return jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (n, *jnp.shape(x))), params)
 
+
+
+def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]:
+    """The uncontrolled reference's mean elements at the first ``n_cycles + 1`` cycle boundaries (``/reference``:
+    t_s, lon_deg, ex, ey, ix, iy) and the station's targets (``/target``), for figures beside a closed loop."""
+    batch = prepare([scenario], reference_pad=1)
+    ref = np.asarray(batch.shared.reference.mean)[: n_cycles + 1]
+    uncontrolled = {"t_s": np.arange(len(ref)) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
+                    "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}
+    station = scenario.config["station"]
+    goals = {"lon_deg": float(station["lon_deg"]), "drift_deg_per_day": 0.0,
+             **{k: float(station[k]) for k in ("ex", "ey", "ix", "iy")}}
+    return uncontrolled, goals

@@ -156,6 +156,8 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
             r, v = position_velocity(dynamics, state.orbit, mu)
             thrust = controller.thrust(params, plan, ctx.t_s + j * step_s, state,
                                        StepEnvironment(env3, step_s, j, r, v))
+            has_propellant = state.mass_kg > params.spacecraft["dry_mass_kg"]  # else the thrusters stop
+            thrust = thrust._replace(on_fraction=jnp.where(has_propellant, thrust.on_fraction, 0.0))
             angle = env3.earth_angle_rad[0]
             lon, lat = subsatellite_lon_lat_rad(rotate_z(r, angle))
             accel_rsw = thrust.direction_rsw * (thrust.on_fraction * thrust.thrust_n / state.mass_kg)
@@ -211,7 +213,7 @@ def propagate(dynamics: Dynamics, state: SpacecraftState, env: Environment, forc
     controller = none.CONTROLLER if thrust_fn is None else Controller(
         stateless_init, no_plan, lambda params, plan, t, state, environment: thrust_fn(t, environment.step_s))
     zero = jnp.asarray(0.0)
-    params = Params(state, force_model, {}, {"lon_rad": zero}, {"h_rv": zero}, {})
+    params = Params(state, force_model, {"dry_mass_kg": zero}, {}, {"lon_rad": zero}, {"h_rv": zero}, {})
     final, records = simulate(controller, params, Shared(env, None), jax.random.key(0), step_s=step_s,
                               dynamics=dynamics)
     return final, records.cycles.means

@@ -25,6 +25,7 @@ from types import SimpleNamespace  # noqa: E402
 
 import geojax  # noqa: E402
 from geojax import plots, scenario  # noqa: E402
+from geojax.loop.rollout import reference_and_target  # noqa: E402
 from geojax.propulsion import PRESETS_DEG  # noqa: E402
 
 # Li 2022, Sec. 5.1 and Table 2 (normal limits).
@@ -45,7 +46,10 @@ def run_year(controller: str, limits: str, days: float, seed: int):
     # The summaries read Li 2022's mean-longitude figure of merit under its old name.
     metrics = {k: float(v) for k, v in result.metrics.items()}
     metrics["max_abs_dlon_deg"] = metrics["max_abs_mean_dlon_deg"]
-    return SimpleNamespace(metrics=metrics, cycles=result.cycles(), wall_s=result.wall_s)
+    metrics["cpu_s_per_orbit"] = result.wall_s / len(result.records.cycles.dv_mps)  # as geojax simulate reports it
+    reference, target = reference_and_target(sc, len(result.records.cycles.dv_mps))
+    return SimpleNamespace(metrics=metrics, cycles=result.cycles(), reference=reference, target=target,
+                           wall_s=result.wall_s)
 
 
 def rows(results) -> list[tuple[str, ...]]:
