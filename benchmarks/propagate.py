@@ -72,12 +72,12 @@ import scipy
 
 import geojax
 from geojax import scenario as scenario_module
-from geojax.constants import SIDEREAL_DAY_S
-from geojax.dynamics import SpacecraftState
-from geojax.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian
-from geojax.forces import ForceModel, perturbing_acceleration, point_mass
+from geojax.physics.constants import SIDEREAL_DAY_S
+from geojax.physics.dynamics import SpacecraftState
+from geojax.physics.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian
+from geojax.physics.forces import ForceModel, perturbing_acceleration, point_mass
 from geojax.loop.simulate import propagate as propagate_cycles
-from geojax.propagate import MEE, environment_at, environment_grid, steps_per_cycle
+from geojax.physics.propagate import MEE, environment_at, environment_grid, steps_per_cycle
 from geojax.parallel import replicate, shard_batch
 from geojax.uncontrolled import cycle_count, inclination_vector_deg
 
@@ -298,7 +298,7 @@ def mean_inclination_change_deg(cartesian_samples: np.ndarray, mu: float) -> np.
     """Change of the one-cycle mean inclination vector [2] (deg), last cycle minus first.
 
     ``cartesian_samples`` is [2, n + 1, 6]: osculating ECI states over the first
-    and last cycle.  Mean (h, k) with ``geojax.elements.cycle_mean``, then
+    and last cycle.  Mean (h, k) with ``geojax.physics.elements.cycle_mean``, then
     ``geojax.uncontrolled.inclination_vector_deg``, exactly as geojax does per cycle.
     """
     samples = jnp.asarray(cartesian_samples)

@@ -25,7 +25,7 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
-from geojax import constants as c  # noqa: E402
+from geojax.physics import constants as c  # noqa: E402
 from geojax import scenario  # noqa: E402
 from geojax.loop.rollout import rollout_fn  # noqa: E402
 from geojax.loop.setup import prepare  # noqa: E402

@@ -25,8 +25,8 @@ from typing import Any, Callable, NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.dynamics import SpacecraftState
-from geojax.forces import ForceModel
+from geojax.physics.dynamics import SpacecraftState
+from geojax.physics.forces import ForceModel
 
 NUMBER = (int, float)
 REQUIRED = object()

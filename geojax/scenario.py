@@ -18,13 +18,13 @@ from pathlib import Path
 import jax.numpy as jnp
 import numpy as np
 
-from geojax import constants as c
-from geojax.elements import cartesian_to_mee, kepler_to_mee
-from geojax.forces import ForceModel
-from geojax.frames import ecef_to_eci, earth_rotation_angle_rad
+from geojax.physics import constants as c
+from geojax.physics.elements import cartesian_to_mee, kepler_to_mee
+from geojax.physics.forces import ForceModel
+from geojax.physics.frames import ecef_to_eci, earth_rotation_angle_rad
 from geojax.params import LOG, REQUIRED, Field, check_table, degrees
-from geojax.propulsion import arm_limits_deg
-from geojax.time import TT_MINUS_TAI_S, parse_utc, tai_minus_utc_s, tt_seconds_from_utc
+from geojax.physics.propulsion import arm_limits_deg
+from geojax.physics.time import TT_MINUS_TAI_S, parse_utc, tai_minus_utc_s, tt_seconds_from_utc
 
 try:
     import tomllib

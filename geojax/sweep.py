@@ -58,7 +58,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from geojax import scenario as scenario_mod, store
-from geojax.frames import earth_rotation_angle_rad
+from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.loop.metrics import CYCLE_NAMES, STATUS_TEXT, cycle_series
 from geojax.loop.rollout import rollout_fn
 from geojax.loop.setup import disperse, prepare

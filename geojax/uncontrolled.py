@@ -14,12 +14,12 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
-from geojax.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
+from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.control import none
 from geojax.loop.setup import params_of
 from geojax.loop.simulate import Shared, simulate
 from geojax.progress import Progress
-from geojax.propagate import DYNAMICS, CycleMeans, environment_grid, steps_per_cycle
+from geojax.physics.propagate import DYNAMICS, CycleMeans, environment_grid, steps_per_cycle
 from geojax.scenario import Scenario
 
 class PropagationResult(NamedTuple):

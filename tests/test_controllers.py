@@ -8,9 +8,9 @@ import pytest
 from geojax import scenario, sweep, tune
 from geojax.control import Controller
 from geojax.control.base import no_plan, stateless_init
-from geojax.dynamics import Thrust
-from geojax.elements import wrap_angle
-from geojax.frames import rotate_z
+from geojax.physics.dynamics import Thrust
+from geojax.physics.elements import wrap_angle
+from geojax.physics.frames import rotate_z
 from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_OK
 from geojax.loop.rollout import simulate
 from geojax.params import LOG, Field
@@ -39,7 +39,7 @@ def test_a_controller_written_in_a_test_runs_through_simulate_sweep_and_tune(tmp
     """Conservation check: with no thrust the same loop gives no Delta-V; with the law, the Delta-V equals
     the mass spent through the rocket equation (m0 (1 - exp(-dv / (Isp g0)))), and a stiffer inclination
     gain spends more."""
-    from geojax.constants import G0_MPS2
+    from geojax.physics.constants import G0_MPS2
 
     sc = scenario.load("li2022", {"duration.days": 3, "controller.k_inc_per_s": 1e-5}, controller=MINE)
     result = simulate(sc, controller=MINE)
@@ -120,7 +120,7 @@ def test_the_thrusters_stop_when_the_propellant_is_gone():
     """Issue 19, defect 5 (the mass went negative at Isp 1e-3 s).  Conservation: with 0.5 kg of propellant the
     QFFC spends it, the thrusters stop at the dry mass (overshoot below one step's flow), the sample gets
     status 5, and the Delta-V delivered is the rocket equation's for the mass used."""
-    from geojax.constants import G0_MPS2
+    from geojax.physics.constants import G0_MPS2
     from geojax.loop.metrics import STATUS_NO_PROPELLANT
 
     days = 20.0

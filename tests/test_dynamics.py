@@ -6,13 +6,13 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax import constants as c
-from geojax.dynamics import SpacecraftState, mee_gauss_rates, no_thrust
-from geojax.elements import cartesian_to_mee, mee_to_cartesian
-from geojax.forces import ForceModel
+from geojax.physics import constants as c
+from geojax.physics.dynamics import SpacecraftState, mee_gauss_rates, no_thrust
+from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian
+from geojax.physics.forces import ForceModel
 from geojax.loop.simulate import propagate as propagate_cycles
-from geojax.propagate import CARTESIAN, MEE, environment_grid, steps_per_cycle
-from geojax.frames import rsw_to_eci
+from geojax.physics.propagate import CARTESIAN, MEE, environment_grid, steps_per_cycle
+from geojax.physics.frames import rsw_to_eci
 
 EPOCH = 7305 * 86400.0 + 69.184  # 2020-01-01 12:00 UTC
 MU = c.MU_EARTH_M3_S2

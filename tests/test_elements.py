@@ -5,8 +5,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax.constants import MU_EARTH_M3_S2 as MU
-from geojax.elements import (
+from geojax.physics.constants import MU_EARTH_M3_S2 as MU
+from geojax.physics.elements import (
     cartesian_to_kepler,
     cartesian_to_mee,
     cycle_mean,

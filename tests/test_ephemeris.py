@@ -4,8 +4,8 @@ import erfa
 import numpy as np
 import pytest
 
-from geojax.ephemeris import moon_ecliptic_of_date, moon_position_eci_m, sun_ecliptic_of_date, sun_position_eci_m
-from geojax.time import julian_centuries_tt
+from geojax.physics.ephemeris import moon_ecliptic_of_date, moon_position_eci_m, sun_ecliptic_of_date, sun_position_eci_m
+from geojax.physics.time import julian_centuries_tt
 
 AU_M = 1.495978707e11
 

@@ -7,10 +7,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax import constants as c
+from geojax.physics import constants as c
 from geojax import scenario, tune
 from geojax.control import lyapunov
-from geojax.frames import rotate_z
+from geojax.physics.frames import rotate_z
 from geojax.loop.rollout import simulate
 from geojax.loop.setup import prepare, unstack
 from geojax.loop.simulate import position_velocity

@@ -7,14 +7,14 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax import constants as c
+from geojax.physics import constants as c
 from geojax import scenario
 from geojax.control import none
 from geojax.loop.setup import params_of, reference
-from geojax.propagate import MEE
+from geojax.physics.propagate import MEE
 from geojax.control import fompc
-from geojax.propagate import environment_grid, steps_per_cycle
-from geojax.propulsion import PRESETS_DEG, arm_limits_deg
+from geojax.physics.propagate import environment_grid, steps_per_cycle
+from geojax.physics.propulsion import PRESETS_DEG, arm_limits_deg
 
 TARGET = jnp.array([np.radians(96.0), 0.0, 0.0, 1e-4, 0.0, 3e-5])
 LIMITS = arm_limits_deg(*PRESETS_DEG["normal"])

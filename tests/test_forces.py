@@ -4,8 +4,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax import constants as c
-from geojax.forces import (
+from geojax.physics import constants as c
+from geojax.physics.forces import (
     ForceModel,
     c22_s22_acceleration,
     j2_acceleration,

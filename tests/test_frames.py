@@ -4,8 +4,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax.constants import OMEGA_EARTH_RAD_S
-from geojax.frames import earth_rotation_angle_rad, ecef_to_eci, eci_to_ecef, eci_to_rsw, rsw_basis, rsw_to_eci
+from geojax.physics.constants import OMEGA_EARTH_RAD_S
+from geojax.physics.frames import earth_rotation_angle_rad, ecef_to_eci, eci_to_ecef, eci_to_rsw, rsw_basis, rsw_to_eci
 
 
 def test_earth_rotation_rate():

@@ -5,12 +5,12 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax import constants as c
-from geojax.dynamics import SpacecraftState
-from geojax.forces import ForceModel
-from geojax.integrate import ThrustWindow, overlap_fraction, window_thrust
+from geojax.physics import constants as c
+from geojax.physics.dynamics import SpacecraftState
+from geojax.physics.forces import ForceModel
+from geojax.physics.integrate import ThrustWindow, overlap_fraction, window_thrust
 from geojax.loop.simulate import propagate as propagate_cycles
-from geojax.propagate import MEE, environment_grid
+from geojax.physics.propagate import MEE, environment_grid
 
 MU = c.MU_EARTH_M3_S2
 TWO_BODY = ForceModel(j2_on=0.0, sun_on=0.0, moon_on=0.0, srp_on=0.0)

@@ -7,8 +7,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax import constants as c
-from geojax import thrust_laws
+from geojax.physics import constants as c
+from geojax.physics import thrust_laws
 from geojax.control import lyapunov
 
 MU = c.MU_EARTH_M3_S2

@@ -11,12 +11,12 @@ SCRIPT = textwrap.dedent(
     """
     import sys, numpy as np, jax, jax.numpy as jnp
     import geojax
-    from geojax import constants as c
-    from geojax.dynamics import SpacecraftState
-    from geojax.forces import ForceModel
+    from geojax.physics import constants as c
+    from geojax.physics.dynamics import SpacecraftState
+    from geojax.physics.forces import ForceModel
     from geojax.parallel import replicate, shard_batch
     from geojax.loop.simulate import propagate as propagate_cycles
-    from geojax.propagate import MEE, environment_grid, steps_per_cycle
+    from geojax.physics.propagate import MEE, environment_grid, steps_per_cycle
     n = steps_per_cycle(3600.0); h = c.SIDEREAL_DAY_S / n
     env = environment_grid(0.0, 0.0, 69.0, h, 2, n)
     mee = jnp.array([42164e3, 1e-4, 0.0, 1e-3, 0.0, 0.0]) + jnp.arange(4)[:, None] * jnp.array([1e3, 0, 0, 0, 0, 0.5])

@@ -3,10 +3,10 @@
 import jax.numpy as jnp
 import numpy as np
 
-from geojax import constants as c
+from geojax.physics import constants as c
 from geojax import plots
 from geojax.control.effects import R_SYNC_M
-from geojax.elements import kepler_to_cartesian, kepler_to_mee
+from geojax.physics.elements import kepler_to_cartesian, kepler_to_mee
 
 
 def test_libration_matches_keplers_equation_to_second_order():

@@ -5,11 +5,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax import constants as c
-from geojax.dynamics import SpacecraftState
-from geojax.forces import ForceModel
+from geojax.physics import constants as c
+from geojax.physics.dynamics import SpacecraftState
+from geojax.physics.forces import ForceModel
 from geojax.loop.simulate import propagate as propagate_cycles
-from geojax.propagate import MEE, CycleMeans, environment_grid, steps_per_cycle
+from geojax.physics.propagate import MEE, CycleMeans, environment_grid, steps_per_cycle
 from geojax.uncontrolled import cycle_count, drift_summary
 
 EPOCH = 7305 * 86400.0 + 69.184

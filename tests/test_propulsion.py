@@ -4,7 +4,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax.propulsion import (
+from geojax.physics.propulsion import (
     PRESETS_DEG,
     arm_limits_deg,
     delta_v_direction_rsw,

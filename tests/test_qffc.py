@@ -6,7 +6,7 @@ import numpy as np
 
 from geojax.control import qffc
 from geojax.control.effects import R_SYNC_M
-from geojax.propulsion import PRESETS_DEG, arm_limits_deg, within_limits
+from geojax.physics.propulsion import PRESETS_DEG, arm_limits_deg, within_limits
 
 
 def random_deviations(n, seed=0):

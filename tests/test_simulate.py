@@ -5,10 +5,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax import constants as c
+from geojax.physics import constants as c
 from geojax import scenario
 from geojax.loop.rollout import prepare_params, simulate, simulate_batch
-from geojax.propagate import environment_grid
+from geojax.physics.propagate import environment_grid
 
 DAYS = 20
 
@@ -50,9 +50,9 @@ def test_station_shadow_per_cycle(utc, shadow_s):
     # Closed form: at an equinox a GEO satellite crosses a shadow of angular width
     # 2 asin(R_E / r) = 17.4 deg, 2 asin(R_E/r) / omega = 4170 s plus ~2 min of penumbra;
     # weeks from an equinox the Sun's declination keeps the orbit out of the shadow.
-    from geojax.forces import ForceModel
+    from geojax.physics.forces import ForceModel
     from geojax.control.burns import sunlit_fraction
-    from geojax.time import parse_utc, tt_seconds_from_utc
+    from geojax.physics.time import parse_utc, tt_seconds_from_utc
 
     t0 = tt_seconds_from_utc(parse_utc(utc))
     n = 960

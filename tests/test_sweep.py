@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from geojax import cli, store, sweep
-from geojax.constants import SIDEREAL_DAY_S
+from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.loop.metrics import CYCLE_NAMES
 
 SPEC = """

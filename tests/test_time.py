@@ -5,7 +5,7 @@ import datetime as dt
 import numpy as np
 import pytest
 
-from geojax.time import gmst_rad, julian_date, tt_seconds_from_utc
+from geojax.physics.time import gmst_rad, julian_date, tt_seconds_from_utc
 
 
 def test_julian_date_meeus_example_7a():

@@ -2,7 +2,7 @@
 
 The state is ECI position and velocity (m, m/s) in the frame of the scenario
 epoch; heyoka's time is seconds since that epoch.  The Sun and Moon positions
-are the Meeus series of ``geojax.ephemeris`` written as heyoka expressions of
+are the Meeus series of ``geojax.physics.ephemeris`` written as heyoka expressions of
 ``hy.time`` (one sin/cos term per row of the coefficient tables), so the
 Taylor integrator differentiates the ephemeris exactly like the dynamics.
 
@@ -22,8 +22,8 @@ from __future__ import annotations
 import heyoka as hy
 import numpy as np
 
-from geojax import constants as c
-from geojax.ephemeris import MOON_ARGUMENTS_DEG, MOON_B_TERMS, MOON_LR_TERMS
+from geojax.physics import constants as c
+from geojax.physics.ephemeris import MOON_ARGUMENTS_DEG, MOON_B_TERMS, MOON_LR_TERMS
 
 from .numpy_model import Model
 
@@ -54,7 +54,7 @@ def _julian_centuries(epoch_tt_s):
 
 
 def _ecliptic_to_eci(longitude, latitude_terms, distance_m, t, frame_t):
-    """Ecliptic-of-date (longitude, latitude, distance) to ECI of ``frame_t`` (see ``geojax.ephemeris``).
+    """Ecliptic-of-date (longitude, latitude, distance) to ECI of ``frame_t`` (see ``geojax.physics.ephemeris``).
 
     ``latitude_terms`` is None for the Sun (latitude 0).
     """

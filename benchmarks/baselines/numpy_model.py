@@ -3,7 +3,7 @@
 Earth point mass + J2 (z of the ECI frame) + Sun and Moon third body + solar
 radiation pressure (1/r^2 from the Sun) with the conical Earth shadow of
 Montenbruck & Gill (2000), Sec. 3.4.2.  Sun and Moon positions are the Meeus
-series of ``geojax.ephemeris`` evaluated with NumPy; only the coefficient
+series of ``geojax.physics.ephemeris`` evaluated with NumPy; only the coefficient
 tables and constants are imported from geojax, no JAX code runs here.
 
 Time ``t`` in the right-hand side is seconds since the scenario epoch; the
@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from geojax import constants as c
-from geojax.ephemeris import MOON_ARGUMENTS_DEG, MOON_B_TERMS, MOON_LR_TERMS
+from geojax.physics import constants as c
+from geojax.physics.ephemeris import MOON_ARGUMENTS_DEG, MOON_B_TERMS, MOON_LR_TERMS
 
 _SECONDS_PER_CENTURY = c.SECONDS_PER_DAY * c.DAYS_PER_JULIAN_CENTURY
 _ARC_SECONDS = 3600.0

@@ -39,7 +39,7 @@ from typing import Any, Callable, Mapping, NamedTuple
 
 import jax.numpy as jnp
 
-from geojax.dynamics import Thrust, no_thrust
+from geojax.physics.dynamics import Thrust, no_thrust
 
 
 class Estimate(NamedTuple):

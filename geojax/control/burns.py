@@ -22,9 +22,9 @@ import jax
 import jax.numpy as jnp
 
 from geojax.control.effects import R_SYNC_M
-from geojax.dynamics import Thrust
-from geojax.forces import shadow_fraction
-from geojax.propulsion import delta_v_direction_rsw, firing_fraction, sunlit_clock
+from geojax.physics.dynamics import Thrust
+from geojax.physics.forces import shadow_fraction
+from geojax.physics.propulsion import delta_v_direction_rsw, firing_fraction, sunlit_clock
 
 NOMINAL_3SIGMA_ATT_DEG = 0.05  # Li 2022, eq. (48)
 

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from geojax.constants import MU_EARTH_M3_S2, OMEGA_EARTH_RAD_S, SIDEREAL_DAY_S
+from geojax.physics.constants import MU_EARTH_M3_S2, OMEGA_EARTH_RAD_S, SIDEREAL_DAY_S
 
 R_SYNC_M = (MU_EARTH_M3_S2 / OMEGA_EARTH_RAD_S**2) ** (1 / 3)  # Keplerian synchronous radius R_s
 V_SYNC_MPS = (MU_EARTH_M3_S2 / R_SYNC_M) ** 0.5  # V_s

@@ -54,12 +54,12 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from geojax import thrust_laws
-from geojax.constants import OMEGA_EARTH_RAD_S
+from geojax.physics import thrust_laws
+from geojax.physics.constants import OMEGA_EARTH_RAD_S
 from geojax.control.base import Controller, no_plan, stateless_init
-from geojax.dynamics import Thrust
-from geojax.elements import wrap_angle
-from geojax.frames import rotate_z, rsw_basis
+from geojax.physics.dynamics import Thrust
+from geojax.physics.elements import wrap_angle
+from geojax.physics.frames import rotate_z, rsw_basis
 from geojax.params import LOG, NUMBER, REQUIRED, Field, Transform, scaled
 
 

@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from geojax.elements import semi_major_axis_m, wrap_angle
+from geojax.physics.elements import semi_major_axis_m, wrap_angle
 
 
 class Reference(NamedTuple):

@@ -55,9 +55,9 @@ from geojax.control import burns as burns_mod
 from geojax.control.base import Controller, stateless_init
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_matrix, remaining_fraction
 from geojax.control.predictor import predict_next
-from geojax.elements import wrap_angle
+from geojax.physics.elements import wrap_angle
 from geojax.params import LOG, NUMBER, Field, station_target
-from geojax.propulsion import ArmLimits, arm_limits
+from geojax.physics.propulsion import ArmLimits, arm_limits
 
 # The [controller] keys of Li 2022's planners.  The QFFC reads vdt_estimate only; it accepts the FOMPC's keys
 # (and ignores them) so that one scenario and one sweep file run both controllers on the same grid.

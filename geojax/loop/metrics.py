@@ -24,8 +24,8 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.constants import SECONDS_PER_DAY
-from geojax.elements import wrap_angle
+from geojax.physics.constants import SECONDS_PER_DAY
+from geojax.physics.elements import wrap_angle
 from geojax.params import station_target
 
 SECONDS_PER_YEAR = 365.25 * SECONDS_PER_DAY

@@ -16,14 +16,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.constants import SIDEREAL_DAY_S
+from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.control.base import Controller
-from geojax.dynamics import SpacecraftState
+from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
 from geojax.loop.setup import Batch, prepare, reference, unstack
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
-from geojax.propagate import Dynamics
+from geojax.physics.propagate import Dynamics
 from geojax.scenario import Scenario
 
 

@@ -20,16 +20,16 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
+from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.control import REGISTRY, none
 from geojax.control.base import Controller
 from geojax.control.predictor import Reference
-from geojax.dynamics import SpacecraftState
-from geojax.elements import cartesian_to_mee, mee_to_cartesian, wrap_angle
-from geojax.frames import ecef_to_eci
+from geojax.physics.dynamics import SpacecraftState
+from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, wrap_angle
+from geojax.physics.frames import ecef_to_eci
 from geojax.loop.simulate import Shared, simulate
 from geojax.params import LEAF_TABLES, Params, static_settings, table_leaves
-from geojax.propagate import DYNAMICS, Dynamics, environment_grid, steps_per_cycle
+from geojax.physics.propagate import DYNAMICS, Dynamics, environment_grid, steps_per_cycle
 from geojax.scenario import SCHEMA, Scenario, controller_fields
 
 

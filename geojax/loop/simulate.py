@@ -37,13 +37,13 @@ import jax.numpy as jnp
 
 from geojax.control.base import Controller, Estimate
 from geojax.control.predictor import Reference, boundary_elements, estimate_mean
-from geojax.dynamics import SpacecraftState
-from geojax.elements import cartesian_to_mee, wrap_angle
-from geojax.forces import Environment, ForceModel
-from geojax.frames import rotate_z, rsw_to_eci, subsatellite_lon_lat_rad
-from geojax.integrate import rk4_step
+from geojax.physics.dynamics import SpacecraftState
+from geojax.physics.elements import cartesian_to_mee, wrap_angle
+from geojax.physics.forces import Environment, ForceModel
+from geojax.physics.frames import rotate_z, rsw_to_eci, subsatellite_lon_lat_rad
+from geojax.physics.integrate import rk4_step
 from geojax.params import Params
-from geojax.propagate import MEE, CycleMeans, Dynamics, cycle_means
+from geojax.physics.propagate import MEE, CycleMeans, Dynamics, cycle_means
 
 # Li 2022, eq. (48): nominal 3-sigma errors, scaled by H_rv and H_att.
 NOMINAL_3SIGMA_R_M = 0.3

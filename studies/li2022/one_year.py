@@ -26,7 +26,7 @@ from types import SimpleNamespace  # noqa: E402
 import geojax  # noqa: E402
 from geojax import plots, scenario  # noqa: E402
 from geojax.loop.rollout import reference_and_target  # noqa: E402
-from geojax.propulsion import PRESETS_DEG  # noqa: E402
+from geojax.physics.propulsion import PRESETS_DEG  # noqa: E402
 
 # Li 2022, Sec. 5.1 and Table 2 (normal limits).
 PAPER = {

@@ -27,6 +27,7 @@ from typing import Callable
 import numpy as np
 
 from geojax import plots, store, sweep
+from geojax.loop.metrics import STATUS_LEFT_LON_BOX
 from geojax.parallel import use_host_cores
 
 HERE = Path(__file__).parent
@@ -99,12 +100,13 @@ def summarise(name: str, groups, attrs) -> Summary:
     status = np.asarray(groups["status"]["code"])
     controllers = [c.decode() for c in groups["grid"]["controller"]]
     x = next(v for k, v in groups["grid"].items() if k != "controller")
-    stable = np.where(status == sweep.STATUS_UNSTABLE, np.nan, dv)
+    unstable = status >= STATUS_LEFT_LON_BOX  # left the longitude or latitude box, diverged, or ran dry
+    stable = np.where(unstable, np.nan, dv)
     with warnings.catch_warnings():  # a point whose every repetition is unstable has no mean
         warnings.simplefilter("ignore", RuntimeWarning)
         mean, std = np.nanmean(stable, axis=-1), np.nanstd(stable, axis=-1)
     by = lambda a: {c: a[i] for i, c in enumerate(controllers)}  # noqa: E731
-    return Summary(name, np.asarray(x), by(mean), by(std), by(np.sum(status == sweep.STATUS_UNSTABLE, axis=-1)),
+    return Summary(name, np.asarray(x), by(mean), by(std), by(np.sum(unstable, axis=-1)),
                    by(np.sum(np.asarray(groups["metrics"]["cycles_without_solution"]) > 0, axis=-1)),
                    dv.shape[-1], float(attrs["wall_s"]))
 
@@ -116,7 +118,8 @@ def report(figure: Figure, summaries: list[Summary], param: str, suffix: str) ->
     command = f"python studies/li2022/{figure.name}.py" + (f" {_flags(suffix)}" if suffix else "")
     lines += [f"`{command}`; sweep files `studies/li2022/sweeps/"
               f"{{{','.join(figure.sweeps)}}}`. ΔV per year (m/s/yr), mean ± standard deviation over the "
-              "repetitions that stayed in the ±0.05° box; 'unstable' counts the repetitions that left it, "
+              "repetitions that stayed in the ±0.05° box; 'unstable' counts the repetitions that left it in longitude "
+              "or latitude at any step, diverged or ran out of propellant (status 2 to 5), "
               "'no sol.' those with cycles the controller could not solve.", ""]
     for s in summaries:
         lines += [f"## {s.name} ({s.reps} repetitions, {s.wall_s:.0f} s wall)", "",

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from geojax.frames import eci_to_ecef, subsatellite_lon_lat_rad
+from geojax.physics.frames import eci_to_ecef, subsatellite_lon_lat_rad
 
 P, F, G, H, K, L = range(6)
 

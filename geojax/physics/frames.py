@@ -2,7 +2,7 @@
 
 ECEF is the ECI frame turned about its z axis by the Earth rotation angle; polar
 motion and the pole's precession within a run are neglected (see
-``geojax.ephemeris`` for the ECI definition and the size of what is left out).
+``geojax.physics.ephemeris`` for the ECI definition and the size of what is left out).
 RSW is (radial, along-track, cross-track): R = r/|r|, W = (r x v)/|r x v|,
 S = W x R (Li 2022, Fig. 1).
 """
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from geojax.ephemeris import general_precession_rad, mean_obliquity_rad
-from geojax.time import gmst_rad, julian_centuries_tt
+from geojax.physics.ephemeris import general_precession_rad, mean_obliquity_rad
+from geojax.physics.time import gmst_rad, julian_centuries_tt
 
 
 def earth_rotation_angle_rad(t_tt_s, frame_epoch_tt_s, tt_minus_ut1_s):

@@ -27,8 +27,8 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.constants import AU_M
-from geojax.time import julian_centuries_tt
+from geojax.physics.constants import AU_M
+from geojax.physics.time import julian_centuries_tt
 
 # Meeus Table 47.A: multiples of (D, M, M', F), then sum_l [1e-6 deg] and
 # sum_r [1e-3 km].

@@ -16,8 +16,8 @@ from typing import Callable, NamedTuple
 import jax
 import jax.numpy as jnp
 
-from geojax.dynamics import SpacecraftState, Thrust, no_thrust
-from geojax.forces import Environment, ForceModel
+from geojax.physics.dynamics import SpacecraftState, Thrust, no_thrust
+from geojax.physics.forces import Environment, ForceModel
 
 Rhs = Callable[[SpacecraftState, Environment, ForceModel, Thrust], SpacecraftState]
 

@@ -5,7 +5,7 @@ The spacecraft state is a pytree ``SpacecraftState(orbit, mass_kg, dv_mps)``:
 velocity [6] (m, m/s) for ``cartesian_rhs``; ``dv_mps`` accumulates the
 delivered thrust acceleration integral(F/m dt), so the delivered Delta-V is
 integrated with the orbit and is exact for any burn window (see
-``geojax.integrate``).
+``geojax.physics.integrate``).
 """
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from geojax.constants import G0_MPS2
-from geojax.elements import mee_radius_m, mee_rsw_basis
-from geojax.forces import Environment, ForceModel, perturbing_acceleration, point_mass
-from geojax.frames import rsw_to_eci
+from geojax.physics.constants import G0_MPS2
+from geojax.physics.elements import mee_radius_m, mee_rsw_basis
+from geojax.physics.forces import Environment, ForceModel, perturbing_acceleration, point_mass
+from geojax.physics.frames import rsw_to_eci
 
 
 class SpacecraftState(NamedTuple):

@@ -13,12 +13,12 @@ from typing import Callable, NamedTuple
 import jax
 import jax.numpy as jnp
 
-from geojax.constants import SIDEREAL_DAY_S
-from geojax.dynamics import cartesian_rhs, mee_rhs
-from geojax.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian, semi_major_axis_m, subsatellite_point_rad, wrap_angle
-from geojax.ephemeris import moon_position_eci_m, sun_position_eci_m
-from geojax.forces import Environment
-from geojax.frames import earth_rotation_angle_rad
+from geojax.physics.constants import SIDEREAL_DAY_S
+from geojax.physics.dynamics import cartesian_rhs, mee_rhs
+from geojax.physics.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian, semi_major_axis_m, subsatellite_point_rad, wrap_angle
+from geojax.physics.ephemeris import moon_position_eci_m, sun_position_eci_m
+from geojax.physics.forces import Environment
+from geojax.physics.frames import earth_rotation_angle_rad
 
 
 class Dynamics(NamedTuple):

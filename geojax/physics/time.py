@@ -14,7 +14,7 @@ import datetime as _dt
 
 import jax.numpy as jnp
 
-from geojax.constants import DAYS_PER_JULIAN_CENTURY, JD_J2000, SECONDS_PER_DAY
+from geojax.physics.constants import DAYS_PER_JULIAN_CENTURY, JD_J2000, SECONDS_PER_DAY
 
 TT_MINUS_TAI_S = 32.184
 

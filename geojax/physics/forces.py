@@ -14,8 +14,8 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from geojax import constants as c
-from geojax.frames import ecef_to_eci, eci_to_ecef
+from geojax.physics import constants as c
+from geojax.physics.frames import ecef_to_eci, eci_to_ecef
 
 
 class ForceModel(NamedTuple):
