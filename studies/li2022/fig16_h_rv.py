@@ -17,7 +17,8 @@ def findings(summaries):
 
     return [
         "; ".join(rise(c) for c in ("qffc", "fompc")),
-        "; ".join(f"{c.upper()}: first level with a repetition out of the box: {first_unstable(s, c)}"
+        "; ".join(f"{c.upper()}: first level with a repetition out of the box at some step: {first_unstable(s, c)}, "
+                  f"with its one-cycle mean longitude out of ±0.05°: {first_unstable(s, c, mean_longitude=True)}"
                   for c in ("qffc", "fompc")),
     ]
 

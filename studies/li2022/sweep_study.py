@@ -32,6 +32,7 @@ from geojax.parallel import use_host_cores
 
 HERE = Path(__file__).parent
 CONTROLLERS = ("qffc", "fompc")
+LI_BOX_DEG = 0.05
 
 
 @dataclasses.dataclass(frozen=True)
@@ -44,6 +45,7 @@ class Summary:
     std: dict  # {controller: [n]}
     unstable: dict  # {controller: [n]} count of repetitions that left the box
     no_solution: dict  # {controller: [n]} count of repetitions with cycles the controller could not solve
+    mean_lon_out: dict  # {controller: [n]} count whose one-cycle mean longitude left the box (Li's figure of merit)
     reps: int
     wall_s: float
 
@@ -108,6 +110,7 @@ def summarise(name: str, groups, attrs) -> Summary:
     by = lambda a: {c: a[i] for i, c in enumerate(controllers)}  # noqa: E731
     return Summary(name, np.asarray(x), by(mean), by(std), by(np.sum(unstable, axis=-1)),
                    by(np.sum(np.asarray(groups["metrics"]["cycles_without_solution"]) > 0, axis=-1)),
+                   by(np.sum(np.asarray(groups["metrics"]["max_abs_mean_dlon_deg"]) > LI_BOX_DEG, axis=-1)),
                    dv.shape[-1], float(attrs["wall_s"]))
 
 
@@ -153,8 +156,10 @@ def value_at(s: Summary, controller: str, x: float) -> float:
     return float(s.mean[controller][np.argmin(np.abs(s.x - x))])
 
 
-def first_unstable(s: Summary, controller: str) -> str:
-    bad = s.x[s.unstable[controller] > 0]
+def first_unstable(s: Summary, controller: str, mean_longitude: bool = False) -> str:
+    """The smallest grid value with a repetition out of the box (status 2 to 5), or with ``mean_longitude``
+    whose one-cycle mean longitude left Li's +-0.05 deg (the criterion before status moved into the rollout)."""
+    bad = s.x[(s.mean_lon_out if mean_longitude else s.unstable)[controller] > 0]
     return "none" if bad.size == 0 else f"{bad.min():g}"
 
 
