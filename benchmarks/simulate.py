@@ -46,9 +46,9 @@ def main() -> None:
         sc = scenario.load(f"li2022-{controller}", {"duration.days": args.days, "errors.h_rv": 1.0, "errors.h_att": 1.0})
         setup = prepare([sc])
         setup = setup._replace(shared=replicate(setup.shared))
-        one = rollout_fn(setup)
-        batched = jax.jit(jax.vmap(lambda p, k: one(p, k)[:2]))
         for batch in args.batches:
+            one = rollout_fn(setup, lanes=max(1, batch // jax.device_count()))
+            batched = jax.jit(jax.vmap(lambda p, k, one=one: one(p, k)[:2]))
             states = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x[0], (batch,) + x.shape[1:]), setup.params)
             keys = jax.vmap(lambda i: jax.random.fold_in(jax.random.key(0), i))(jnp.arange(batch))
             if batch % jax.device_count() == 0:

@@ -67,7 +67,7 @@ import resource, sys, jax, numpy as np
 from geojax import scenario, tune
 sc = scenario.load("katz2025-continuous", {"controller.thrust_mode": "continuous-clipped"})
 p = tune.Problem(sc, ["k_h", "k_e"], gradient="reverse")
-c = tune.to_theta(p.setup.params, ["k_h", "k_e"])
+c = tune.to_theta(p.base, p.entries)
 out = p.surrogate_grad(np.tile(c, (16, 1)) + np.linspace(-0.1, 0.1, 16)[:, None], 0.05)
 jax.block_until_ready(out)
 print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20)
@@ -87,13 +87,14 @@ def main() -> None:
                                "parameters": PARAMETERS[mode]})
         spec = dataclasses.replace(spec, scenario=scenario.load(f"katz2025-{paper_mode}", {"controller.thrust_mode": mode}))
         problem = tune.Problem(spec.scenario, spec.parameters, spec.penalty_mps,
-                               tune.default_margin(spec, spec.scenario), spec.gradient)
-        center = tune.to_theta(problem.setup.params, spec.parameters)
+                               tune.default_margin(spec, spec.scenario), spec.gradient,
+                               lanes=max(1, spec.starts // jax.device_count()))
+        center = tune.to_theta(problem.base, problem.entries)
         paper_dv, paper_g, paper_ok = map(float, map(np.max, problem.exact_one(center)))
-        warm = tune.start_points(spec, center)  # compile outside the timing, as for SLSQP below
+        warm = tune.start_points(spec, center, problem.entries, problem.sizes)  # compile outside the timing, as for SLSQP below
         problem.linearise(warm, spec.temperature_start)
         ours = tune.tune(spec, problem=problem)
-        reference = slsqp(problem, tune.start_points(spec, center), center, slsqp_iterations)
+        reference = slsqp(problem, tune.start_points(spec, center, problem.entries, problem.sizes), center, slsqp_iterations)
         reached = np.asarray(ours.history["best_dv_per_year_mps"]) <= reference["best_dv_per_year_mps"] + 1e-9
         t_reach = float(np.asarray(ours.history["wall_s"])[reached][0]) if reached.any() else None
         gains = tune.paper_units(ours.best_params) if ours.best_params is not None else {}
@@ -144,7 +145,7 @@ def slsqp(problem: tune.Problem, starts: np.ndarray, center: np.ndarray, max_ite
     wall = time.perf_counter() - start
     gains = {}
     if best["theta"] is not None:
-        gains = tune.paper_units(tune.from_theta(best["theta"], problem.setup.params, problem.names))
+        gains = tune.paper_units(tune.from_theta(best["theta"], problem.base, problem.entries))
     return {"best_dv_per_year_mps": best["dv"], "wall_s": wall, "evaluations": evaluations,
             "k_h_per_km2_s": gains.get("k_h_per_km2_s"), "k_e_km2_per_s3": gains.get("k_e_km2_per_s3"),
             "lambda_b_deg": gains.get("lambda_b_deg")}

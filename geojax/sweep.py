@@ -321,7 +321,7 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int):
     compilation seconds)."""
     scenarios = [_scenario(sweep, controller, p) for p in _points(sweep)]
     batch = prepare(scenarios, sweep.custom.get(controller))
-    one_rollout = rollout_fn(batch)
+    one_rollout = rollout_fn(batch, lanes=width // jax.device_count())
     base_key = jax.random.key(sweep.seed)
     first = scenarios[0]
     dispersion = (jnp.asarray(sweep.dispersion["mee_1sigma"]) * jnp.array([1e3, 1, 1, 1, 1, 1]),

@@ -275,15 +275,17 @@ class Problem:
     """The tuning problem of one scenario: batched exact evaluation and surrogate gradients, compiled once."""
 
     def __init__(self, sc: scenario_mod.Scenario, names, penalty_mps: float = 200.0, margin: float = 0.02,
-                 gradient: str = "forward", controller: Controller | None = None):
+                 gradient: str = "forward", controller: Controller | None = None, lanes: int = 1):
+        """``lanes``: starts evaluated per device (the rollout is compiled for it)."""
         self.batch = prepare([sc], controller)
         self.base = unstack(self.batch.params, 0)
         self.entries = tuned(sc, controller, names)
         self.names = tuple(names)
         self.sizes = [int(np.size(getattr(self.base, e.table)[e.field.si])) for e in self.entries]
         self.box_half_width_rad = float(self.base.station["box_half_width_rad"])
-        self._rollouts = {False: rollout_fn(self.batch),
-                          True: rollout_fn(self.batch, controller=self.batch.controller.surrogate or self.batch.controller)}
+        self._rollouts = {False: rollout_fn(self.batch, lanes=lanes),
+                          True: rollout_fn(self.batch, controller=self.batch.controller.surrogate or self.batch.controller,
+                                           lanes=lanes)}
         self.penalty_mps, self.margin = penalty_mps, margin
         self._exact = jax.jit(jax.vmap(lambda th: self.evaluate(th, smooth=False)[1]))
         self._single = jax.jit(lambda th: self.evaluate(th, smooth=False)[1])
@@ -447,7 +449,8 @@ class _Run:
         self.start_wall = time.perf_counter()
         self.spec, self.out = spec, out
         self.problem = problem or Problem(spec.scenario, spec.parameters, spec.penalty_mps,
-                                          default_margin(spec, spec.scenario), spec.gradient, spec.controller)
+                                          default_margin(spec, spec.scenario), spec.gradient, spec.controller,
+                                          lanes=max(1, spec.starts // jax.device_count()))
         self.margin = default_margin(spec, spec.scenario)
         self.noise_mps = 0.0 if self.problem.exact_is_smooth else SAMPLED_LAW_NOISE_MPS
         # The smallest trust region: for the sampled-and-held laws the scale below which they are noise (their

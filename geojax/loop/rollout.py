@@ -23,7 +23,7 @@ from geojax.loop.metrics import cycle_table, summarize
 from geojax.loop.setup import Batch, prepare, reference, unstack
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
-from geojax.physics.propagate import Dynamics
+from geojax.physics.propagate import Dynamics, for_lanes
 from geojax.scenario import Scenario
 
 
@@ -63,14 +63,15 @@ def rollout(params: Params, key, shared: Shared, reference_env=None, *, controll
     return final, records, summarize(params, final, records, step_s, shared.env.earth_angle_rad.shape[1])
 
 
-def rollout_fn(batch: Batch, keep_steps: bool = False, controller: Controller | None = None):
+def rollout_fn(batch: Batch, keep_steps: bool = False, controller: Controller | None = None, lanes: int = 1):
     """The pure rollout of one sample of ``batch``: ``(params, key) -> (final, records, metrics)``.
 
-    ``controller`` replaces the batch's (a tuning differentiates through the surrogate).
+    ``controller`` replaces the batch's (a tuning differentiates through the surrogate); ``lanes`` is how many
+    samples the caller vmaps per device (the step is compiled for it, ``physics.propagate.for_lanes``).
     """
     return functools.partial(rollout, shared=batch.shared, reference_env=_reference_env(batch),
                              controller=batch.controller if controller is None else controller,
-                             step_s=batch.step_s, dynamics=batch.dynamics, keep_steps=keep_steps)
+                             step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, lanes), keep_steps=keep_steps)
 
 
 def _reference_env(batch: Batch):
@@ -119,7 +120,7 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
         seeds = range(n) if seeds is None else seeds
         keys = jnp.stack([jax.random.key(int(s)) for s in seeds])
     final, records, metrics = _batched(params, keys, batch.shared, _reference_env(batch), batch.controller,
-                                       batch.step_s, batch.dynamics, keep_steps)
+                                       batch.step_s, for_lanes(batch.dynamics, n), keep_steps)
     metrics = {k: np.asarray(v) for k, v in metrics.items()}
     status = metrics.pop("status")
     to_numpy = lambda tree: jax.tree_util.tree_map(np.asarray, tree)  # noqa: E731

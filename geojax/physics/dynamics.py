@@ -10,14 +10,16 @@ integrated with the orbit and is exact for any burn window (see
 
 from __future__ import annotations
 
+from functools import partial
 from typing import NamedTuple
 
 import jax.numpy as jnp
 
 from geojax.physics.constants import G0_MPS2
-from geojax.physics.elements import mee_radius_m, mee_rsw_basis
-from geojax.physics.forces import Environment, ForceModel, perturbing_acceleration, point_mass
-from geojax.physics.frames import rsw_to_eci
+from geojax.physics.elements import mee_rsw_rows
+from geojax.physics.forces import Environment, ForceModel, perturbing_xyz, point_mass_xyz
+from geojax.physics.frames import rsw_to_eci_xyz
+from geojax.physics.fusion import materialized
 
 
 class SpacecraftState(NamedTuple):
@@ -45,54 +47,84 @@ def no_thrust() -> Thrust:
 
 
 def mee_gauss_rates(mee, a_rsw, mu):
-    """Li 2022, eqs. (6)-(7): d(p, f, g, h, k, L)/dt for an RSW acceleration [3] (m/s^2)."""
-    p, f, g, h, k, true_lon = (mee[..., j] for j in range(6))
-    a_r, a_t, a_n = a_rsw[..., 0], a_rsw[..., 1], a_rsw[..., 2]
-    cos_l, sin_l = jnp.cos(true_lon), jnp.sin(true_lon)
+    """Li 2022, eqs. (6)-(7): d(p, f, g, h, k, L)/dt [..., 6] for an RSW acceleration [..., 3] (m/s^2)."""
+    true_lon = mee[..., 5]
+    rates = gauss_rates(*(mee[..., j] for j in range(5)), jnp.cos(true_lon), jnp.sin(true_lon),
+                        a_rsw[..., 0], a_rsw[..., 1], a_rsw[..., 2], mu)
+    return jnp.stack(jnp.broadcast_arrays(*rates), -1)
+
+
+def gauss_rates(p, f, g, h, k, cos_l, sin_l, a_r, a_t, a_n, mu):
+    """Li 2022, eqs. (6)-(7), on components: the rates of (p, f, g, h, k, L) as a tuple."""
     w = 1 + f * cos_l + g * sin_l
-    s2 = 1 + h**2 + k**2
+    s2 = 1 + h * h + k * k
     q = jnp.sqrt(p / mu)
     hk = h * sin_l - k * cos_l
-    return jnp.stack(
-        [
-            q * 2 * p / w * a_t,
-            q * (a_r * sin_l + ((1 + w) * cos_l + f) * a_t / w - hk * g * a_n / w),
-            q * (-a_r * cos_l + ((1 + w) * sin_l + g) * a_t / w + hk * f * a_n / w),
-            q * s2 * a_n / (2 * w) * cos_l,
-            q * s2 * a_n / (2 * w) * sin_l,
-            jnp.sqrt(mu * p) * (w / p) ** 2 + q * hk * a_n / w,
-        ],
-        -1,
+    q_w = q / w
+    return (
+        2 * p * q_w * a_t,
+        q * a_r * sin_l + q_w * (((1 + w) * cos_l + f) * a_t - hk * g * a_n),
+        -q * a_r * cos_l + q_w * (((1 + w) * sin_l + g) * a_t + hk * f * a_n),
+        0.5 * q_w * s2 * a_n * cos_l,
+        0.5 * q_w * s2 * a_n * sin_l,
+        jnp.sqrt(mu * p) * (w / p) ** 2 + q_w * hk * a_n,
     )
 
 
 def _thrust_rates(state, thrust: Thrust):
     accel = thrust.on_fraction * thrust.thrust_n / state.mass_kg
     mass_rate = -thrust.on_fraction * thrust.thrust_n / (thrust.isp_s * G0_MPS2)
-    return accel * thrust.direction_rsw, mass_rate, accel
+    return accel, mass_rate
 
 
-def mee_rhs(state: SpacecraftState, env: Environment, fm: ForceModel, thrust: Thrust) -> SpacecraftState:
-    """Time derivative of a MEE spacecraft state.
+def _components(orbit):
+    """The six components of an orbit state: a tuple (the loop's step carry) or an array [..., 6]."""
+    return tuple(orbit) if isinstance(orbit, (tuple, list)) else tuple(orbit[..., j] for j in range(6))
 
-    The perturbations depend on position only, so the RSW basis comes straight
-    from the elements (no velocity, no cross products).
+
+def _like(orbit, components):
+    return tuple(components) if isinstance(orbit, (tuple, list)) else jnp.stack(jnp.broadcast_arrays(*components), -1)
+
+
+def _trig(angle):
+    return jnp.cos(angle), jnp.sin(angle)
+
+
+def mee_rhs(state: SpacecraftState, env: Environment, fm: ForceModel, thrust: Thrust,
+            boundaries: bool = False) -> SpacecraftState:
+    """Time derivative of a MEE spacecraft state (``orbit``: an array [6] or a tuple of six components).
+
+    The perturbations depend on position only, so the RSW basis comes straight from the elements (no
+    velocity, no cross products).  cos L, sin L and the perturbing acceleration are computed behind fusion
+    boundaries (``fusion.materialized``) when ``boundaries`` (static; ``physics.propagate.for_lanes``):
+    every later term reads them.
     """
-    basis = mee_rsw_basis(state.orbit)
-    r_eci = mee_radius_m(state.orbit)[..., None] * basis[..., 0, :]
-    a_thrust_rsw, mass_rate, accel = _thrust_rates(state, thrust)
-    a_pert_eci = perturbing_acceleration(r_eci, state.mass_kg, env, fm)
-    a_rsw = jnp.einsum("...ij,...j->...i", basis, a_pert_eci) + a_thrust_rsw
-    return SpacecraftState(mee_gauss_rates(state.orbit, a_rsw, fm.mu_m3_s2), mass_rate, accel)
+    p, f, g, h, k, true_lon = _components(state.orbit)
+    anchor = env.earth_angle_rad
+    cos_l, sin_l = materialized(_trig, true_lon, anchor=anchor, enabled=boundaries)
+    rows = mee_rsw_rows(h, k, cos_l, sin_l)
+    r = p / (1 + f * cos_l + g * sin_l)
+    a_eci = materialized(partial(perturbing_xyz, boundaries=boundaries), r * rows[0][0], r * rows[0][1],
+                         r * rows[0][2], state.mass_kg, env, fm, anchor=anchor, enabled=boundaries)
+    accel, mass_rate = _thrust_rates(state, thrust)
+    d = thrust.direction_rsw
+    a_r, a_t, a_n = (sum(row[j] * a_eci[j] for j in range(3)) + accel * d[..., i] for i, row in enumerate(rows))
+    rates = gauss_rates(p, f, g, h, k, cos_l, sin_l, a_r, a_t, a_n, fm.mu_m3_s2)
+    return SpacecraftState(_like(state.orbit, rates), mass_rate, accel)
 
 
-def cartesian_rhs(state: SpacecraftState, env: Environment, fm: ForceModel, thrust: Thrust) -> SpacecraftState:
-    """Time derivative of a Cartesian ECI spacecraft state."""
-    r_eci, v_eci = state.orbit[:3], state.orbit[3:]
-    a_thrust_rsw, mass_rate, accel = _thrust_rates(state, thrust)
-    a_eci = (
-        point_mass(r_eci, fm.mu_m3_s2)
-        + perturbing_acceleration(r_eci, state.mass_kg, env, fm)
-        + rsw_to_eci(a_thrust_rsw, r_eci, v_eci)
-    )
-    return SpacecraftState(jnp.concatenate([v_eci, a_eci]), mass_rate, accel)
+def cartesian_rhs(state: SpacecraftState, env: Environment, fm: ForceModel, thrust: Thrust,
+                  boundaries: bool = False) -> SpacecraftState:
+    """Time derivative of a Cartesian ECI spacecraft state (``orbit``: an array [6] or a tuple)."""
+    x, y, z, vx, vy, vz = _components(state.orbit)
+    accel, mass_rate = _thrust_rates(state, thrust)
+    gx, gy, gz = point_mass_xyz(x, y, z, fm.mu_m3_s2)
+    px, py, pz = materialized(partial(perturbing_xyz, boundaries=boundaries), x, y, z, state.mass_kg, env, fm,
+                              anchor=env.earth_angle_rad, enabled=boundaries)
+    tx, ty, tz = (accel * c for c in rsw_to_eci_xyz(_xyz_of(thrust.direction_rsw), (x, y, z), (vx, vy, vz)))
+    return SpacecraftState(_like(state.orbit, (vx, vy, vz, gx + px + tx, gy + py + ty, gz + pz + tz)),
+                           mass_rate, accel)
+
+
+def _xyz_of(vector):
+    return vector[..., 0], vector[..., 1], vector[..., 2]

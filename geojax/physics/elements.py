@@ -92,24 +92,30 @@ def mee_to_kepler(mee):
 
 
 def mee_rsw_basis(mee):
-    """Rows R, S, W [..., 3, 3] of the RSW frame of a MEE state, in ECI, without v.
+    """Rows R, S, W [..., 3, 3] of the RSW frame of a MEE state, in ECI, without v (``mee_rsw_rows``)."""
+    true_lon = mee[..., L]
+    rows = mee_rsw_rows(mee[..., H], mee[..., K], jnp.cos(true_lon), jnp.sin(true_lon))
+    return jnp.stack([jnp.stack(jnp.broadcast_arrays(*row), -1) for row in rows], -2)
+
+
+def mee_rsw_rows(h, k, cos_l, sin_l):
+    """Rows R, S, W of the RSW frame of a MEE state, each a tuple of its ECI components.
 
     R = r / |r|, W = the orbit normal, S = W x R (Walker, Ireland & Owens 1985):
     R = (cos L (1 + a2) + 2hk sin L, sin L (1 - a2) + 2hk cos L, 2 (h sin L - k cos L)) / s2,
     S = (-sin L (1 + a2) + 2hk cos L, cos L (1 - a2) - 2hk sin L, 2 (h cos L + k sin L)) / s2,
     W = (2k, -2h, 1 - h^2 - k^2) / s2, with a2 = h^2 - k^2 and s2 = 1 + h^2 + k^2.
     """
-    h, k, true_lon = mee[..., H], mee[..., K], mee[..., L]
-    cos_l, sin_l = jnp.cos(true_lon), jnp.sin(true_lon)
-    a2 = h**2 - k**2
-    hk2 = 2 * h * k
-    rows = [
-        [cos_l * (1 + a2) + hk2 * sin_l, sin_l * (1 - a2) + hk2 * cos_l, 2 * (h * sin_l - k * cos_l)],
-        [-sin_l * (1 + a2) + hk2 * cos_l, cos_l * (1 - a2) - hk2 * sin_l, 2 * (h * cos_l + k * sin_l)],
-        [2 * k, -2 * h, 1 - h**2 - k**2],
-    ]
-    s2 = (1 + h**2 + k**2)[..., None, None]
-    return jnp.stack([jnp.stack(jnp.broadcast_arrays(*row), -1) for row in rows], -2) / s2
+    hh, kk = h * h, k * k
+    a2, hk2 = hh - kk, 2 * h * k
+    inv_s2 = 1 / (1 + hh + kk)
+    return (
+        ((cos_l * (1 + a2) + hk2 * sin_l) * inv_s2, (sin_l * (1 - a2) + hk2 * cos_l) * inv_s2,
+         2 * (h * sin_l - k * cos_l) * inv_s2),
+        ((-sin_l * (1 + a2) + hk2 * cos_l) * inv_s2, (cos_l * (1 - a2) - hk2 * sin_l) * inv_s2,
+         2 * (h * cos_l + k * sin_l) * inv_s2),
+        (2 * k * inv_s2, -2 * h * inv_s2, (1 - hh - kk) * inv_s2),
+    )
 
 
 def mee_radius_m(mee):
@@ -124,14 +130,19 @@ def mee_to_cartesian(mee, mu):
     r = (p / w) R and v = sqrt(mu / p) ((f sin L - g cos L) R + w S) in the RSW
     basis of ``mee_rsw_basis``.
     """
-    p, f, g, true_lon = mee[..., P], mee[..., F], mee[..., G], mee[..., L]
+    r_xyz, v_xyz = mee_to_rv_xyz(*(mee[..., j] for j in range(6)), mu)
+    return jnp.stack(jnp.broadcast_arrays(*r_xyz), -1), jnp.stack(jnp.broadcast_arrays(*v_xyz), -1)
+
+
+def mee_to_rv_xyz(p, f, g, h, k, true_lon, mu):
+    """``mee_to_cartesian`` on components: ((x, y, z), (vx, vy, vz))."""
     cos_l, sin_l = jnp.cos(true_lon), jnp.sin(true_lon)
     w = 1 + f * cos_l + g * sin_l
-    basis = mee_rsw_basis(mee)
+    rows = mee_rsw_rows(h, k, cos_l, sin_l)
     speed = jnp.sqrt(mu / p)
-    r_eci = (p / w)[..., None] * basis[..., 0, :]
-    v_eci = (speed * (f * sin_l - g * cos_l))[..., None] * basis[..., 0, :] + (speed * w)[..., None] * basis[..., 1, :]
-    return r_eci, v_eci
+    r, v_r, v_s = p / w, speed * (f * sin_l - g * cos_l), speed * w
+    return (tuple(r * c for c in rows[0]),
+            tuple(v_r * c_r + v_s * c_s for c_r, c_s in zip(rows[0], rows[1], strict=True)))
 
 
 def cartesian_to_mee(r_eci, v_eci, mu):

@@ -65,6 +65,16 @@ def rsw_to_eci(vector_rsw, r_eci, v_eci):
     return jnp.einsum("...ji,...j->...i", rsw_basis(r_eci, v_eci), vector_rsw)
 
 
+def rsw_to_eci_xyz(vector_rsw, r_eci, v_eci):
+    """``rsw_to_eci`` on components: each argument a tuple (x, y, z) of arrays; returns a tuple."""
+    (u_r, u_s, u_w), (x, y, z), (vx, vy, vz) = vector_rsw, r_eci, v_eci
+    hx, hy, hz = y * vz - z * vy, z * vx - x * vz, x * vy - y * vx
+    r, h = jnp.sqrt(x * x + y * y + z * z), jnp.sqrt(hx * hx + hy * hy + hz * hz)
+    rx, ry, rz, wx, wy, wz = x / r, y / r, z / r, hx / h, hy / h, hz / h
+    sx, sy, sz = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
+    return u_r * rx + u_s * sx + u_w * wx, u_r * ry + u_s * sy + u_w * wy, u_r * rz + u_s * sz + u_w * wz
+
+
 def subsatellite_lon_lat_rad(r_ecef):
     """Geocentric longitude and latitude (radians) of an ECEF position."""
     lon = jnp.arctan2(r_ecef[..., 1], r_ecef[..., 0])

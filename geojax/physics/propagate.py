@@ -15,7 +15,7 @@ import jax.numpy as jnp
 
 from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.physics.dynamics import cartesian_rhs, mee_rhs
-from geojax.physics.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian, semi_major_axis_m, subsatellite_point_rad, wrap_angle
+from geojax.physics.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian, mee_to_rv_xyz, semi_major_axis_m, subsatellite_point_rad, wrap_angle
 from geojax.physics.ephemeris import moon_position_eci_m, sun_position_eci_m
 from geojax.physics.forces import Environment
 from geojax.physics.frames import earth_rotation_angle_rad
@@ -28,20 +28,34 @@ class Dynamics(NamedTuple):
     to_mee: Callable  # (orbit [6], mu) -> MEE [6]
     from_mee: Callable  # (MEE [6], mu) -> orbit [6]
     to_cartesian: Callable  # (orbit [6], mu) -> ECI (r m, v m/s) [6]
+    rv_xyz: Callable  # (orbit [6] or its six components, mu) -> ((x, y, z), (vx, vy, vz)), m and m/s
 
 
 def _mee_to_rv(mee, mu):
     return jnp.concatenate(mee_to_cartesian(mee, mu), axis=-1)
 
 
-MEE = Dynamics(mee_rhs, lambda orbit, mu: orbit, lambda mee, mu: mee, _mee_to_rv)
+MEE = Dynamics(mee_rhs, lambda orbit, mu: orbit, lambda mee, mu: mee, _mee_to_rv,
+               lambda orbit, mu: mee_to_rv_xyz(*orbit, mu))
 CARTESIAN = Dynamics(
     cartesian_rhs,
     lambda orbit, mu: cartesian_to_mee(orbit[..., :3], orbit[..., 3:], mu),
     _mee_to_rv,
     lambda orbit, mu: orbit,
+    lambda orbit, mu: (tuple(orbit[:3]), tuple(orbit[3:])),
 )
 DYNAMICS = {"mee": MEE, "cartesian": CARTESIAN}
+# With fusion boundaries in the right-hand side (``physics.fusion``): from BOUNDARY_LANES vmapped lanes per
+# device the step runs 2.5-4x faster (benchmarks/core.py); a batch of one runs 2x slower (each boundary is a
+# conditional of a few microseconds).  The numbers are the same to rounding.
+BOUNDARY_LANES = 8
+_WITH_BOUNDARIES = {id(d): d._replace(rhs=partial(d.rhs, boundaries=True)) for d in (MEE, CARTESIAN)}
+
+
+def for_lanes(dynamics: Dynamics, lanes: int) -> Dynamics:
+    """The dynamics to compile for ``lanes`` vmapped samples per device: with fusion boundaries from
+    ``BOUNDARY_LANES`` on."""
+    return _WITH_BOUNDARIES.get(id(dynamics), dynamics) if lanes >= BOUNDARY_LANES else dynamics
 
 
 class CycleMeans(NamedTuple):

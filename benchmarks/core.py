@@ -1,0 +1,265 @@
+"""The integration step: geojax's step against the smallest kernel that does the same work, and against an
+earlier revision of geojax, in one run.
+
+    python benchmarks/core.py [--baseline REV] [--batches 1 64 1024 4096] [--cycles 4] [--loop-days 20]
+
+Per implementation and batch: nanoseconds per right-hand-side evaluation per sample (4 per RK4 step),
+orbit-years per second, and the fusions of the compiled step (the loop body's ``fusion`` instructions and
+the conditionals that ``physics.fusion.materialized`` adds, counted in ``compile().as_text()``).  Then the
+closed loop (li2022-qffc and li2022-fompc, H = 1 errors, batch 256): simulated years per second.
+
+* ``geojax``: this working tree, ``jit(vmap(loop.simulate.propagate))`` with the li2022 force model with
+  C22/S22 and the conical shadow on, MEE, 897.5 s step (96 per sidereal day);
+* ``geojax@REV``: the same measurement of revision REV (default: the commit before the fused step), run in
+  a subprocess from a temporary ``git worktree``, one after the other on the same machine;
+* ``minimal``: Cartesian RK4 written straight in jax.numpy on component arrays: point mass, J2, Sun and
+  Moon (from the same environment grid), SRP without shadow; no C22, no records, no cycle means.
+
+Every implementation runs on one device (``XLA_FLAGS`` unset: the comparison is per core, not how well
+each shards).  Results: ``benchmarks/results/core.json`` and ``.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+RESULTS = HERE / "results"
+DEFAULT_BASELINE = "1c1acb7"  # main before the fused step (issue 13)
+
+
+def measure_engine(batches, n_cycles: int, loop_days: float) -> dict:
+    """This process's geojax: the step (uncontrolled, via the one loop) and the closed loop."""
+    import jax
+    import jax.numpy as jnp
+
+    import geojax  # noqa: F401  (x64)
+    from geojax import scenario
+    from geojax.loop.simulate import propagate
+    from geojax.physics.constants import SIDEREAL_DAY_S
+    from geojax.physics.dynamics import SpacecraftState
+    from geojax.physics.propagate import MEE, environment_grid, steps_per_cycle
+
+    sc = scenario.load("li2022", {"forces.c22_s22": True})
+    n_steps = steps_per_cycle(sc.step_s)
+    step_s = SIDEREAL_DAY_S / n_steps
+    env = environment_grid(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s, step_s, n_cycles, n_steps)
+    fm = jax.tree_util.tree_map(jnp.asarray, sc.force_model)
+    try:
+        from geojax.physics.propagate import for_lanes
+    except ImportError:  # a revision before the fused step
+        for_lanes = lambda dynamics, lanes: dynamics  # noqa: E731
+    rows = {}
+    for batch in batches:
+        mee = jnp.broadcast_to(jnp.asarray(sc.initial_mee), (batch, 6))
+        mass = jnp.full(batch, sc.mass_kg)
+        dynamics = for_lanes(MEE, batch)
+        run = jax.jit(jax.vmap(lambda m, kg, d=dynamics: propagate(d, SpacecraftState(m, kg, jnp.asarray(0.0)), env,
+                                                                  fm, step_s)[0].orbit))
+        rows[batch] = _timed_step(run, (mee, mass), batch, n_cycles * n_steps, step_s)
+    return {"step": rows, "loop": _closed_loop(loop_days)}
+
+
+def _timed_step(fn, args, batch: int, n_steps_total: int, step_s: float) -> dict:
+    import jax
+
+    start = time.perf_counter()
+    compiled = fn.lower(*args).compile()
+    compile_s = time.perf_counter() - start
+    text = compiled.as_text()
+    jax.block_until_ready(compiled(*args))  # warm
+    best = float("inf")
+    for _ in range(3):
+        start = time.perf_counter()
+        jax.block_until_ready(compiled(*args))
+        best = min(best, time.perf_counter() - start)
+    return {"ns_per_rhs_per_sample": best / (4 * batch * n_steps_total) * 1e9,
+            "orbit_years_per_s": batch * n_steps_total * step_s / 86400 / 365.25 / best,
+            "compile_s": compile_s, **step_fusions(text)}
+
+
+def step_fusions(hlo_text: str) -> dict:
+    """Fusions and conditionals of the compiled step: the computation with the most fusions is the step's
+    loop body; its conditionals' branches are counted with it."""
+    computations = {m.group(1): m.group(2) for m in re.finditer(r"\n(%[\w.\-]+) [^\n]*\{\n(.*?)\n\}", hlo_text, re.S)}
+    body_name = max(computations, key=lambda name: computations[name].count(" fusion("))
+    body = computations[body_name]
+    branches = re.findall(r"branch_computations=\{([^}]*)\}", body)
+    branch_fusions = sum(computations.get(name.strip(), "").count(" fusion(")
+                         for group in branches for name in group.split(","))
+    return {"fusions_per_step": body.count(" fusion(") + branch_fusions,
+            "conditionals_per_step": body.count(" conditional(")}
+
+
+def _closed_loop(days: float, batch: int = 256) -> dict:
+    import jax
+    import jax.numpy as jnp
+
+    from geojax import scenario
+    from geojax.loop.rollout import rollout_fn
+    from geojax.loop.setup import prepare
+
+    out = {}
+    for controller in ("qffc", "fompc"):
+        sc = scenario.load(f"li2022-{controller}", {"duration.days": days, "errors.h_rv": 1.0, "errors.h_att": 1.0})
+        setup = prepare([sc])
+        try:
+            one = rollout_fn(setup, lanes=batch)
+        except TypeError:  # a revision before the fused step
+            one = rollout_fn(setup)
+        run = jax.jit(jax.vmap(lambda p, k: one(p, k)[2]))
+        params = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x[0], (batch,) + x.shape[1:]), setup.params)
+        keys = jax.vmap(lambda i: jax.random.fold_in(jax.random.key(0), i))(jnp.arange(batch))
+        compiled = run.lower(params, keys).compile()
+        jax.block_until_ready(compiled(params, keys))
+        start = time.perf_counter()
+        metrics = jax.block_until_ready(compiled(params, keys))
+        wall = time.perf_counter() - start
+        years = batch * setup.n_cycles * 86164.0905 / (365.25 * 86400)
+        out[controller] = {"years_per_s": years / wall, "batch": batch, "days": days,
+                           "mean_dv_per_year_mps": float(jnp.mean(metrics["dv_per_year_mps"]))}
+    return out
+
+
+def measure_minimal(batches, n_cycles: int) -> dict:
+    """The smallest kernel of the same work (see the module docstring)."""
+    import jax
+    import jax.numpy as jnp
+
+    import geojax  # noqa: F401
+    from geojax import scenario
+    from geojax.physics import constants as c
+    from geojax.physics.constants import SIDEREAL_DAY_S
+    from geojax.physics.elements import mee_to_cartesian
+    from geojax.physics.propagate import environment_grid, steps_per_cycle
+
+    sc = scenario.load("li2022")
+    fm = sc.force_model
+    n_steps = steps_per_cycle(sc.step_s)
+    h = SIDEREAL_DAY_S / n_steps
+    env = environment_grid(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s, h, n_cycles, n_steps)
+    suns, moons = env.r_sun_eci_m.reshape(-1, 3, 3), env.r_moon_eci_m.reshape(-1, 3, 3)
+    srp = fm.srp_pressure_1au_n_m2 * (1 + fm.reflectivity) * fm.srp_area_m2 / sc.mass_kg * c.AU_M**2
+
+    def rhs(s, sun, moon):
+        x, y, z, vx, vy, vz = s
+        r2 = x * x + y * y + z * z
+        ir3 = 1 / (r2 * jnp.sqrt(r2))
+        j2 = 1.5 * fm.j2 * fm.r_earth_m**2 / r2
+        q = j2 * (5 * z * z / r2 - 1)
+        ax = -fm.mu_m3_s2 * ir3 * x * (1 - q)
+        ay = -fm.mu_m3_s2 * ir3 * y * (1 - q)
+        az = -fm.mu_m3_s2 * ir3 * z * (1 - q - 2 * j2)
+        for body, mu in ((sun, fm.mu_sun_m3_s2), (moon, fm.mu_moon_m3_s2)):
+            dx, dy, dz = body[0] - x, body[1] - y, body[2] - z
+            d2 = dx * dx + dy * dy + dz * dz
+            k = mu / (d2 * jnp.sqrt(d2))
+            b2 = body[0] ** 2 + body[1] ** 2 + body[2] ** 2
+            kb = mu / (b2 * jnp.sqrt(b2))
+            ax, ay, az = ax + k * dx - kb * body[0], ay + k * dy - kb * body[1], az + k * dz - kb * body[2]
+        dx, dy, dz = sun[0] - x, sun[1] - y, sun[2] - z
+        d2 = dx * dx + dy * dy + dz * dz
+        k = srp / (d2 * jnp.sqrt(d2))
+        return (vx, vy, vz, ax - k * dx, ay - k * dy, az - k * dz)
+
+    def step(s, xs):
+        sun3, moon3 = xs
+        k1 = rhs(s, sun3[0], moon3[0])
+        k2 = rhs(tuple(a + h / 2 * b for a, b in zip(s, k1)), sun3[1], moon3[1])
+        k3 = rhs(tuple(a + h / 2 * b for a, b in zip(s, k2)), sun3[1], moon3[1])
+        k4 = rhs(tuple(a + h * b for a, b in zip(s, k3)), sun3[2], moon3[2])
+        return tuple(a + h / 6 * (b + 2 * c_ + 2 * d + e) for a, b, c_, d, e in zip(s, k1, k2, k3, k4)), None
+
+    def run_one(rv):
+        final, _ = jax.lax.scan(step, tuple(rv[i] for i in range(6)), (suns, moons))
+        return jnp.stack(final)
+
+    r, v = mee_to_cartesian(jnp.asarray(sc.initial_mee), fm.mu_m3_s2)
+    rows = {}
+    for batch in batches:
+        rv = jnp.broadcast_to(jnp.concatenate([r, v]), (batch, 6))
+        rows[batch] = _timed_step(jax.jit(jax.vmap(run_one)), (rv,), batch, n_cycles * n_steps, h)
+    return {"step": rows}
+
+
+def _in_subprocess(tree: Path, what: str, args) -> dict:
+    """Run one measurement in a fresh Python on ``tree``'s geojax (one device, nothing else loaded)."""
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    env["PYTHONPATH"] = str(tree)
+    with tempfile.NamedTemporaryFile(suffix=".json") as out:
+        code = (f"import json, sys; sys.path.insert(0, {str(HERE)!r}); import core; "
+                f"json.dump(core.{what}({args.batches!r}, {args.cycles}"
+                f"{', ' + repr(args.loop_days) if what == 'measure_engine' else ''}), open({out.name!r}, 'w'))")
+        subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=tree)
+        return json.load(open(out.name))
+
+
+def markdown(results: dict) -> str:
+    impls = list(results["step"])
+    lines = ["# The integration step", "", f"`{results['command']}` on {results['machine']}, one device per "
+             "implementation, li2022 force model (C22/S22 and conical shadow on; the minimal kernel without "
+             "C22 and shadow), 96 steps per sidereal day, "
+             f"{results['cycles']} cycles. ns per right-hand side per sample (4 per RK4 step), orbit-years/s, "
+             "fusions (and conditionals) of the compiled step.", "",
+             "| batch | " + " | ".join(impls) + " |", "|---:|" + "---:|" * len(impls)]
+    for batch in results["batches"]:
+        cells = []
+        for impl in impls:
+            row = results["step"][impl][str(batch)]
+            cells.append(f"{row['ns_per_rhs_per_sample']:.1f} ns, {row['orbit_years_per_s']:.0f} /s, "
+                         f"{row['fusions_per_step']} ({row['conditionals_per_step']})")
+        lines.append(f"| {batch} | " + " | ".join(cells) + " |")
+    lines += ["", "Closed loop, batch 256, H = 1 errors: simulated years per second (mean ΔV, m/s/yr).", "",
+              "| controller | " + " | ".join(k for k in impls if k in results["loop"]) + " |",
+              "|---|" + "---:|" * sum(k in results["loop"] for k in impls)]
+    for controller in ("qffc", "fompc"):
+        cells = [f"{results['loop'][k][controller]['years_per_s']:.2f} "
+                 f"({results['loop'][k][controller]['mean_dv_per_year_mps']:.3f})" for k in impls if k in results["loop"]]
+        lines.append(f"| {controller} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--baseline", default=DEFAULT_BASELINE, help="git revision to compare with ('' for none)")
+    parser.add_argument("--batches", type=int, nargs="+", default=[1, 64, 1024, 4096])
+    parser.add_argument("--cycles", type=int, default=4, help="sidereal days per step measurement")
+    parser.add_argument("--loop-days", type=float, default=20.0, help="days of the closed-loop measurement")
+    parser.add_argument("--out", type=Path, default=RESULTS)
+    args = parser.parse_args()
+    repo = HERE.parent
+    results = {"command": "python benchmarks/core.py " + " ".join(sys.argv[1:]), "batches": args.batches,
+               "cycles": args.cycles, "machine": f"{os.cpu_count()} cores", "step": {}, "loop": {}}
+    runs = [("geojax", repo)]
+    with tempfile.TemporaryDirectory() as tmp:
+        if args.baseline:
+            old = Path(tmp) / "baseline"
+            subprocess.run(["git", "-C", str(repo), "worktree", "add", "--detach", str(old), args.baseline],
+                           check=True, capture_output=True)
+            runs.append((f"geojax@{args.baseline}", old))
+        try:
+            for name, tree in runs:
+                print(f"{name} ...", flush=True)
+                measured = _in_subprocess(tree, "measure_engine", args)
+                results["step"][name], results["loop"][name] = measured["step"], measured["loop"]
+        finally:
+            if args.baseline:
+                subprocess.run(["git", "-C", str(repo), "worktree", "remove", "--force", str(old)], check=False)
+    print("minimal ...", flush=True)
+    results["step"]["minimal"] = _in_subprocess(repo, "measure_minimal", args)["step"]
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "core.json").write_text(json.dumps(results, indent=1))
+    (args.out / "core.md").write_text(markdown(results))
+    print(markdown(results))
+
+
+if __name__ == "__main__":
+    main()
