@@ -40,11 +40,18 @@ def main(argv: list[str] | None = None) -> int:
         return 130
 
 
+def _version() -> str:
+    import geojax
+
+    return geojax.__version__
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="geojax",
         description="Closed-loop station keeping of electric-propulsion GEO satellites in JAX.",
     )
+    parser.add_argument("--version", action="version", version=f"geojax {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
     demo = sub.add_parser("demo", help="li2022 for one year, without control and with the QFFC: summaries, figures")

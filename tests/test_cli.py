@@ -74,3 +74,23 @@ def test_simulate_writes_metrics_and_cycles(tmp_path, capsys):
 def test_simulate_refuses_a_scenario_without_controller(capsys):
     assert cli.main(["simulate", "li2022", "--days", "2"]) == 2
     assert "controller.kind" in capsys.readouterr().err
+
+
+def test_version_and_python_dash_m(capsys):
+    """``geojax --version`` names the package's ``__version__``, which is pyproject.toml's, and
+    ``python -m geojax`` is the same command."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import geojax
+    from geojax.scenario import tomllib
+
+    pyproject = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())
+    assert pyproject["project"]["version"] == geojax.__version__
+
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(["--version"])
+    assert exit_.value.code == 0 and capsys.readouterr().out.strip() == f"geojax {geojax.__version__}"
+    run = subprocess.run([sys.executable, "-m", "geojax", "--version"], capture_output=True, text=True, check=True)
+    assert run.stdout.strip() == f"geojax {geojax.__version__}"

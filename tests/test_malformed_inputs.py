@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import os
 import random
-import tomllib
 
 import pytest
 
 from geojax import cli, scenario, sweep, tune
 from geojax.loop import rollout
+from geojax.scenario import tomllib
 
 SWEEP = """
 name = "fuzz"
