@@ -38,6 +38,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"geojax {args.command}: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `geojax scenarios | head`: the reader left; say nothing more
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
 
 
 def _version() -> str:
@@ -99,7 +104,8 @@ def _parser() -> argparse.ArgumentParser:
     plot.add_argument("--out", help="folder for the figures (default: next to the file)")
     plot.set_defaults(func=_plot)
 
-    scen = sub.add_parser("scenarios", help="list the shipped scenarios")
+    scen = sub.add_parser("scenarios", help="list the shipped scenarios, or print one's TOML")
+    scen.add_argument("--show", metavar="NAME", help="print the TOML of the shipped scenario NAME")
     scen.set_defaults(func=_scenarios)
     return parser
 
@@ -344,8 +350,15 @@ def _box_half_width_deg(attrs) -> float:
 def _scenarios(args) -> int:
     from geojax import scenario
 
-    for name in scenario.available():
-        print(f"{name:12s} {scenario.load(name).config['description']}")
+    if args.show:
+        print(scenario.read_text(args.show), end="")
+        return 0
+    names = scenario.available()
+    width = max(map(len, names))
+    for name in names:
+        print(f"{name:{width}s}  {scenario.load(name).config['description']}")
+    print(f"\n`geojax scenarios --show NAME` prints a scenario's TOML (to copy and edit: "
+          f"`geojax scenarios --show li2022-qffc > mine.toml`).")
     return 0
 
 

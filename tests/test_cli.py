@@ -94,3 +94,16 @@ def test_version_and_python_dash_m(capsys):
     assert exit_.value.code == 0 and capsys.readouterr().out.strip() == f"geojax {geojax.__version__}"
     run = subprocess.run([sys.executable, "-m", "geojax", "--version"], capture_output=True, text=True, check=True)
     assert run.stdout.strip() == f"geojax {geojax.__version__}"
+
+
+def test_scenarios_align_and_show_a_toml_that_loads_as_the_same_scenario(tmp_path, capsys):
+    from geojax import scenario
+
+    assert cli.main(["scenarios"]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if line and not line.startswith("`")]
+    starts = {line.index(scenario.load(line.split()[0]).config["description"]) for line in lines}
+    assert len(starts) == 1  # every description starts in the same column
+    assert cli.main(["scenarios", "--show", "katz2025-discrete"]) == 0
+    copy = tmp_path / "mine.toml"
+    copy.write_text(capsys.readouterr().out)
+    assert scenario.load(copy).config == scenario.load("katz2025-discrete").config
