@@ -60,8 +60,8 @@ def main() -> None:
             final, rec = jax.block_until_ready(compiled(states, keys))
             run_s = time.perf_counter() - t
             dv_year = np.asarray(final.dv_mps) * 365.25 * 86400 / (setup.n_cycles * c.SIDEREAL_DAY_S)
-            per_orbit = run_s / (loop.n_cycles * batch)
-            rows.append({"controller": controller, "batch": batch, "cycles": loop.n_cycles, "compile_s": compile_s,
+            per_orbit = run_s / (setup.n_cycles * batch)
+            rows.append({"controller": controller, "batch": batch, "cycles": setup.n_cycles, "compile_s": compile_s,
                          "run_s": run_s, "s_per_orbit_per_sample": per_orbit,
                          "speedup_vs_paper": PAPER_S_PER_ORBIT[controller] / per_orbit,
                          "dv_per_year_mps_mean": float(dv_year.mean()), "dv_per_year_mps_std": float(dv_year.std())})

@@ -42,3 +42,14 @@ def test_two_devices_match_one(tmp_path):
     one = run_with_devices(1, tmp_path / "one.npy")
     two = run_with_devices(2, tmp_path / "two.npy")
     np.testing.assert_allclose(two, one, rtol=1e-14, atol=0)
+
+
+def test_importing_geojax_leaves_the_device_count_to_the_command():
+    """``geojax`` (the CLI) asks for one XLA CPU device per core after importing the package, so nothing in
+    the package may start JAX's backend at import (a jnp array built at module level did, and every
+    ``geojax sweep`` ran on one core)."""
+    code = ("import geojax; from geojax import cli, sweep, tune; from geojax.parallel import use_host_cores; "
+            "use_host_cores(2); import jax; print(jax.device_count())")
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "2"

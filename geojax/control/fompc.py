@@ -36,6 +36,7 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from geojax.control import burns as burns_mod
 from geojax.control import qffc
@@ -48,9 +49,11 @@ FIELDS = qffc.FIELDS
 class MpcParams(NamedTuple):
     """FOMPC parameters a sweep can vary (array leaves; ``params.controller`` holds them by the same names)."""
 
-    horizon: jnp.ndarray = jnp.asarray(6)  # N, cycles (<= Annealing.n_max)
-    di_max: jnp.ndarray = jnp.asarray(8e-5)  # Delta i_max, MEE (h, k)
-    penalty: jnp.ndarray = jnp.asarray(1e8)  # P, (m/s)^2 per unit (h, k)^2
+    # numpy defaults: a jnp array built at import would start JAX's backend before ``geojax.parallel`` can
+    # ask for one device per core
+    horizon: jnp.ndarray = np.asarray(6)  # N, cycles (<= Annealing.n_max)
+    di_max: jnp.ndarray = np.asarray(8e-5)  # Delta i_max, MEE (h, k)
+    penalty: jnp.ndarray = np.asarray(1e8)  # P, (m/s)^2 per unit (h, k)^2
 
 
 class Annealing(NamedTuple):
