@@ -91,13 +91,6 @@ def mee_to_kepler(mee):
     return p / (1 - e**2), e, i, raan, argp, nu
 
 
-def mee_rsw_basis(mee):
-    """Rows R, S, W [..., 3, 3] of the RSW frame of a MEE state, in ECI, without v (``mee_rsw_rows``)."""
-    true_lon = mee[..., L]
-    rows = mee_rsw_rows(mee[..., H], mee[..., K], jnp.cos(true_lon), jnp.sin(true_lon))
-    return jnp.stack([jnp.stack(jnp.broadcast_arrays(*row), -1) for row in rows], -2)
-
-
 def mee_rsw_rows(h, k, cos_l, sin_l):
     """Rows R, S, W of the RSW frame of a MEE state, each a tuple of its ECI components.
 
@@ -118,17 +111,11 @@ def mee_rsw_rows(h, k, cos_l, sin_l):
     )
 
 
-def mee_radius_m(mee):
-    """|r| = p / w, w = 1 + f cos L + g sin L (Li 2022, eq. (7))."""
-    true_lon = mee[..., L]
-    return mee[..., P] / (1 + mee[..., F] * jnp.cos(true_lon) + mee[..., G] * jnp.sin(true_lon))
-
-
 def mee_to_cartesian(mee, mu):
     """MEE [..., 6] to ECI position and velocity [..., 3].
 
     r = (p / w) R and v = sqrt(mu / p) ((f sin L - g cos L) R + w S) in the RSW
-    basis of ``mee_rsw_basis``.
+    basis of ``mee_rsw_rows``.
     """
     r_xyz, v_xyz = mee_to_rv_xyz(*(mee[..., j] for j in range(6)), mu)
     return jnp.stack(jnp.broadcast_arrays(*r_xyz), -1), jnp.stack(jnp.broadcast_arrays(*v_xyz), -1)
