@@ -3,7 +3,7 @@
     geojax demo [--out DIR]
     geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5]
     geojax simulate SCENARIO [--controller qffc|fompc] [--horizon N] [--days D] [--seed S] [--out FILE.h5] [--plots DIR]
-    geojax sweep SWEEP.toml --out FILE.h5 [--resume] [--chunk N]
+    geojax sweep SWEEP.toml --out FILE.h5 [--resume] [--chunk N] [--ray [ADDRESS]] [--workers N]
     geojax tune TUNE.toml --out FILE.h5 [--quiet]
     geojax plot FILE.h5 [--out DIR]
     geojax scenarios
@@ -35,6 +35,13 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as err:
         print(f"geojax {args.command}: error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except RuntimeError as err:
+        from geojax.cluster import ClusterError
+
+        if not isinstance(err, ClusterError):
+            raise
+        print(f"geojax {args.command}: error: {err}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print(f"geojax {args.command}: interrupted", file=sys.stderr)
         return 130
@@ -96,6 +103,11 @@ def _parser() -> argparse.ArgumentParser:
     swp.add_argument("--resume", action="store_true", help="continue an interrupted sweep into the same --out")
     swp.add_argument("--chunk", type=int, help="samples per saved chunk (default: one compiled batch of the widest "
                      "controller, 64 per device; a resumed sweep keeps its cut)")
+    swp.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
+                     help="run the chunks as Ray tasks: alone, on a Ray instance started here; 'auto', HOST:PORT or "
+                     "ray://HOST:PORT, on a running cluster (pip install \"geojax[ray]\"); same results as a local run")
+    swp.add_argument("--workers", type=int, help="with --ray: worker processes (default one per node, each using "
+                     "its node's cores)")
     swp.add_argument("--quiet", action="store_true", help="no progress bar")
     swp.set_defaults(func=_sweep)
 
@@ -293,7 +305,8 @@ def _sweep(args) -> int:
     n = spec.n_points * spec.repetitions
     print(f"{spec.name}: {len(spec.controllers)} controller(s) x {spec.n_points} grid point(s) x "
           f"{spec.repetitions} repetition(s) = {len(spec.controllers) * n} samples", flush=True)
-    path = sweep.run_sweep(spec, args.out, resume=args.resume, chunk=args.chunk, progress=False if args.quiet else None)
+    path = sweep.run_sweep(spec, args.out, resume=args.resume, chunk=args.chunk, progress=False if args.quiet else None,
+                           ray=args.ray, workers=args.workers)
     groups, _ = store.read_h5(path)
     dv = groups["metrics"]["dv_per_year_mps"]
     from geojax.loop.metrics import STATUS_MEANINGS

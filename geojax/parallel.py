@@ -19,13 +19,16 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 
-def use_host_cores(count: int | None = None) -> None:
-    """Ask XLA for one CPU device per core (``count``, default all), unless ``XLA_FLAGS`` already says.
+def use_host_cores(count: int | None = None, replace: bool = False) -> None:
+    """Ask XLA for one CPU device per core (``count``, default all), unless ``XLA_FLAGS`` already says
+    (``replace``: whatever it says; a Ray worker inherits its driver's flags but not its node).
 
     Takes effect only if no JAX computation has run yet in this process (the
     ``geojax`` command calls it first thing); later it changes nothing.
     """
     flags = os.environ.get("XLA_FLAGS", "")
+    if replace:
+        flags = " ".join(f for f in flags.split() if "xla_force_host_platform_device_count" not in f)
     if "xla_force_host_platform_device_count" not in flags:
         count = count or os.cpu_count() or 1
         os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={count}".strip()

@@ -14,7 +14,14 @@ class Progress:
         self.stream = stream or sys.stderr
         self.enabled = self.stream.isatty() if enabled is None else enabled
         self.done = 0
+        self.note = ""  # shown after the ETA (a cluster's workers alive)
+        self._resumed = 0  # done before this run: counted, not in the rate
         self.start = time.perf_counter()
+
+    def resumed(self, n: int) -> None:
+        """``n`` units done by an earlier run (a resumed sweep): shown as done, left out of the rate."""
+        self._resumed += n
+        self.update(n)
 
     def __enter__(self):
         return self
@@ -24,13 +31,13 @@ class Progress:
         if not self.enabled:
             return
         elapsed = time.perf_counter() - self.start
-        rate = self.done / elapsed if elapsed > 0 else 0.0
-        eta = (self.total - self.done) / rate if rate > 0 else float("nan")
+        rate = (self.done - self._resumed) / elapsed if elapsed > 0 else 0.0
+        eta = f"{(self.total - self.done) / rate:.0f} s" if rate > 0 else "--"
         width = 30
         filled = int(width * self.done / max(self.total, 1))
         self.stream.write(
             f"\r[{'#' * filled}{'.' * (width - filled)}] {self.done}/{self.total} {self.unit}"
-            f"  {rate:.1f} {self.unit}/s  ETA {eta:.0f} s "
+            f"  {rate:.1f} {self.unit}/s  ETA {eta}" + (f"  {self.note} " if self.note else " ")
         )
         self.stream.flush()
 

@@ -45,6 +45,7 @@ The file's ``wall_s`` and ``compile_s`` count the last run only.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import itertools
@@ -199,9 +200,18 @@ def _scenario(sweep: Sweep, controller: str, point: dict):
 
 
 def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | None = None,
-              progress: bool | None = None) -> Path:
-    """Run every sample not yet saved, then write ``out`` (HDF5).  Returns its path."""
+              progress: bool | None = None, ray: str | None = None, workers: int | None = None) -> Path:
+    """Run every sample not yet saved, then write ``out`` (HDF5).  Returns its path.
+
+    ``ray``: run the chunks as Ray tasks (``geojax.cluster``): ``"local"`` starts a Ray instance on this
+    machine, ``"auto"``, ``"HOST:PORT"`` or ``"ray://HOST:PORT"`` joins a running cluster; ``workers`` Ray
+    worker processes (default one per node).  The results are bit for bit those of a local run.
+    """
     out = store.check_output_file(out)
+    if workers is not None and ray is None:
+        raise ValueError("--workers: only with --ray (a local sweep uses this process's devices)")
+    if workers is not None and not 1 <= workers <= 10_000:
+        raise ValueError(f"--workers: must be from 1 to 10000, got {workers}")
     parts = out.with_name(out.name + ".parts")
     digest = hashlib.sha256(sweep.text.encode()).hexdigest()
     if chunk is not None and chunk < 1:
@@ -218,21 +228,26 @@ def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | 
             store.discard_folder(parts)
         return out  # finished earlier
     n_samples = sweep.n_points * sweep.repetitions
-    if parts.exists():
-        chunk = _resumed_chunk(parts, digest, chunk)
-    else:
-        chunk = chunk or default_chunk(n_samples)
-        fresh = store.temporary(parts)  # complete before it is visible
-        fresh.mkdir(parents=True)
-        store.atomic_write(fresh / "chunk", str(chunk).encode())
-        store.atomic_write(fresh / "sweep.sha256", digest.encode())
-        os.replace(fresh, parts)
-    try:
-        return _run_chunks(sweep, out, parts, chunk, progress)
-    except BaseException:
-        if parts.exists() and not any(parts.glob("*.npz")):
-            store.discard_folder(parts)  # nothing computed: leave nothing behind
-        raise
+    with contextlib.ExitStack() as connection:
+        if ray is not None:  # reach the cluster before anything is written
+            from geojax import cluster
+
+            connection.enter_context(cluster.connected(ray))
+        if parts.exists():
+            chunk = _resumed_chunk(parts, digest, chunk)
+        else:
+            chunk = chunk or default_chunk(n_samples)
+            fresh = store.temporary(parts)  # complete before it is visible
+            fresh.mkdir(parents=True)
+            store.atomic_write(fresh / "chunk", str(chunk).encode())
+            store.atomic_write(fresh / "sweep.sha256", digest.encode())
+            os.replace(fresh, parts)
+        try:
+            return _run_chunks(sweep, out, parts, chunk, progress, ray is not None, workers)
+        except BaseException:
+            if parts.exists() and not any(parts.glob("*.npz")):
+                store.discard_folder(parts)  # nothing computed: leave nothing behind
+            raise
 
 
 def _resumed_chunk(parts: Path, digest: str, chunk: int | None) -> int:
@@ -253,32 +268,68 @@ def _resumed_chunk(parts: Path, digest: str, chunk: int | None) -> int:
     return started
 
 
-def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool | None) -> Path:
+def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool | None,
+                on_ray: bool = False, workers: int | None = None) -> Path:
     n_samples = sweep.n_points * sweep.repetitions
     start = time.perf_counter()
-    results, compile_s = {}, 0.0
     total = len(sweep.controllers) * n_samples
+    todo, done = [], 0
+    for controller in sweep.controllers:
+        saved = {int(p.stem.split("_")[-1]) for p in parts.glob(f"{controller}_*.npz")}
+        done += sum(_chunk_len(s, chunk, n_samples) for s in saved)
+        todo += [(controller, s, _chunk_len(s, chunk, n_samples)) for s in range(0, n_samples, chunk) if s not in saved]
+
+    def save(controller: str, first: int, values: dict) -> None:
+        store.atomic_write(parts / f"{controller}_{first:09d}.npz", _npz_bytes(values))
+
     with Progress(total, "samples", enabled=progress) as bar:
-        for controller in sweep.controllers:
-            done = {int(p.stem.split("_")[-1]): p for p in parts.glob(f"{controller}_*.npz")}
-            bar.update(sum(_chunk_len(s, chunk, n_samples) for s in done))
-            todo = [s for s in range(0, n_samples, chunk) if s not in done]
-            width = LANES_PER_DEVICE.get(controller, DEFAULT_LANES_PER_DEVICE) * jax.device_count()
-            if todo:
-                batch_fn, params, seconds = _compiled_batch(sweep, controller, width)
-                compile_s += seconds
-            for s in todo:
-                pieces = []
-                for lane0 in range(s, s + _chunk_len(s, chunk, n_samples), width):
-                    idx = np.minimum(np.arange(lane0, lane0 + width), n_samples - 1)  # pad with the last sample
-                    out_lanes = batch_fn(_lanes(params, idx // sweep.repetitions), idx)
-                    pieces.append({k: np.asarray(v) for k, v in out_lanes.items()})
-                    bar.update(min(width, s + _chunk_len(s, chunk, n_samples) - lane0))
-                values = {k: np.concatenate([p[k] for p in pieces])[: _chunk_len(s, chunk, n_samples)] for k in pieces[0]}
-                store.atomic_write(parts / f"{controller}_{s:09d}.npz", _npz_bytes(values))
-            files = sorted(parts.glob(f"{controller}_*.npz"))
-            pieces = [dict(np.load(f)) for f in files]
-            results[controller] = {k: np.concatenate([p[k] for p in pieces]) for k in pieces[0]}
+        bar.resumed(done)
+        if on_ray:
+            from geojax import cluster
+
+            compile_s = cluster.run_chunks(sweep, todo, save, bar, workers)
+        else:
+            compile_s, runners = 0.0, {}
+            for controller, first, length in todo:
+                if controller not in runners:
+                    runners[controller] = ChunkRunner(sweep, controller)
+                    compile_s += runners[controller].compile_s
+                save(controller, first, runners[controller].run(first, length, bar.update))
+    return _write_results(sweep, out, parts, wall_s=time.perf_counter() - start, compile_s=compile_s)
+
+
+class ChunkRunner:
+    """One controller of a sweep, compiled once for this process's devices: ``run(first, length)`` gives the
+    metrics of samples ``first .. first + length - 1`` (numpy, one row per sample).
+
+    The batch is ``LANES_PER_DEVICE`` samples per device whatever the chunk (the last call padded with the
+    chunk's last sample), so a sample's numbers do not depend on the chunk, the device count or the process
+    that runs it: a local sweep and every Ray worker use this.
+    """
+
+    def __init__(self, sweep: Sweep, controller: str):
+        self.n_samples = sweep.n_points * sweep.repetitions
+        self.repetitions = sweep.repetitions
+        self.width = LANES_PER_DEVICE.get(controller, DEFAULT_LANES_PER_DEVICE) * jax.device_count()
+        self._batch_fn, self._params, self.compile_s = _compiled_batch(sweep, controller, self.width)
+
+    def run(self, first: int, length: int, on_samples=None) -> dict:
+        pieces = []
+        for lane0 in range(first, first + length, self.width):
+            idx = np.minimum(np.arange(lane0, lane0 + self.width), self.n_samples - 1)  # pad with the last sample
+            out_lanes = self._batch_fn(_lanes(self._params, idx // self.repetitions), idx)
+            pieces.append({k: np.asarray(v) for k, v in out_lanes.items()})
+            if on_samples is not None:
+                on_samples(min(self.width, first + length - lane0))
+        return {k: np.concatenate([p[k] for p in pieces])[:length] for k in pieces[0]}
+
+
+def _write_results(sweep: Sweep, out: Path, parts: Path, wall_s: float, compile_s: float) -> Path:
+    """Join the saved chunks of every controller into ``out`` (written atomically), then remove the parts."""
+    results = {}
+    for controller in sweep.controllers:
+        pieces = [dict(np.load(f)) for f in sorted(parts.glob(f"{controller}_*.npz"))]
+        results[controller] = {k: np.concatenate([p[k] for p in pieces]) for k in pieces[0]}
     shape = (len(sweep.controllers), *sweep.shape, sweep.repetitions)
     names = sorted({k for c in sweep.controllers for k in results[c]})
     n_samples = sweep.n_points * sweep.repetitions
@@ -294,7 +345,6 @@ def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool
     status = stacked("status").reshape(shape).astype(np.int8)
     grid = {k.replace(".", "__"): np.asarray(v, dtype=float) for k, v in sweep.grid.items()}
     grid["controller"] = np.array(sweep.controllers, dtype="S")
-    wall_s = time.perf_counter() - start
     store.write_h5(out, {"grid": grid, "metrics": metrics, "status": {"code": status}, **groups}, sweep.text, wall_s,
                    attrs={"kind": "sweep", "name": sweep.name, "grid_axes": ",".join(["controller", *sweep.grid]),
                           "compile_s": compile_s,

@@ -1,0 +1,178 @@
+"""Sweeps beyond one machine: each chunk a Ray task on a worker that compiled once (DESIGN.md, "Scale").
+
+``geojax sweep SWEEP.toml --out FILE.h5 --ray [ADDRESS]`` (``sweep.run_sweep(..., ray=ADDRESS)``) plans the
+chunks exactly as a local sweep does and hands them to Ray.  The workers are Ray actors, by default one
+per node, each using its share of the node's cores as XLA devices through ``parallel.per_device``; a
+worker compiles each controller once (``sweep.ChunkRunner``) and runs chunk after chunk.  The driver
+keeps at most two chunks queued per worker, so a fast worker takes more, and writes every finished chunk
+into ``FILE.h5.parts/`` itself, atomically and once: ``--resume`` continues whatever stopped (the driver,
+a worker, a node), with or without Ray.
+
+Failures: a worker whose process dies is restarted by Ray and its queued chunks retried
+(``MAX_RESTARTS``, ``max_task_retries``); a worker that cannot be restarted is dropped and its chunks go
+to the others; a chunk that has failed ``MAX_ATTEMPTS`` times, or the last worker lost, stops the sweep
+with the chunks done saved.  An error raised by the engine inside a worker (a bad scenario value) is
+raised here as itself.
+
+Same numbers: a sample's keys come from (seed, global index) and every worker compiles the same
+one-device program of ``LANES_PER_DEVICE`` lanes, so the file is bit for bit a local run's, whatever
+the number of workers, their device counts and the order chunks finish in.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import os
+import socket
+import warnings
+
+MAX_RESTARTS = 3  # per worker, before it is dropped
+MAX_ATTEMPTS = 4  # per chunk, across workers
+QUEUED_PER_WORKER = 2  # chunks sent ahead to each worker: one running, one waiting
+CONNECT_TIMEOUT_S = 5.0
+
+
+class ClusterError(RuntimeError):
+    """The cluster could not finish the sweep (every worker lost, a chunk failing everywhere); the chunks
+    done are saved and ``--resume`` continues."""
+
+
+@contextlib.contextmanager
+def connected(address: str):
+    """Join (``"auto"``, ``"HOST:PORT"``, ``"ray://HOST:PORT"``) or start (``"local"``) a Ray instance for
+    the duration of the block; ``ValueError`` in one line if Ray is missing or the cluster unreachable.
+
+    If this process has already joined one (``ray.init`` in a notebook or a test), that one is used.
+    """
+    try:
+        import ray
+    except ImportError:
+        raise ValueError('--ray: Ray is not installed; pip install "geojax[ray]"') from None
+    if ray.is_initialized():
+        yield ray
+        return
+    if address not in ("local", "auto"):
+        _check_reachable(address)
+    try:
+        with warnings.catch_warnings():  # Ray starts its processes by fork and exec, which JAX's warning
+            warnings.filterwarnings("ignore", "os.fork", RuntimeWarning)  # about forking threads does not concern
+            if address == "local":
+                ray.init(include_dashboard=False, logging_level="ERROR")
+            else:
+                ray.init(address=address, logging_level="ERROR")
+    except (ConnectionError, RuntimeError, ValueError, TimeoutError) as err:
+        first = (str(err).strip().splitlines() or [type(err).__name__])[0]
+        hint = "; start one with `ray start --head`" if address == "auto" else ""
+        raise ValueError(f"--ray {address}: {first}{hint}") from None
+    try:
+        yield ray
+    finally:
+        ray.shutdown()
+
+
+def _check_reachable(address: str) -> None:
+    """Fail fast, in one line, where nothing listens at ``address`` (Ray itself retries for 20-30 s)."""
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    if not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ValueError(f"--ray {address}: expected local, auto, HOST:PORT or ray://HOST:PORT")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=CONNECT_TIMEOUT_S).close()
+    except OSError as err:
+        raise ValueError(f"--ray {address}: cannot reach {host}:{port} ({err.strerror or err})") from None
+
+
+class ChunkWorker:
+    """A Ray actor: one worker process, its XLA devices, each controller compiled once."""
+
+    def __init__(self, sweep, devices: int):
+        from geojax.parallel import use_host_cores
+
+        use_host_cores(devices, replace=True)  # before this process's first JAX computation
+        self.sweep, self.runners = sweep, {}
+
+    def run(self, controller: str, first: int, length: int):
+        """The metrics of one chunk, and (process id, seconds compiling for it)."""
+        from geojax.sweep import ChunkRunner
+
+        compile_s = 0.0
+        if controller not in self.runners:
+            self.runners[controller] = ChunkRunner(self.sweep, controller)
+            compile_s = self.runners[controller].compile_s
+        return self.runners[controller].run(first, length), (os.getpid(), compile_s)
+
+
+def placements(nodes: list[dict], workers: int | None) -> list[tuple[str, int]]:
+    """(node id, XLA devices) of each worker: round-robin over the alive nodes (ordered by id), each
+    worker one device per core of its equal share of its node's CPUs."""
+    alive = sorted((n for n in nodes if n.get("Alive") and n.get("Resources", {}).get("CPU", 0) >= 1),
+                   key=lambda n: n["NodeID"])
+    if not alive:
+        raise ValueError("--ray: the cluster has no alive node with a CPU")
+    count = workers or len(alive)
+    per_node = collections.Counter(i % len(alive) for i in range(count))
+    return [(alive[i % len(alive)]["NodeID"],
+             max(1, int(alive[i % len(alive)]["Resources"]["CPU"]) // per_node[i % len(alive)]))
+            for i in range(count)]
+
+
+def run_chunks(sweep, todo: list[tuple[str, int, int]], save, bar, workers: int | None = None) -> float:
+    """Run each (controller, first sample, length) of ``todo`` on the cluster joined by ``connected``,
+    calling ``save(controller, first, values)`` once per chunk as it finishes.  Returns the longest
+    compilation of any worker (seconds)."""
+    import ray
+    from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+    if not todo:
+        return 0.0
+    remote = ray.remote(ChunkWorker)
+    actors = [remote.options(num_cpus=devices, max_restarts=MAX_RESTARTS, max_task_retries=MAX_RESTARTS,
+                             scheduling_strategy=NodeAffinitySchedulingStrategy(node, soft=True))
+              .remote(sweep, devices)
+              for node, devices in placements(ray.nodes(), workers)]
+    live = set(range(len(actors)))
+    pending = collections.deque(todo)
+    inflight: dict = {}  # ObjectRef -> (worker, chunk)
+    attempts = collections.Counter()
+    pids = collections.defaultdict(set)  # worker -> the processes it has run in (a restart adds one)
+    compile_s = 0.0
+
+    def note():
+        restarts = sum(len(p) - 1 for p in pids.values() if p)
+        bar.note = f"{len(live)}/{len(actors)} workers alive" + (f", {restarts} restarted" if restarts else "")
+        bar.update(0)
+
+    try:
+        note()
+        while pending or inflight:
+            if not live:
+                raise ClusterError("every Ray worker was lost; the chunks done are saved: --resume continues")
+            for w in sorted(live):
+                while pending and sum(1 for v, _ in inflight.values() if v == w) < QUEUED_PER_WORKER:
+                    task = pending.popleft()
+                    inflight[actors[w].run.remote(*task)] = (w, task)
+            ready, _ = ray.wait(list(inflight), num_returns=1, timeout=1.0)
+            for ref in ready:
+                w, task = inflight.pop(ref)
+                try:
+                    values, (pid, seconds) = ray.get(ref)
+                except ray.exceptions.RayTaskError as err:  # the engine raised: the same error here
+                    raise (err.cause if isinstance(err.cause, Exception) else err) from None
+                except ray.exceptions.RayError as err:  # the worker is gone for good: its chunks go elsewhere
+                    attempts[task] += 1
+                    if attempts[task] >= MAX_ATTEMPTS:
+                        raise ClusterError(f"chunk {task[0]} from sample {task[1]} failed {attempts[task]} times; "
+                                           f"last: {str(err).splitlines()[0]}; --resume continues") from None
+                    live.discard(w)
+                    pending.appendleft(task)
+                    note()
+                    continue
+                save(*task[:2], values)
+                pids[w].add(pid)
+                compile_s = max(compile_s, seconds)
+                bar.update(task[2])
+                note()
+        return compile_s
+    finally:
+        for actor in actors:
+            ray.kill(actor)
