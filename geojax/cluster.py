@@ -2,7 +2,7 @@
 
 ``geojax sweep SWEEP.toml --out FILE.h5 --ray [ADDRESS]`` (``sweep.run_sweep(..., ray=ADDRESS)``) plans the
 chunks exactly as a local sweep does and hands them to Ray.  The workers are Ray actors, by default one
-per node, each using its share of the node's cores as XLA devices through ``parallel.per_device``; a
+per node, each using its share of the node's cores (or GPUs) as XLA devices through ``parallel.per_device``; a
 worker compiles each controller once (``sweep.ChunkRunner``) and runs chunk after chunk.  The driver
 keeps at most two chunks queued per worker, so a fast worker takes more, and writes every finished chunk
 into ``FILE.h5.parts/`` itself, atomically and once: ``--resume`` continues whatever stopped (the driver,
@@ -102,18 +102,23 @@ class ChunkWorker:
         return self.runners[controller].run(first, length), (os.getpid(), compile_s)
 
 
-def placements(nodes: list[dict], workers: int | None) -> list[tuple[str, int]]:
-    """(node id, XLA devices) of each worker: round-robin over the alive nodes (ordered by id), each
-    worker one device per core of its equal share of its node's CPUs."""
+def placements(nodes: list[dict], workers: int | None) -> list[tuple[str, int, float]]:
+    """(node id, XLA CPU devices, GPUs) of each worker: round-robin over the alive nodes (ordered by id),
+    each worker one CPU device per core of its equal share of its node's CPUs, and its share of the node's
+    GPUs (Ray hides the GPUs from a worker that does not ask for them)."""
     alive = sorted((n for n in nodes if n.get("Alive") and n.get("Resources", {}).get("CPU", 0) >= 1),
                    key=lambda n: n["NodeID"])
     if not alive:
         raise ValueError("--ray: the cluster has no alive node with a CPU")
     count = workers or len(alive)
     per_node = collections.Counter(i % len(alive) for i in range(count))
-    return [(alive[i % len(alive)]["NodeID"],
-             max(1, int(alive[i % len(alive)]["Resources"]["CPU"]) // per_node[i % len(alive)]))
-            for i in range(count)]
+    placed = []
+    for i in range(count):
+        node, sharing = alive[i % len(alive)], per_node[i % len(alive)]
+        gpus = node["Resources"].get("GPU", 0.0)
+        placed.append((node["NodeID"], max(1, int(node["Resources"]["CPU"]) // sharing),
+                       float(gpus // sharing if gpus >= sharing else gpus / sharing)))
+    return placed
 
 
 def run_chunks(sweep, todo: list[tuple[str, int, int]], save, bar, workers: int | None = None) -> float:
@@ -126,10 +131,11 @@ def run_chunks(sweep, todo: list[tuple[str, int, int]], save, bar, workers: int 
     if not todo:
         return 0.0
     remote = ray.remote(ChunkWorker)
-    actors = [remote.options(num_cpus=devices, max_restarts=MAX_RESTARTS, max_task_retries=MAX_RESTARTS,
+    actors = [remote.options(num_cpus=devices, num_gpus=gpus, max_restarts=MAX_RESTARTS,
+                             max_task_retries=MAX_RESTARTS,
                              scheduling_strategy=NodeAffinitySchedulingStrategy(node, soft=True))
               .remote(sweep, devices)
-              for node, devices in placements(ray.nodes(), workers)]
+              for node, devices, gpus in placements(ray.nodes(), workers)]
     live = set(range(len(actors)))
     pending = collections.deque(todo)
     inflight: dict = {}  # ObjectRef -> (worker, chunk)

@@ -111,10 +111,11 @@ def when_first_chunk_saved(parts: Path, action, timeout_s: float = 300.0) -> thr
 
 def test_worker_placement_shares_each_nodes_cores():
     nodes = [{"NodeID": "b", "Alive": True, "Resources": {"CPU": 2.0}},
-             {"NodeID": "a", "Alive": True, "Resources": {"CPU": 8.0}},
+             {"NodeID": "a", "Alive": True, "Resources": {"CPU": 8.0, "GPU": 2.0}},
              {"NodeID": "c", "Alive": False, "Resources": {"CPU": 64.0}}]
-    assert cluster.placements(nodes, None) == [("a", 8), ("b", 2)]  # one per alive node, all its cores
-    assert cluster.placements(nodes, 3) == [("a", 4), ("b", 2), ("a", 4)]  # two on a: four cores each
+    assert cluster.placements(nodes, None) == [("a", 8, 2.0), ("b", 2, 0.0)]  # one per alive node, all of it
+    assert cluster.placements(nodes, 3) == [("a", 4, 1.0), ("b", 2, 0.0), ("a", 4, 1.0)]  # two on a: halves
+    assert cluster.placements(nodes, 5)[0] == ("a", 2, pytest.approx(2 / 3))  # three on a: GPUs shared
     with pytest.raises(ValueError, match="no alive node"):
         cluster.placements(nodes[2:], None)
 
