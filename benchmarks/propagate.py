@@ -23,7 +23,7 @@ with the ``hy.select`` shadow and its steps capped at 20 s in eclipse seasons.
 
 Batch samples: sample 0 is the scenario's initial state, the others perturb p
 by up to +-1 km and L by up to +-0.01 rad (uniform, seeded).  "One year" is
-``geojax.uncontrolled.cycle_count(365.25)`` sidereal days (cycles), for every implementation.
+``geojax.uncontrolled.propagated_cycles(365.25)`` sidereal days (cycles), for every implementation.
 
 Accuracy: the one-year change of the mean inclination vector
 i (cos Omega, sin Omega) [deg] from the first to the last one-cycle mean
@@ -79,7 +79,7 @@ from geojax.physics.forces import ForceModel, perturbing_acceleration, point_mas
 from geojax.loop.simulate import propagate as propagate_cycles
 from geojax.physics.propagate import MEE, environment_at, environment_grid, steps_per_cycle
 from geojax.parallel import replicate, shard_batch
-from geojax.uncontrolled import cycle_count, inclination_vector_deg
+from geojax.uncontrolled import propagated_cycles, inclination_vector_deg
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from baselines import heyoka_model, numpy_model  # noqa: E402
@@ -234,7 +234,7 @@ def make_problem(days: float, max_batch: int, seed: int) -> Problem:
     mee[1:, 0] += rng.uniform(-1e3, 1e3, max_batch - 1)
     mee[1:, 5] += rng.uniform(-0.01, 0.01, max_batch - 1)
     r, v = mee_to_cartesian(jnp.asarray(mee), force_model.mu_m3_s2)
-    n_cycles = cycle_count(days)
+    n_cycles = propagated_cycles(days)
     return Problem(
         scenario=scenario,
         force_model=force_model,
@@ -843,7 +843,7 @@ def markdown(results: dict) -> str:
         f"NumPy {m['numpy']}, SciPy {m['scipy']}; load average at start {m['load_average_at_start'][0]:.2f}. "
         f"geojax {m['geojax']} at git {m['geojax_git']}.",
         "",
-        f"Propagation: {c['n_cycles']} sidereal days (cycle_count({c['days']:g} d)), J2 + Sun + Moon + SRP "
+        f"Propagation: {c['n_cycles']} sidereal days (propagated_cycles({c['days']:g} d)), J2 + Sun + Moon + SRP "
         "(Li 2022, eq. (4)), **Earth shadow off in all three** (see Notes). Float64 everywhere.",
         "",
     ]

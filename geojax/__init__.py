@@ -8,7 +8,9 @@ The public API (shapes and units in each docstring):
   ``Result.metrics`` (units in the names), ``Result.status`` (``STATUS_MEANINGS``), ``Result.records``.
 * ``simulate_batch(scenario, params, seeds=...) -> Result``: a batch in one compiled call (leading axis on
   every leaf); ``prepare_params(scenario, n)`` gives n copies of a scenario's ``Params`` to edit.
-* ``load_sweep`` / ``run_sweep``: Monte Carlo sweeps to HDF5, resumable; ``read_results`` reads a file back.
+* ``load_sweep`` / ``run_sweep``: Monte Carlo sweeps to HDF5, resumable (``ray=``: on a Ray cluster);
+  ``open_results`` reads any results file as an ``xarray.Dataset`` (named dimensions, coordinates, units),
+  ``read_results`` as plain arrays.
 * ``load_tuning`` / ``tune_gains``: gains tuned by derivatives through rollouts.
 * ``Controller`` (``init``, ``plan``, ``thrust`` and their ``Field`` declarations), ``Thrust``, ``Params``:
   to write a controller of one's own (see the README).
@@ -29,6 +31,7 @@ from geojax.params import LOG, Field, Params  # noqa: E402
 from geojax.scenario import Scenario  # noqa: E402
 from geojax.scenario import available as available_scenarios  # noqa: E402
 from geojax.scenario import load as load_scenario  # noqa: E402
+from geojax.results import open_results  # noqa: E402
 from geojax.store import read_h5 as read_results  # noqa: E402
 from geojax.sweep import load as load_sweep  # noqa: E402
 from geojax.sweep import run_sweep  # noqa: E402
@@ -39,6 +42,6 @@ from geojax.tune import tune as tune_gains  # noqa: E402
 __all__ = [
     "Controller", "CycleContext", "Estimate", "Field", "LOG", "Params", "Result", "STATUS_MEANINGS", "Scenario",
     "SpacecraftState", "StepEnvironment", "Thrust", "available_scenarios", "load_scenario", "load_sweep",
-    "load_tuning", "prepare_params", "read_results", "run_sweep", "simulate", "simulate_batch", "tune_gains",
+    "load_tuning", "open_results", "prepare_params", "read_results", "run_sweep", "simulate", "simulate_batch", "tune_gains",
     "tuning_from_dict",
 ]

@@ -2,11 +2,14 @@
 
     geojax demo [--out DIR]
     geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5]
-    geojax simulate SCENARIO [--controller qffc|fompc] [--horizon N] [--days D] [--seed S] [--out FILE.h5] [--plots DIR]
+    geojax simulate SCENARIO [--controller qffc|fompc|lyapunov] [--horizon N] [--days D] [--seed S] [--out FILE.h5] [--plots DIR]
     geojax sweep SWEEP.toml --out FILE.h5 [--resume] [--chunk N] [--ray [ADDRESS]] [--workers N]
-    geojax tune TUNE.toml --out FILE.h5 [--quiet]
-    geojax plot FILE.h5 [--out DIR]
-    geojax scenarios
+    geojax tune TUNE.toml --out FILE.h5
+    geojax plot FILE.h5 [--out DIR] [--format png|pdf|svg] [--dpi N]
+    geojax scenarios [--show NAME]
+
+Every command takes -q (print only the files written) and -v (also compilation times and devices).
+``--days D`` means D solar days, run as round(D / sidereal day) cycles, in every command.
 
 Bad input (an unknown scenario, a field of the wrong type or out of range)
 prints one line naming the field and what is allowed, and exits with status 2.
@@ -58,6 +61,10 @@ def _version() -> str:
     return geojax.__version__
 
 
+DAYS_HELP = ("duration in solar days (default: the scenario's); the run is that many sidereal-day cycles, "
+             "rounded (20 days: 20 cycles), the same in propagate, simulate, sweep and tune")
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="geojax",
@@ -65,39 +72,46 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"geojax {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    common = argparse.ArgumentParser(add_help=False)  # every command: -q / -v
+    talk = common.add_mutually_exclusive_group()
+    talk.add_argument("-q", "--quiet", action="store_true", help="print only the files written (and errors)")
+    talk.add_argument("-v", "--verbose", action="store_true",
+                      help="also print compilation times, devices and where each number comes from")
 
-    demo = sub.add_parser("demo", help="li2022 for one year, without control and with the QFFC: summaries, figures")
-    demo.add_argument("--out", default="geojax-demo", help="folder for the figure and HDF5 file (default: geojax-demo)")
+    def command(name, **kw):
+        return sub.add_parser(name, parents=[common], **kw)
+
+    demo = command("demo", help="li2022 for one year, without control and with the QFFC: summaries, figures")
+    demo.add_argument("--out", default="geojax-demo", help="folder for the figures and HDF5 files (default: geojax-demo)")
     demo.set_defaults(func=_demo)
 
-    prop = sub.add_parser("propagate", help="uncontrolled propagation; one-cycle mean elements per sidereal day")
+    prop = command("propagate", help="uncontrolled propagation; one-cycle mean elements per sidereal day")
     prop.add_argument("scenario", help="a shipped scenario name (see 'geojax scenarios') or a .toml path")
-    prop.add_argument("--days", type=float, help="duration in days (default: the scenario's)")
+    prop.add_argument("--days", type=float, help=DAYS_HELP)
     prop.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
     prop.add_argument("--out", help="write the per-cycle mean elements to this HDF5 file")
-    prop.add_argument("--quiet", action="store_true", help="no progress bar")
     prop.set_defaults(func=_propagate)
 
-    sim = sub.add_parser("simulate", help="closed-loop station keeping (any controller); summary, metrics, status, HDF5")
+    sim = command("simulate", help="closed-loop station keeping (any controller); summary, metrics, status, HDF5")
     sim.add_argument("scenario", help="a scenario with a [controller] table, e.g. li2022-qffc, li2022-fompc, or a .toml path")
     sim.add_argument("--controller", help="override controller.kind (qffc, fompc, lyapunov, ...)")
     sim.add_argument("--horizon", type=int, help="FOMPC prediction horizon N in cycles, 1-10 (default: the scenario's)")
-    sim.add_argument("--days", type=float, help="duration in days (default: the scenario's)")
+    sim.add_argument("--days", type=float, help=DAYS_HELP)
     sim.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
     sim.add_argument("--seed", type=int, default=0, help="seed of the orbit-determination and attitude errors (default 0)")
     sim.add_argument("--h-rv", type=float, help="orbit-determination error level H_rv (Li 2022 eq. 48; default: the scenario's)")
     sim.add_argument("--h-att", type=float, help="attitude error level H_att (default: the scenario's)")
     sim.add_argument("--out", help="write /metrics and /cycles to this HDF5 file")
-    sim.add_argument("--plots", help="folder for the mean-element figure")
+    sim.add_argument("--plots", help="folder for the figures")
     sim.set_defaults(func=_simulate)
 
-    tune = sub.add_parser("tune", help="tune Milankovitch-Lyapunov gains by gradients through the rollout (Katz 2025)")
+    tune = command("tune", help="tune controller gains by gradients through the rollout (Katz 2025)")
     tune.add_argument("file", help="a tuning file (TOML; see geojax.tune for the keys)")
-    tune.add_argument("--out", required=True, help="results file (HDF5): /iterations per iteration, /best, /metrics")
-    tune.add_argument("--quiet", action="store_true", help="no per-iteration lines")
+    tune.add_argument("--out", required=True, help="results file (HDF5): /iterations per iteration, /best, /metrics; "
+                      "the tuned scenario is written beside it as FILE-tuned.toml")
     tune.set_defaults(func=_tune)
 
-    swp = sub.add_parser("sweep", help="Monte Carlo sweep over scenario parameters x repetitions x controllers; HDF5")
+    swp = command("sweep", help="Monte Carlo sweep over scenario parameters x repetitions x controllers; HDF5")
     swp.add_argument("file", help="a sweep file (TOML; see geojax.sweep for the keys)")
     swp.add_argument("--out", required=True, help="results file (HDF5); chunks are kept in FILE.h5.parts/ until done")
     swp.add_argument("--resume", action="store_true", help="continue an interrupted sweep into the same --out")
@@ -108,18 +122,29 @@ def _parser() -> argparse.ArgumentParser:
                      "ray://HOST:PORT, on a running cluster (pip install \"geojax[ray]\"); same results as a local run")
     swp.add_argument("--workers", type=int, help="with --ray: worker processes (default one per node, each using "
                      "its node's cores)")
-    swp.add_argument("--quiet", action="store_true", help="no progress bar")
     swp.set_defaults(func=_sweep)
 
-    plot = sub.add_parser("plot", help="draw the figures of a results file")
+    plot = command("plot", help="draw the figures of a results file (simulate, propagate, sweep, tune)")
     plot.add_argument("file", help="an HDF5 file written by geojax")
     plot.add_argument("--out", help="folder for the figures (default: next to the file)")
+    plot.add_argument("--format", choices=("png", "pdf", "svg"), default="png", help="figure format (default png)")
+    plot.add_argument("--dpi", type=int, default=150, help="resolution of PNG figures (default 150)")
     plot.set_defaults(func=_plot)
 
-    scen = sub.add_parser("scenarios", help="list the shipped scenarios, or print one's TOML")
+    scen = command("scenarios", help="list the shipped scenarios, or print one's TOML")
     scen.add_argument("--show", metavar="NAME", help="print the TOML of the shipped scenario NAME")
     scen.set_defaults(func=_scenarios)
     return parser
+
+
+def _say(args):
+    """``print`` unless ``-q``."""
+    return (lambda *a, **k: None) if getattr(args, "quiet", False) else print
+
+
+def _detail(args):
+    """``print`` with ``-v`` only."""
+    return print if getattr(args, "verbose", False) else (lambda *a, **k: None)
 
 
 def _overrides(args) -> dict:
@@ -135,14 +160,19 @@ def _propagate(args) -> int:
     from geojax import scenario, store
     from geojax import uncontrolled as run
 
+    from geojax.loop.setup import cycle_count
+
     sc = scenario.load(args.scenario, _overrides(args))
-    result = run.propagate_scenario(sc, progress=None if not args.quiet else False)
+    _check_outputs(args)
+    result = run.propagate_scenario(sc, progress=False if args.quiet else None)
     summary = run.drift_summary(result.cycles, sc.days)
-    _print_summary(sc, result, summary)
+    _print_summary(sc, result, summary, _say(args))
+    _detail(args)(f"  devices {store.device_description()}; propagated {len(result.cycles.t_s)} cycles to interpolate "
+                  f"the change over exactly {sc.days:g} days")
     if args.out:
         path = store.write_h5(
             args.out,
-            {"cycles": run.cycles_table(result.cycles)},
+            {"cycles": run.cycles_table(result.cycles, cycle_count(sc.days))},
             scenario.to_toml(sc.config),
             result.wall_s,
             attrs={"kind": "propagate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s, "step_s": result.step_s},
@@ -181,21 +211,32 @@ def _simulate(args) -> int:
     if sc.controller == "none":
         raise ValueError(f"controller.kind: {sc.name} has no controller; give --controller or use 'geojax propagate'")
     _check_outputs(args)
-    print(f"{sc.name}: {sc.controller} for {sc.days:g} days (compiling, then running)...", flush=True)
+    say, detail = _say(args), _detail(args)
+    say(f"{sc.name}: {sc.controller} for {sc.days:g} days; compiling...", flush=True)
     feedback = sc.controller == "lyapunov"
-    result = simulate(sc, args.seed, keep_steps=feedback)
+    result = simulate(sc, args.seed, keep_steps=feedback,
+                      on_compiled=lambda s: say(f"compiled in {s:.1f} s; running...", flush=True))
     cycles = result.cycles()
-    print(f"{sc.name}: {sc.controller}, {len(cycles['t_s'])} cycles, {result.wall_s:.1f} s wall, "
-          f"status {int(result.status)} ({STATUS_MEANINGS[int(result.status)]})")
+    run_s = result.wall_s - result.compile_s
+    say(f"{sc.name}: {sc.controller}, {len(cycles['t_s'])} cycles in {run_s:.1f} s after compilation, "
+        f"status {int(result.status)} ({STATUS_MEANINGS[int(result.status)]})")
+    detail(f"  devices {_devices()}; the run is one compiled call (no host callbacks in the loop), so it reports "
+           f"its times instead of a progress bar")
     if feedback:
         mode = sc.config["controller"]["thrust_mode"]
         paper, source = (KATZ.get(mode, {}), "Katz 2025") if sc.name.startswith("katz2025") else ({}, "")
     else:
         paper, source = (PAPER.get(sc.controller, {}), "Li 2022") if sc.name.startswith("li2022") else ({}, "")
-    metrics = {**{k: float(v) for k, v in result.metrics.items()}, "cpu_s_per_orbit": result.wall_s / len(cycles["t_s"])}
-    print(f"  {'metric':32s} {'geojax':>12s}  {source}")
+    metrics = {**{k: float(v) for k, v in result.metrics.items()}, "cpu_s_per_orbit": run_s / len(cycles["t_s"])}
+    changed = _departures_from_paper(args, sc) if paper else []
+    if changed:
+        source = f"{source} (its own run)"
+    say(f"  {'metric':32s} {'geojax':>12s}  {source}")
     for name, value in metrics.items():
-        print(f"  {name:32s} {value:12.5g}  {paper.get(name, '')}")
+        say(f"  {name:32s} {value:12.5g}  {paper.get(name, '')}")
+    if changed:
+        say(f"  note: {source.split(' (')[0]}'s numbers are for its own run; this one differs in "
+            f"{', '.join(changed)}, so they are shown for orientation only")
     groups = {"metrics": {**metrics, "status": int(result.status)}, "cycles": cycles}
     steps = _steps_table(result) if feedback else None
     if steps is not None:
@@ -205,19 +246,46 @@ def _simulate(args) -> int:
     if args.out:
         path = store.write_h5(args.out, groups, scenario.to_toml(sc.config), result.wall_s,
                               attrs={"kind": "simulate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s,
-                                     "seed": args.seed, "status_codes": _status_text()})
+                                     "seed": args.seed, "compile_s": result.compile_s,
+                                     "status_codes": _status_text()})
         print(f"wrote {path}")
     if args.plots:
         title = f"{sc.name}, {sc.controller}"
+        box = sc.config["station"]["box_half_width_deg"]
         if steps is not None:
-            figures = plots.plot_feedback(steps, sc.config["station"]["box_half_width_deg"], Path(args.plots) / sc.name,
+            figures = plots.plot_feedback(steps, box, Path(args.plots) / sc.name,
                                           title=f"{sc.name}, {sc.config['controller']['thrust_mode']} thrust")
         else:
             figures = [plots.plot_cycles(cycles, Path(args.plots) / f"{sc.name}.png", title=title),
                        plots.plot_station_keeping(cycles, groups["reference"], groups["target"],
-                                                  Path(args.plots) / f"{sc.name}-station-keeping.png", title=title)]
+                                                  Path(args.plots) / f"{sc.name}-station-keeping.png", title=title,
+                                                  box_half_width_deg=box)]
         print("wrote " + " and ".join(map(str, figures)))
     return 0
+
+
+def _departures_from_paper(args, sc) -> list[str]:
+    """The settings of this run that differ from the paper's run of its scenario ("duration.days = 20")."""
+    from geojax import scenario
+
+    shipped = scenario.load(sc.name).config if sc.name in scenario.available() else None
+    if shipped is None:
+        return ["the scenario (a file of one's own)"]
+    out = []
+    for table, values in sc.config.items():
+        if isinstance(values, dict):
+            for key, value in values.items():
+                if shipped.get(table, {}).get(key) != value:
+                    out.append(f"{table}.{key} = {value}")
+    if args.seed != 0:
+        out.append(f"seed = {args.seed}")
+    return out
+
+
+def _devices() -> str:
+    from geojax.store import device_description
+
+    return device_description()
 
 
 def _status_text() -> str:
@@ -249,76 +317,123 @@ def _tune(args) -> int:
 
     spec = tune.load(args.file)
     _check_outputs(args)
+    say = _say(args)
     result = tune.tune(spec, out=args.out, verbose=not args.quiet)
-    print(f"{spec.scenario.name}: {result.message}; {result.wall_s:.1f} s wall")
+    say(f"{spec.scenario.name}: {result.message}; {result.wall_s:.1f} s wall")
     if result.best_params is None:
-        print("  no feasible point: every iterate left the box with the exact law")
+        say("  no feasible point: every iterate left the box with the exact law")
+        print(f"wrote {args.out}")
         return 1
     fields = scenario.controller_fields(spec.scenario.config["controller"], spec.controller)
     for name, value in tune.paper_units(result.best_params, fields).items():
-        print(f"  {name:24s} {value:.6g}")
-    print(f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept "
-          f"(constraint lon {result.best_constraint[0]:+.4f}, lat {result.best_constraint[1]:+.4f})")
-    print(f"wrote {args.out}")
+        say(f"  {name:24s} {value:.6g}")
+    say(f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept "
+        f"(constraint lon {result.best_constraint[0]:+.4f}, lat {result.best_constraint[1]:+.4f})")
+    print(f"wrote {args.out} and {tune.tuned_scenario_path(args.out)} (run it: geojax simulate "
+          f"{tune.tuned_scenario_path(args.out)})")
     return 0
 
 
-def _print_summary(sc, result, summary) -> None:
-    print(f"{sc.name}: {len(result.cycles.t_s)} sidereal-day cycles, step {result.step_s:.2f} s, "
-          f"{sc.dynamics.upper()} RK4, {result.wall_s:.1f} s wall")
-    print(f"  mean inclination       {summary.i_start_deg:.4f} deg -> {summary.i_end_deg:.4f} deg")
-    print(f"  inclination-vector change  {summary.di_deg:.4f} deg towards {summary.di_direction_deg:.1f} deg "
-          f"over {summary.elapsed_days:.1f} days")
-    print(f"  mean longitude drift   {summary.dlon_deg:+.4f} deg")
-    print(f"  largest |e - e0|       {summary.de_max:.3e}")
+def _print_summary(sc, result, summary, say=print) -> None:
+    from geojax.loop.setup import cycle_count
+
+    say(f"{sc.name}: {sc.days:g} days, {cycle_count(sc.days)} sidereal-day cycles, step {result.step_s:.2f} s, "
+        f"{sc.dynamics.upper()} RK4, {result.wall_s:.1f} s wall")
+    say(f"  mean inclination       {summary.i_start_deg:.4f} deg -> {summary.i_end_deg:.4f} deg")
+    say(f"  inclination-vector change  {summary.di_deg:.4f} deg towards {summary.di_direction_deg:.1f} deg "
+        f"over {summary.elapsed_days:.1f} days")
+    say(f"  mean longitude drift   {summary.dlon_deg:+.4f} deg")
+    say(f"  largest |e - e0|       {summary.de_max:.3e}")
 
 
 def _demo(args) -> int:
     from geojax import plots, scenario, store
     from geojax import uncontrolled as run
 
+    from geojax.loop.setup import cycle_count
+
     out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {str(out)!r}: exists and is not a folder")
+    say = _say(args)
     sc = scenario.load("li2022")
-    print("geojax demo 1/2: one year of li2022 without station keeping (Li 2022 initial state, J2 + Sun + Moon + SRP)")
-    result = run.propagate_scenario(sc)
+    say("geojax demo 1/2: one year of li2022 without station keeping (Li 2022 initial state, J2 + Sun + Moon + SRP)")
+    result = run.propagate_scenario(sc, progress=False if args.quiet else None)
     summary = run.drift_summary(result.cycles, sc.days)
-    _print_summary(sc, result, summary)
-    table = run.cycles_table(result.cycles)
+    _print_summary(sc, result, summary, say)
+    table = run.cycles_table(result.cycles, cycle_count(sc.days))
     h5 = store.write_h5(out / "li2022-uncontrolled.h5", {"cycles": table}, scenario.to_toml(sc.config), result.wall_s,
                         attrs={"kind": "propagate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s, "step_s": result.step_s})
     figure = plots.plot_cycles(table, out / "li2022-uncontrolled.png", title="li2022, no control, one year")
     print(f"wrote {h5} and {figure}")
-    print()
-    print("geojax demo 2/2: the same year with QFFC station keeping (li2022-qffc, normal arm limits)")
-    args_sim = argparse.Namespace(scenario="li2022-qffc", controller=None, horizon=None, days=None, step=None, seed=0, h_rv=None, h_att=None,
-                                  out=str(out / "li2022-qffc.h5"), plots=str(out))
+    say()
+    say("geojax demo 2/2: the same year with QFFC station keeping (li2022-qffc, normal arm limits)")
+    args_sim = argparse.Namespace(scenario="li2022-qffc", controller=None, horizon=None, days=None, step=None, seed=0,
+                                  h_rv=None, h_att=None, out=str(out / "li2022-qffc.h5"), plots=str(out),
+                                  quiet=args.quiet, verbose=args.verbose)
     return _simulate(args_sim)
 
 
 def _sweep(args) -> int:
-    import numpy as np
-
     from geojax import store, sweep
 
     spec = sweep.load(args.file)
     _check_outputs(args)
+    say = _say(args)
     n = spec.n_points * spec.repetitions
-    print(f"{spec.name}: {len(spec.controllers)} controller(s) x {spec.n_points} grid point(s) x "
-          f"{spec.repetitions} repetition(s) = {len(spec.controllers) * n} samples", flush=True)
+    say(f"{spec.name}: {len(spec.controllers)} controller(s) x {spec.n_points} grid point(s) x "
+        f"{spec.repetitions} repetition(s) = {len(spec.controllers) * n} samples", flush=True)
     path = sweep.run_sweep(spec, args.out, resume=args.resume, chunk=args.chunk, progress=False if args.quiet else None,
                            ray=args.ray, workers=args.workers)
-    groups, _ = store.read_h5(path)
-    dv = groups["metrics"]["dv_per_year_mps"]
-    from geojax.loop.metrics import STATUS_MEANINGS
-
-    for i, controller in enumerate(spec.controllers):
-        codes = groups["status"]["code"][i]
-        counts = ", ".join(f"{int(np.sum(codes == c))} {STATUS_MEANINGS[c]}" for c in range(1, len(STATUS_MEANINGS))
-                           if np.any(codes == c))
-        print(f"  {controller}: ΔV per year {np.nanmean(dv[i]):.2f} m/s/yr averaged over the sweep; "
-              f"{counts or 'every sample ok'}")
+    groups, attrs = store.read_h5(path)
+    _detail(args)(f"  compiled in {float(attrs.get('compile_s', float('nan'))):.1f} s, {float(attrs['wall_s']):.1f} s "
+                  f"wall in all, on {attrs['device']}")
+    for line in sweep_summary(spec, groups):
+        say(line)
     print(f"wrote {path}")
     return 0
+
+
+SUMMARY_ROWS = 40  # grid points listed per controller; the rest: geojax plot or geojax.open_results
+
+
+def sweep_summary(spec, groups) -> list[str]:
+    """One line per controller and grid point: ΔV per year (mean ± std over the repetitions), box half-ranges
+    and the statuses; a warning where the repetitions of a point are identical (nothing random in them)."""
+    import itertools
+
+    import numpy as np
+
+    from geojax.loop.metrics import STATUS_MEANINGS
+
+    metrics, codes = groups["metrics"], groups["status"]["code"]
+    keys = list(spec.grid)
+    points = list(itertools.product(*spec.grid.values()))
+    lines, identical = [], []
+    for i, controller in enumerate(spec.controllers):
+        lines.append(f"  {controller}:")
+        flat = {k: np.asarray(v[i]).reshape(len(points), spec.repetitions) for k, v in metrics.items()}
+        status = np.asarray(codes[i]).reshape(len(points), spec.repetitions)
+        for j, point in enumerate(points[:SUMMARY_ROWS]):
+            dv = flat["dv_per_year_mps"][j]
+            counts = ", ".join(f"{int(np.sum(status[j] == c))} {STATUS_MEANINGS[c]}"
+                               for c in range(1, len(STATUS_MEANINGS)) if np.any(status[j] == c))
+            where = ", ".join(f"{k.rpartition('.')[2]} {v:g}" for k, v in zip(keys, point, strict=True))
+            spread = f" ± {np.std(dv):.2f}" if spec.repetitions > 1 else ""
+            lines.append(f"    {where}: ΔV {np.mean(dv):.2f}{spread} m/s/yr, max |δλ| "
+                         f"{np.max(flat['max_abs_dlon_deg'][j]):.4f}°, max |δφ| {np.max(flat['max_abs_dlat_deg'][j]):.4f}°; "
+                         f"{counts or 'all ok'}")
+        if len(points) > SUMMARY_ROWS:
+            lines.append(f"    ... {len(points) - SUMMARY_ROWS} more grid points (geojax plot, geojax.open_results)")
+        if spec.repetitions > 1:
+            same = all(np.array_equal(v, v[:, :1].repeat(spec.repetitions, 1), equal_nan=True) for v in flat.values())
+            if same:
+                identical.append(controller)
+    if identical:
+        lines.append(f"  warning: the {spec.repetitions} repetitions of every grid point are identical for "
+                     f"{', '.join(identical)}: nothing random in them (no orbit-determination or attitude errors, no "
+                     f"[dispersion], a deterministic controller); use repetitions = 1, or add errors or a dispersion")
+    return lines
 
 
 def _plot(args) -> int:
@@ -327,28 +442,37 @@ def _plot(args) -> int:
     path = Path(args.file)
     if not path.is_file():
         raise ValueError(f"file {str(path)!r}: no such file")
+    if not 10 <= args.dpi <= 2400:
+        raise ValueError(f"--dpi: must be from 10 to 2400, got {args.dpi}")
     try:
         groups, attrs = store.read_h5(path)
     except OSError:
         raise ValueError(f"file {str(path)!r}: not an HDF5 file") from None
     out = Path(args.out) if args.out else path.parent
-    if attrs.get("kind") == "sweep":
-        figure = plots.plot_sweep(groups, str(attrs["grid_axes"]).split(","), out / f"{path.stem}.png",
-                                  title=str(attrs.get("name", path.stem)))
-        print(f"wrote {figure}")
-        return 0
-    if "steps" in groups:  # a feedback run (Katz 2025)
-        box = _box_half_width_deg(attrs)
-        figures = plots.plot_feedback(groups["steps"], box, out / path.stem, title=str(attrs.get("scenario", path.stem)))
-        print("wrote " + " and ".join(map(str, figures)))
-        return 0
-    if "cycles" not in groups:
-        raise ValueError(f"file {str(path)!r}: no /cycles group to plot")
-    title = str(attrs.get("scenario", path.stem))
-    figures = [plots.plot_cycles(groups["cycles"], out / f"{path.stem}.png", title=title)]
-    if {"reference", "target"} <= set(groups):
-        figures.append(plots.plot_station_keeping(groups["cycles"], groups["reference"], groups["target"],
-                                                  out / f"{path.stem}-station-keeping.png", title=title))
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {str(out)!r}: exists and is not a folder")
+    ext, dpi = args.format, args.dpi
+    title = str(attrs.get("scenario", attrs.get("name", path.stem)))
+    kind = attrs.get("kind")
+    if kind == "sweep":
+        figures = [plots.plot_sweep(groups, str(attrs["grid_axes"]).split(","), out / f"{path.stem}.{ext}",
+                                    title=str(attrs.get("name", path.stem)), dpi=dpi)]
+    elif kind == "tune":
+        if "iterations" not in groups:
+            raise ValueError(f"file {str(path)!r}: a tuning file without /iterations (stopped before its first)")
+        figures = [plots.plot_tuning(groups, out / f"{path.stem}-convergence.{ext}",
+                                     title=f"{title}: tuning {attrs.get('parameters', '')}", dpi=dpi)]
+    elif "steps" in groups:  # a feedback run (Katz 2025)
+        figures = plots.plot_feedback(groups["steps"], _box_half_width_deg(attrs), out / path.stem, title=title,
+                                      dpi=dpi, fmt=ext)
+    elif "cycles" in groups:
+        figures = [plots.plot_cycles(groups["cycles"], out / f"{path.stem}.{ext}", title=title, dpi=dpi)]
+        if {"reference", "target"} <= set(groups):
+            figures.append(plots.plot_station_keeping(groups["cycles"], groups["reference"], groups["target"],
+                                                      out / f"{path.stem}-station-keeping.{ext}", title=title,
+                                                      box_half_width_deg=_box_half_width_deg(attrs), dpi=dpi))
+    else:
+        raise ValueError(f"file {str(path)!r}: nothing geojax can plot (no /cycles, /steps, sweep or tuning data)")
     print("wrote " + " and ".join(map(str, figures)))
     return 0
 

@@ -175,8 +175,10 @@ def run_chunks(sweep, todo: list[tuple[str, int, int]], save, bar, workers: int 
                     continue
                 save(*task[:2], values)
                 pids[w].add(pid)
-                compile_s = max(compile_s, seconds)
                 bar.update(task[2])
+                if seconds > compile_s:  # a worker's first chunk of a controller: the rate starts after it
+                    compile_s = seconds
+                    bar.restart()
                 note()
         return compile_s
     finally:

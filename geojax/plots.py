@@ -1,7 +1,13 @@
-"""Figures from results (matplotlib, no display needed)."""
+"""Figures from results (matplotlib, no display needed).
+
+Every figure is drawn under one style, ``STYLE`` (applied per call, never to matplotlib's global state),
+and written at ``dpi`` in the format its path's suffix names (``FORMATS``).  No axis carries offset text:
+small quantities are shown in a power of ten named in the axis label (``e_x (10⁻⁵)``, ``decade``).
+"""
 
 from __future__ import annotations
 
+import functools
 import warnings
 from pathlib import Path
 
@@ -10,135 +16,317 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.ticker import MaxNLocator, ScalarFormatter  # noqa: E402
+
+FORMATS = ("png", "pdf", "svg")
+
+STYLE = {
+    "font.size": 9, "axes.labelsize": 9, "axes.titlesize": 9, "figure.titlesize": 10,
+    "xtick.labelsize": 8, "ytick.labelsize": 8, "legend.fontsize": 8, "legend.framealpha": 0.85,
+    "axes.formatter.useoffset": False, "axes.formatter.use_mathtext": True,
+    "axes.grid": True, "grid.alpha": 0.3, "grid.linewidth": 0.5, "lines.linewidth": 1.0,
+    "savefig.bbox": "tight", "savefig.pad_inches": 0.03,
+    "pdf.fonttype": 42,  # TrueType in the PDF: text stays text, as journals ask
+}
+
+DAY_S = 86400.0
+UNCONTROLLED_DAYS = 30.0  # the uncontrolled ground track shown beside a closed loop (Li 2022 Fig. 4)
+INSET_RATIO = 0.2  # the controlled path gets a zoomed inset when it spans less than this of the uncontrolled one
+
+# Axis labels (name, unit) of the keys of sweeps, metrics and tunings; others follow ``_quantity``'s fallback.
+QUANTITIES = {
+    "thrusters.beta_max_deg": ("β_max", "deg"), "thrusters.beta_min_deg": ("β_min", "deg"),
+    "thrusters.alpha_max_deg": ("α_max", "deg"), "thrusters.alpha_min_deg": ("α_min", "deg"),
+    "controller.horizon": ("horizon N", "cycles"), "controller.di_max": ("Δi_max", ""),
+    "controller.k_h_per_km2_s": ("k_h", "1/(km² s)"), "controller.k_e_km2_per_s3": ("k_e", "km²/s³"),
+    "controller.k_lambda_km_per_rad": ("k_λ", "km/rad"), "controller.lambda_b_deg": ("λ_b", "deg"),
+    "controller.u0_km_per_s2": ("u_0", "km/s²"),
+    "errors.h_rv": ("H_rv", ""), "errors.h_att": ("H_att", ""),
+    "dv_per_year_mps": ("ΔV per year", "m/s/yr"), "max_abs_dlon_deg": ("max |δλ|", "deg"),
+    "max_abs_dlat_deg": ("max |δφ|", "deg"), "max_abs_mean_dlon_deg": ("max |mean δλ|", "deg"),
+    "mean_dlon_deg": ("mean δλ", "deg"), "dlon_half_range_deg": ("δλ half-range", "deg"),
+    "dlat_half_range_deg": ("δφ half-range", "deg"), "max_abs_de": ("max |δe|", ""), "max_abs_di": ("max |δi|", ""),
+    "mass_used_kg": ("propellant used", "kg"), "cycles_without_solution": ("cycles without solution", ""),
+}
+UNIT_SUFFIXES = {"_mps2": "m/s²", "_mps": "m/s", "_deg": "deg", "_rad": "rad", "_km": "km", "_kg": "kg",
+                 "_m2": "m²", "_m": "m", "_n": "N", "_s": "s", "_days": "days"}
+SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
 
-def plot_cycles(cycles: dict[str, np.ndarray], path: str | Path, title: str = "") -> Path:
+def _styled(plot):
+    """``plot`` drawn under ``STYLE`` whatever the caller's rcParams, which it leaves as they were."""
+    @functools.wraps(plot)
+    def styled(*args, **kwargs):
+        with matplotlib.rc_context(STYLE):
+            return plot(*args, **kwargs)
+    return styled
+
+
+@_styled
+def plot_cycles(cycles: dict[str, np.ndarray], path: str | Path, title: str = "", dpi: int = 150) -> Path:
     """Mean-element histories of a run: longitude, drift, eccentricity and inclination vectors, a.
 
-    ``cycles`` holds the ``/cycles`` datasets of ``geojax propagate``.
+    ``cycles`` holds the ``/cycles`` datasets of ``geojax propagate`` (t_s, lon_deg, drift_deg_per_day, ex, ey,
+    ix, iy, a_m; one value per cycle).
     """
-    days = np.asarray(cycles["t_s"]) / 86400.0
-    fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True)
+    days = np.asarray(cycles["t_s"]) / DAY_S
+    fig, axes = plt.subplots(2, 3, figsize=(7.2, 4.6), constrained_layout=True)
     ax = axes.ravel()
     ax[0].plot(days, np.degrees(np.unwrap(np.radians(cycles["lon_deg"]))))
     ax[0].set(xlabel="days", ylabel="mean longitude (deg E)")
-    ax[1].plot(days, cycles["drift_deg_per_day"])
-    ax[1].set(xlabel="days", ylabel="drift (deg/day)")
-    ax[2].plot(days, (np.asarray(cycles["a_m"]) - 42164.17e3) / 1e3)
-    ax[2].set(xlabel="days", ylabel="mean a - 42164.17 km (km)")
-    ax[3].plot(cycles["ex"], cycles["ey"])
-    ax[3].plot(cycles["ex"][:1], cycles["ey"][:1], "o", label="start")
-    ax[3].set(xlabel="e_x", ylabel="e_y", aspect="equal")
-    ax[3].legend()
-    ax[4].plot(cycles["ix"], cycles["iy"])
-    ax[4].plot(cycles["ix"][:1], cycles["iy"][:1], "o", label="start")
-    ax[4].set(xlabel="i_x = h", ylabel="i_y = k")
-    ax[4].legend()
-    ax[5].plot(days, np.degrees(2 * np.arctan(np.hypot(cycles["ix"], cycles["iy"]))))
-    ax[5].set(xlabel="days", ylabel="mean inclination (deg)")
-    return _save(fig, ax, title, path)
+    label, (drift,) = _scaled("drift", "deg/day", cycles["drift_deg_per_day"])
+    ax[1].plot(days, drift)
+    ax[1].set(xlabel="days", ylabel=label)
+    label, (da,) = _scaled("mean a − 42164.17 km", "km", (np.asarray(cycles["a_m"]) - 42164.17e3) / 1e3)
+    ax[2].plot(days, da)
+    ax[2].set(xlabel="days", ylabel=label)
+    for a, (x, y, xname, yname) in zip(ax[3:5], [("ex", "ey", "e_x", "e_y"), ("ix", "iy", "i_x = h", "i_y = k")]):
+        power = decade(cycles[x], cycles[y])
+        xs, ys = (np.asarray(cycles[k]) / 10.0**power for k in (x, y))
+        a.plot(xs, ys)
+        a.plot(xs[:1], ys[:1], "o", ms=4, label="start")
+        a.set(xlabel=_label(xname, "", power), ylabel=_label(yname, "", power), aspect="equal")
+        a.legend(loc="best")
+    label, (incl,) = _scaled("mean inclination", "deg", np.degrees(2 * np.arctan(np.hypot(cycles["ix"], cycles["iy"]))))
+    ax[5].plot(days, incl)
+    ax[5].set(xlabel="days", ylabel=label)
+    for a in ax:
+        a.xaxis.set_major_locator(MaxNLocator(5))
+        a.yaxis.set_major_locator(MaxNLocator(5))
+    return _save(fig, ax, title, path, dpi)
 
 
-def plot_station_keeping(cycles, reference, target, path: str | Path, title: str = "") -> Path:
-    """Li 2022 Figs. 4-8 from a closed-loop run: longitude history; the (d lambda, d phi),
-    (de_x, de_y) and (di_x, di_y) planes with the uncontrolled reference dashed (its
-    first 30 days in the ground-track plane); Delta-V_NS per cycle (eq. (45)) and
-    the mean pitch angle (eq. (46)).
+@_styled
+def plot_station_keeping(cycles, reference, target, path: str | Path, title: str = "",
+                         box_half_width_deg: float | None = None, dpi: int = 150) -> Path:
+    """Li 2022 Figs. 4-8 from a closed-loop run: mean longitude offset; the (δe_x, δe_y) and (δi_x, δi_y) planes
+    with the uncontrolled reference dashed and, when the controlled path is small beside it, a zoomed inset; the
+    ground track (δλ, δφ) with the reference's first 30 days and the ±box; ΔV_NS per cycle (eq. (45)) and the
+    mean pitch angle (eq. (46)).
 
-    ``cycles``, ``reference`` and ``target`` are the /cycles, /reference and /target
-    groups of ``geojax simulate --out``.
+    ``cycles``, ``reference`` and ``target`` are the /cycles, /reference and /target groups of
+    ``geojax simulate --out``; ``box_half_width_deg`` draws the station's box on the ground track.
     """
-    days = np.asarray(cycles["t_s"]) / 86400.0
-    ref_days = np.asarray(reference["t_s"]) / 86400.0
-    fig, axes = plt.subplots(2, 3, figsize=(14, 8), constrained_layout=True)
+    days = np.asarray(cycles["t_s"]) / DAY_S
+    ref_days = np.asarray(reference["t_s"]) / DAY_S
+    run = f"controlled, {_days_text(_run_days(cycles['t_s']))} days"
+    fig, axes = plt.subplots(2, 3, figsize=(7.2, 5.2), constrained_layout=True)
     ax = axes.ravel()
-    ax[0].plot(days, np.asarray(cycles["lon_deg"]) - target["lon_deg"], label="controlled")
-    ax[0].set(xlabel="days", ylabel="mean δλ (deg)")
-    ax[0].legend()
-    for a, (x, y, label) in zip(ax[1:3], [("ex", "ey", "e"), ("ix", "iy", "i")]):
-        a.plot(np.asarray(reference[x]) - target[x], np.asarray(reference[y]) - target[y], "r--", label="uncontrolled")
-        a.plot(np.asarray(cycles[x]) - target[x], np.asarray(cycles[y]) - target[y], label="controlled")
-        a.set(xlabel=f"δ{label}_x", ylabel=f"δ{label}_y")
-        a.ticklabel_format(style="sci", scilimits=(0, 0))
-        a.legend()
-    month = ref_days <= 30.0
+    label, (dlon,) = _scaled("mean δλ", "deg", np.asarray(cycles["lon_deg"]) - target["lon_deg"])
+    ax[0].plot(days, dlon)
+    ax[0].set(xlabel="days", ylabel=label)
+    for a, (x, y, name) in zip(ax[1:3], [("ex", "ey", "e"), ("ix", "iy", "i")]):
+        power = decade(*(np.asarray(g[k]) - target[k] for g in (reference, cycles) for k in (x, y)))
+        ref_x, ref_y, x_, y_ = ((np.asarray(g[k]) - target[k]) / 10.0**power for g in (reference, cycles) for k in (x, y))
+        a.plot(ref_x, ref_y, "r--", lw=0.8, label=f"uncontrolled, {_days_text(np.ptp(ref_days))} days")
+        a.plot(x_, y_, "C0", label=run)
+        a.plot(0.0, 0.0, "k+", ms=7, label="target")
+        a.set(xlabel=_label(f"δ{name}_x", "", power), ylabel=_label(f"δ{name}_y", "", power), aspect="equal",
+              xlim=_padded(np.r_[ref_x, x_], 1.1), ylim=_padded(np.r_[ref_y, y_], 1.1))
+        if 0.0 < _extent(x_, y_) < INSET_RATIO * _extent(ref_x, ref_y):
+            _zoom(a, x_, y_, np.r_[ref_x, x_], np.r_[ref_y, y_])
+        _legend_above(a)
+    month = ref_days - ref_days[0] <= UNCONTROLLED_DAYS
     ref_lon, ref_lat = ground_track_deg(*(np.asarray(reference[k])[month] for k in ("lon_deg", "ex", "ey", "ix", "iy")))
     lon, lat = ground_track_deg(*(np.asarray(cycles[k]) for k in ("lon_deg", "ex", "ey", "ix", "iy")))
-    ax[3].plot(ref_lon - target["lon_deg"], ref_lat, "r--", lw=0.6, label="uncontrolled, 30 days")
-    ax[3].plot(lon - target["lon_deg"], lat, lw=0.6, label="controlled")
-    ax[3].set(xlabel="δλ (deg)", ylabel="δφ (deg)", xlim=_padded(lon - target["lon_deg"]), ylim=_padded(lat))
-    ax[3].legend()
+    dlon, box = lon - target["lon_deg"], box_half_width_deg
+    ax[3].plot(ref_lon - target["lon_deg"], ref_lat, "r--", lw=0.6,
+               label=f"uncontrolled, first {_days_text(np.ptp(ref_days[month]))} days")
+    ax[3].plot(dlon, lat, "C0", lw=0.6, label=run)
+    if box is None:
+        ax[3].set(xlim=_padded(dlon), ylim=_padded(lat))
+    else:
+        ax[3].plot([-box, box, box, -box, -box], [-box, -box, box, box, -box], "k--", lw=0.8, label=f"box ±{box:g}°")
+        ax[3].set(xlim=_padded(np.r_[dlon, -box, box], 1.15), ylim=_padded(np.r_[lat, -box, box], 1.15), aspect="equal")
+    ax[3].set(xlabel="δλ (deg)", ylabel="δφ (deg)")
+    ax[3].xaxis.set_major_locator(MaxNLocator(4, symmetric=box is not None))
+    ax[3].yaxis.set_major_locator(MaxNLocator(4, symmetric=box is not None))
+    _legend_above(ax[3])
     v_total = np.asarray(cycles["v1_mps"]) + np.asarray(cycles["v2_mps"])
     dv_ns = np.asarray(cycles["dv_ns_mps"])
-    ax[4].plot(days, dv_ns)
-    ax[4].set(xlabel="days", ylabel="ΔV_NS per cycle (m/s), eq. (45)")
+    label, (dv_ns_shown,) = _scaled("ΔV_NS per cycle", "m/s", dv_ns)
+    ax[4].plot(days, dv_ns_shown)
+    ax[4].set(xlabel="days", ylabel=label)
     mean_beta = np.degrees(np.arcsin(np.clip(dv_ns / np.where(v_total > 0, v_total, 1.0), 0.0, 1.0)))
     ax[5].plot(days[v_total > 0], mean_beta[v_total > 0])
-    ax[5].set(xlabel="days", ylabel="mean pitch β̄ (deg), eq. (46)")
-    return _save(fig, ax, title, path)
+    ax[5].set(xlabel="days", ylabel=r"mean pitch $\bar{\beta}$ (deg)")
+    for a in ax[[0, 4, 5]]:
+        a.xaxis.set_major_locator(MaxNLocator(5))
+    return _save(fig, ax, title, path, dpi)
 
 
+@_styled
 def plot_sweep(groups, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
-               label: str = "") -> Path:
+               label: str = "", dpi: int = 150) -> Path:
     """A sweep's metric against its first swept parameter: mean and spread (min-max) over the
     repetitions, one line per controller (and per value of any further axis), unstable points
     (status 2) marked with a cross.  ``groups`` are the groups of a ``geojax sweep`` file."""
-    return plot_sweeps([(label, groups)], axes_names, path, metric, title)
+    return plot_sweeps([(label, groups)], axes_names, path, metric, title, dpi=dpi)
 
 
-def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "") -> Path:
+@_styled
+def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
+                dpi: int = 150) -> Path:
     """``plot_sweep`` for several sweeps over the same parameter on one axis: ``runs`` is [(label, groups)]."""
-    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(5.0, 3.4), constrained_layout=True)
     param = axes_names[1]
+    x_power = decade(*(np.asarray(g["grid"][param.replace(".", "__")], float) for _, g in runs))
+    y_power = decade(*(np.asarray(g["metrics"][metric], float) for _, g in runs))
     for prefix, groups in runs:
-        values = np.asarray(groups["metrics"][metric])  # [controller, grid..., reps]
+        values = np.asarray(groups["metrics"][metric], float) / 10.0**y_power  # [controller, grid..., reps]
         status = np.asarray(groups["status"]["code"])
         controllers = [c.decode() if isinstance(c, bytes) else str(c) for c in groups["grid"]["controller"]]
-        x = np.asarray(groups["grid"][param.replace(".", "__")])
+        x = np.asarray(groups["grid"][param.replace(".", "__")], float) / 10.0**x_power
         for i, controller in enumerate(controllers):
             v = values[i].reshape(len(x), -1, values.shape[-1])  # [x, other axes, reps]
             s = status[i].reshape(v.shape)
             for j in range(v.shape[1]):
-                label = " ".join(filter(None, [prefix, controller.upper(), f"#{j}" if v.shape[1] > 1 else ""]))
+                name = " ".join(filter(None, [prefix, controller.upper(), f"#{j}" if v.shape[1] > 1 else ""]))
                 stable = np.where(s[:, j] == 2, np.nan, v[:, j])
+                bad = np.any(s[:, j] == 2, axis=-1)
                 with warnings.catch_warnings():  # a point whose every repetition is unstable has no spread
                     warnings.simplefilter("ignore", RuntimeWarning)
                     mean, low, high = (f(stable, axis=-1) for f in (np.nanmean, np.nanmin, np.nanmax))
-                line, = ax.plot(x, mean, "o-", label=label)
-                ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2)
-                bad = np.any(s[:, j] == 2, axis=-1)
+                    unstable = np.nanmean(np.where(np.isfinite(v[bad, j]), v[bad, j], np.nan), axis=-1)
+                line, = ax.plot(x, mean, "o-", ms=3.5, label=name)
+                ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, lw=0)
                 if bad.any():
-                    ax.plot(x[bad], np.nanmean(np.where(np.isfinite(v[bad, j]), v[bad, j], np.nan), axis=-1), "x",
-                            color=line.get_color(), ms=10, mew=2, label=f"{label}: unstable")
-    ax.set(xlabel=param, ylabel=metric)
-    ax.legend(fontsize="small")
-    return _save(fig, [ax], title, path)
+                    ax.plot(x[bad], unstable, "x", color=line.get_color(), ms=8, mew=1.5, label=f"{name}: unstable")
+    ax.set(xlabel=_label(*_quantity(param), x_power), ylabel=_label(*_quantity(metric), y_power))
+    ax.legend(loc="best", fontsize="small")
+    return _save(fig, [ax], title, path, dpi)
 
 
-def plot_feedback(steps, box_half_width_deg: float, path_stem: str | Path, title: str = "") -> list[Path]:
-    """Katz 2025 Figs. 1-7 from a feedback run (``/steps`` of ``geojax simulate --out``): the ground track
-    (lambda - lambda_d, latitude) inside the box; the delivered acceleration per ECEF axis and its norm
-    over the run; and a two-day close-up of the z axis mid-run (Fig. 5)."""
-    days = np.asarray(steps["t_s"]) / 86400.0
-    u = np.stack([np.asarray(steps[k]) for k in ("ux_mps2", "uy_mps2", "uz_mps2")], -1) * 1e-3  # km/s^2
+@_styled
+def plot_feedback(steps, box_half_width_deg: float, path_stem: str | Path, title: str = "", dpi: int = 150,
+                  fmt: str = "png") -> list[Path]:
+    """Katz 2025 Figs. 1-7 from a feedback run (``/steps`` of ``geojax simulate --out``: t_s, dlon_deg, lat_deg and
+    the delivered ECEF acceleration ux_mps2, uy_mps2, uz_mps2): the ground track (λ − λ_d, latitude) inside the
+    box, to ``{path_stem}-ground-track.{fmt}``; the acceleration per axis and its norm over the run and a two-day
+    close-up of the z axis mid-run (Fig. 5), in µm/s², to ``{path_stem}-thrust.{fmt}``."""
+    if fmt not in FORMATS:
+        raise ValueError(f"fmt: one of {', '.join(FORMATS)}, got {fmt!r}")
+    days = np.asarray(steps["t_s"]) / DAY_S
+    u_um = np.stack([np.asarray(steps[k]) for k in ("ux_mps2", "uy_mps2", "uz_mps2")], -1) * 1e6  # µm/s²
     box = box_half_width_deg
-    fig, ax = plt.subplots(figsize=(6, 6), constrained_layout=True)
-    ax.plot(steps["dlon_deg"], steps["lat_deg"], lw=0.3)
-    ax.plot([-box, box, box, -box, -box], [-box, -box, box, box, -box], "r--", label="box")
-    ax.set(xlabel="λ − λ_d (deg)", ylabel="latitude (deg)", aspect="equal")
-    ax.legend()
-    track = _save(fig, [ax], title, f"{path_stem}-ground-track.png")
-    fig, axes = plt.subplots(5, 1, figsize=(10, 11), constrained_layout=True)
-    for a, series, label in zip(axes, [u[:, 0], u[:, 1], u[:, 2], np.linalg.norm(u, axis=-1)],
-                                ["u_x", "u_y", "u_z", "|u|"]):
+    dlon, lat = np.asarray(steps["dlon_deg"]), np.asarray(steps["lat_deg"])
+    fig, ax = plt.subplots(figsize=(3.6, 3.9), constrained_layout=True)
+    ax.plot(dlon, lat, lw=0.3, label=f"track, {_days_text(_run_days(steps['t_s']))} days")
+    ax.plot([-box, box, box, -box, -box], [-box, -box, box, box, -box], "r--", lw=0.8, label=f"box ±{box:g}°")
+    ax.set(xlabel="λ − λ_d (deg)", ylabel="latitude (deg)", aspect="equal",
+           xlim=_padded(np.r_[dlon, -box, box], 1.1), ylim=_padded(np.r_[lat, -box, box], 1.1))
+    ax.xaxis.set_major_locator(MaxNLocator(5, symmetric=True))
+    ax.yaxis.set_major_locator(MaxNLocator(5, symmetric=True))
+    _legend_above(ax)
+    track = _save(fig, [ax], title, f"{path_stem}-ground-track.{fmt}", dpi)
+    fig, axes = plt.subplots(5, 1, figsize=(7.2, 7.6), constrained_layout=True)
+    for a, series, name in zip(axes, [u_um[:, 0], u_um[:, 1], u_um[:, 2], np.linalg.norm(u_um, axis=-1)],
+                               ["u_x", "u_y", "u_z", "|u|"]):
         a.plot(days, series, lw=0.4)
-        a.set(xlabel="days", ylabel=f"{label} (km/s²)")
+        a.set(xlabel="days", ylabel=f"{name} (µm/s²)")
     mid = days[len(days) // 2]
     close = (days >= mid) & (days <= mid + 2.0)
-    axes[4].step(days[close], u[close, 2], where="post")
-    axes[4].set(xlabel="days", ylabel="u_z (km/s²), 2 days")
-    history = _save(fig, list(axes), title, f"{path_stem}-thrust.png")
+    axes[4].step(days[close], u_um[close, 2], where="post", lw=0.8)
+    axes[4].set(xlabel="days", ylabel="u_z (µm/s²)")
+    axes[4].set_title("u_z, two days mid-run", loc="left")
+    history = _save(fig, list(axes), title, f"{path_stem}-thrust.{fmt}", dpi)
     return [track, history]
+
+
+@_styled
+def plot_tuning(groups, path: str | Path, title: str = "", dpi: int = 150) -> Path:
+    """The convergence of a ``geojax tune`` results file against iteration: the exact-law ΔV of every start (thin
+    lines; a diverged start's iterations are left out) with the best feasible ΔV so far (thick steps) and the best
+    point (star); the larger of each start's two box constraints, (excursion / half-width)² − 1, with the box edge
+    at 0 (inside below); and, when recorded, each start's step length (log scale).
+
+    ``groups`` are the groups of the file: ``iterations`` (dv_per_year_mps [it, starts], constraint
+    [it, starts, 2], step_norm [it, starts], active [it, starts], best_dv_per_year_mps [it], ...) and, when a
+    feasible point was found, ``metrics`` (dv_per_year_mps, constraint_lon, constraint_lat).
+    """
+    hist = groups["iterations"]
+    alive = np.asarray(hist["active"]) > 0 if "active" in hist else True
+    dv = _finite_or_nan(np.where(alive, hist["dv_per_year_mps"], np.nan))
+    g = _finite_or_nan(np.where(alive, np.max(np.asarray(hist["constraint"], float), axis=-1), np.nan))
+    it = np.arange(dv.shape[0])
+    panels = 3 if "step_norm" in hist else 2
+    fig, axes = plt.subplots(panels, 1, figsize=(5.0, 2.1 * panels + 0.4), constrained_layout=True)
+    for a, series in zip(axes, [dv, g]):
+        for start in range(series.shape[1]):
+            a.plot(it, series[:, start], lw=0.6, alpha=0.7, color=f"C{start % 10}",
+                   label="starts (exact law)" if start == 0 else None)
+    best = _finite_or_nan(hist["best_dv_per_year_mps"])
+    axes[0].step(it, best, where="post", color="k", lw=2.0, label="best feasible so far")
+    metrics = groups.get("metrics") or {}
+    if np.isfinite(best).any():
+        found = int(np.argmax(best == np.nanmin(best)))
+        best_dv = float(metrics.get("dv_per_year_mps", best[found]))
+        axes[0].plot(found, best_dv, "*", color="C3", ms=11, mec="k", mew=0.5, label=f"best: {best_dv:.2f} m/s/yr")
+        if {"constraint_lon", "constraint_lat"} <= set(metrics):
+            axes[1].plot(found, max(float(metrics["constraint_lon"]), float(metrics["constraint_lat"])), "*",
+                         color="C3", ms=11, mec="k", mew=0.5, label="best point")
+    axes[0].set(xlabel="iteration", ylabel=label_for("dv_per_year_mps"))
+    axes[1].axhline(0.0, color="k", ls="--", lw=0.8, label="box edge (inside below)")
+    if np.nanmax(np.abs(g), initial=0.0) > 10.0:  # a start far outside would flatten the rest
+        axes[1].set_yscale("symlog", linthresh=1.0)
+    axes[1].set(xlabel="iteration", ylabel="max box constraint")
+    if panels == 3:
+        step = _finite_or_nan(np.where(alive, hist["step_norm"], np.nan))
+        for start in range(step.shape[1]):
+            axes[2].plot(it, np.where(step[:, start] > 0, step[:, start], np.nan), lw=0.6, alpha=0.7,
+                         color=f"C{start % 10}")
+        if np.nanmax(step, initial=0.0) > 0:
+            axes[2].set_yscale("log")
+        axes[2].set(xlabel="iteration", ylabel="step length (θ units)")
+    for a in axes[:2]:
+        a.legend(loc="best", fontsize="small")
+    for a in axes:
+        a.xaxis.set_major_locator(MaxNLocator(integer=True))
+    return _save(fig, list(axes), title, path, dpi)
+
+
+def label_for(key: str) -> str:
+    """A readable axis label with its unit for a sweep axis, metric or tuned parameter key:
+    "thrusters.beta_max_deg" -> "β_max (deg)", "dv_per_year_mps" -> "ΔV per year (m/s/yr)"."""
+    return _label(*_quantity(key))
+
+
+def _quantity(key: str) -> tuple[str, str]:
+    """(name, unit) of a key: from ``QUANTITIES``, else its last dotted part with a unit suffix read as the unit
+    ("spacecraft.mass_kg" -> ("mass", "kg")); a compound unit (``_per_``) is left in the name."""
+    if key in QUANTITIES:
+        return QUANTITIES[key]
+    name = key.rsplit(".", 1)[-1]
+    if "_per_" not in name:
+        for suffix, unit in UNIT_SUFFIXES.items():
+            if name.endswith(suffix) and len(name) > len(suffix):
+                return name[: -len(suffix)], unit
+    return name, ""
+
+
+def decade(*arrays) -> int:
+    """The power of ten to show ``arrays`` in (as values / 10**power): 0 while their largest finite magnitude is
+    between 0.01 and 1000, else that magnitude's power of ten (1.2e-4 -> -4)."""
+    finite = np.concatenate([np.ravel(np.asarray(a, float)) for a in arrays])
+    finite = np.abs(finite[np.isfinite(finite)])
+    largest = float(np.max(finite, initial=0.0))
+    if largest == 0.0:
+        return 0
+    power = int(np.floor(np.log10(largest)))
+    return 0 if -2 <= power <= 2 else power
+
+
+def _label(name: str, unit: str = "", power: int = 0) -> str:
+    """"e_x (10⁻⁵)", "drift (10⁻³ deg/day)", "β_max (deg)", "H_rv"."""
+    scale = f"10{str(power).translate(SUPERSCRIPT)}" if power else ""
+    inside = " ".join(filter(None, [scale, unit]))
+    return f"{name} ({inside})" if inside else name
+
+
+def _scaled(name: str, unit: str, *arrays):
+    """The label and ``arrays`` in the power of ten that suits them (``decade``)."""
+    power = decade(*arrays)
+    return _label(name, unit, power), [np.asarray(a, float) / 10.0**power for a in arrays]
 
 
 def ground_track_deg(lon_deg, ex, ey, ix, iy, samples_per_cycle: int = 48):
@@ -161,19 +349,81 @@ def libration_rad(true_lon_rad, f, g, h, k):
     return 2 * (f * s - g * c), 2 * (h * s - k * c)
 
 
+def _run_days(t_s) -> float:
+    """The days a run of equally spaced samples at ``t_s`` covers: their count times their spacing."""
+    t_s = np.asarray(t_s, float)
+    return t_s.size * float(np.median(np.diff(t_s))) / DAY_S if t_s.size > 1 else 0.0
+
+
+def _days_text(days: float) -> str:
+    return f"{days:.0f}" if days >= 2.0 else f"{days:.1f}"
+
+
+def _finite_or_nan(values) -> np.ndarray:
+    values = np.asarray(values, float)
+    return np.where(np.isfinite(values), values, np.nan)
+
+
+def _extent(x, y) -> float:
+    """The larger side of the bounding box of a path."""
+    return float(max(np.ptp(x), np.ptp(y))) if np.size(x) else 0.0
+
+
 def _padded(values, factor: float = 1.5):
+    values = np.asarray(values, float)
+    values = values[np.isfinite(values)]
     centre, half = 0.5 * (np.max(values) + np.min(values)), 0.5 * (np.max(values) - np.min(values))
-    half = max(half * factor, 1e-6)
+    half = max(half * factor, 1e-6 * max(1.0, abs(centre)))
     return centre - half, centre + half
 
 
-def _save(fig, axes, title: str, path: str | Path) -> Path:
-    for a in axes:
-        a.grid(alpha=0.3)
-    if title:
-        fig.suptitle(title)
+def _zoom(ax, x, y, all_x, all_y, size: float = 0.38):
+    """A zoomed inset of the path (x, y) in the corner of ``ax`` holding the fewest of the points (all_x, all_y),
+    with the zoomed region marked on ``ax``."""
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    u, v = (np.asarray(all_x) - x0) / (x1 - x0), (np.asarray(all_y) - y0) / (y1 - y0)
+    corners = [(0.02, 0.02), (1 - size - 0.02, 0.02), (0.02, 1 - size - 0.02), (1 - size - 0.02, 1 - size - 0.02)]
+    crowd = [np.sum((u > cx - 0.05) & (u < cx + size + 0.05) & (v > cy - 0.05) & (v < cy + size + 0.05))
+             for cx, cy in corners]
+    inset = ax.inset_axes([*corners[int(np.argmin(crowd))], size, size])
+    inset.plot(x, y, "C0", lw=0.8)
+    inset.plot(0.0, 0.0, "k+", ms=6)
+    half = 0.5 * max(np.ptp(x), np.ptp(y)) * 1.3
+    cx, cy = 0.5 * (np.max(x) + np.min(x)), 0.5 * (np.max(y) + np.min(y))
+    inset.set(xlim=(cx - half, cx + half), ylim=(cy - half, cy + half))
+    inset.set_aspect("equal", adjustable="datalim")
+    inset.tick_params(labelsize=6, length=2, pad=1)
+    inset.xaxis.set_major_locator(MaxNLocator(3))
+    inset.yaxis.set_major_locator(MaxNLocator(3))
+    ax.indicate_inset_zoom(inset, edgecolor="0.4")
+    return inset
+
+
+def _legend_above(ax) -> None:
+    """The legend in a band above the axes, so it covers no data."""
+    ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=1, frameon=False, borderaxespad=0.0,
+              handlelength=1.8, fontsize=7)
+
+
+def _save(fig, axes, title: str, path: str | Path, dpi: int = 150) -> Path:
+    """Write ``fig`` to ``path`` in the format of its suffix (one of ``FORMATS``) at ``dpi`` under ``STYLE``, with a
+    grid on ``axes``, no offset text on any axes and ``title`` above; closes ``fig``."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    fmt = path.suffix.lstrip(".").lower()
+    try:
+        if fmt not in FORMATS:
+            raise ValueError(f"figure {str(path)!r}: the suffix must be one of {', '.join('.' + f for f in FORMATS)}")
+        with matplotlib.rc_context(STYLE):
+            for a in axes:
+                a.grid(True, alpha=STYLE["grid.alpha"], lw=STYLE["grid.linewidth"])
+            for a in fig.axes:  # figures built outside STYLE (studies/) included
+                for axis in (a.xaxis, a.yaxis):
+                    if isinstance(axis.get_major_formatter(), ScalarFormatter):
+                        axis.get_major_formatter().set_useOffset(False)
+            if title:
+                fig.suptitle(title)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fig.savefig(path, dpi=dpi, format=fmt)
+    finally:
+        plt.close(fig)
     return path

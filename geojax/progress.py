@@ -23,6 +23,12 @@ class Progress:
         self._resumed += n
         self.update(n)
 
+    def restart(self, note: str = "") -> None:
+        """Start the rate and ETA afresh from here (after a compilation, which says nothing of the rate)."""
+        self._resumed, self.start = self.done, time.perf_counter()
+        self.note = note or self.note
+        self.update(0)
+
     def __enter__(self):
         return self
 

@@ -1,7 +1,9 @@
 """HDF5 results (DESIGN.md, "Contracts").
 
-Every file carries the attributes ``geojax_version``, ``config_toml``,
-``created_utc``, ``wall_s`` and ``device``.  Files are written to a temporary
+Every file carries the attributes ``geojax_version``, ``jax_version``, ``jaxlib_version``,
+``source_revision`` (the git commit of the source, ``+dirty`` with uncommitted changes, when it is a
+checkout), ``config_toml``, ``created_utc``, ``wall_s`` and ``device``, and every dataset its units and
+axis names (``geojax.results``).  Files are written to a temporary
 name in the same folder (``.NAME.tmp-PID``) and renamed, so a reader never sees
 a half-written file; folders are removed by renaming them first
 (``.NAME.trash-PID``), so a kill never leaves half a folder under its name.
@@ -29,8 +31,33 @@ def device_description() -> str:
     return f"{len(devices)} x {devices[0].platform}:{devices[0].device_kind}"
 
 
-def write_h5(path: str | Path, groups: dict[str, dict[str, np.ndarray]], config_toml: str, wall_s: float, attrs=None) -> Path:
-    """Write ``{group: {name: array}}`` and the standard attributes to ``path`` atomically."""
+def source_revision() -> str:
+    """The git commit geojax runs from (``+dirty`` with uncommitted changes), or "unknown" (an installed wheel)."""
+    import subprocess
+
+    root = Path(geojax.__file__).resolve().parent.parent
+    if not (root / ".git").exists():
+        return "unknown"
+    try:
+        head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
+                              timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return (head + ("+dirty" if dirty else "")) if head else "unknown"
+
+
+def write_h5(path: str | Path, groups: dict[str, dict[str, np.ndarray]], config_toml: str, wall_s: float, attrs=None,
+             dims: dict[str, tuple[str, ...]] | None = None) -> Path:
+    """Write ``{group: {name: array}}`` and the standard attributes to ``path`` atomically.
+
+    ``dims`` names the axes (``geojax.results.label_datasets``: {"GROUP" or "GROUP/NAME": leading axes}).
+    """
+    import jaxlib
+
+    from geojax.results import label_datasets
+
     path = Path(path)
     if path.parent and not path.parent.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -39,6 +66,9 @@ def write_h5(path: str | Path, groups: dict[str, dict[str, np.ndarray]], config_
     try:
         with h5py.File(tmp, "w") as f:
             f.attrs["geojax_version"] = geojax.__version__
+            f.attrs["jax_version"] = jax.__version__
+            f.attrs["jaxlib_version"] = jaxlib.__version__
+            f.attrs["source_revision"] = source_revision()
             f.attrs["config_toml"] = config_toml
             f.attrs["created_utc"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
             f.attrs["wall_s"] = float(wall_s)
@@ -49,6 +79,7 @@ def write_h5(path: str | Path, groups: dict[str, dict[str, np.ndarray]], config_
                 g = f.require_group(group)
                 for name, value in datasets.items():
                     g.create_dataset(name, data=np.asarray(value))
+            label_datasets(f, dims or {})
         os.replace(tmp, path)
     finally:
         if tmp.exists():

@@ -66,6 +66,7 @@ from geojax.loop.setup import disperse, prepare
 from geojax.params import Field, check_table
 from geojax.parallel import per_device
 from geojax.progress import Progress
+from geojax.results import dims_of_sweep
 
 
 MAX_SAMPLES = 10_000_000  # samples per sweep file (a larger campaign is several files, or a cluster)
@@ -294,6 +295,7 @@ def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool
                 if controller not in runners:
                     runners[controller] = ChunkRunner(sweep, controller)
                     compile_s += runners[controller].compile_s
+                    bar.restart(f"{controller} compiled in {runners[controller].compile_s:.1f} s")
                 save(controller, first, runners[controller].run(first, length, bar.update))
     return _write_results(sweep, out, parts, wall_s=time.perf_counter() - start, compile_s=compile_s)
 
@@ -345,10 +347,12 @@ def _write_results(sweep: Sweep, out: Path, parts: Path, wall_s: float, compile_
     status = stacked("status").reshape(shape).astype(np.int8)
     grid = {k.replace(".", "__"): np.asarray(v, dtype=float) for k, v in sweep.grid.items()}
     grid["controller"] = np.array(sweep.controllers, dtype="S")
+    base = scenario_mod.to_toml(_scenario(sweep, sweep.controllers[0], {}).config)  # [set] applied, fully resolved
     store.write_h5(out, {"grid": grid, "metrics": metrics, "status": {"code": status}, **groups}, sweep.text, wall_s,
                    attrs={"kind": "sweep", "name": sweep.name, "grid_axes": ",".join(["controller", *sweep.grid]),
-                          "compile_s": compile_s,
-                          "status_codes": STATUS_TEXT})
+                          "compile_s": compile_s, "base_scenario_toml": base,
+                          "status_codes": STATUS_TEXT},
+                   dims=dims_of_sweep(list(sweep.grid), sweep.cycles))
     store.discard_folder(parts)
     return out
 

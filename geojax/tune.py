@@ -58,6 +58,7 @@ each day (``feedback.rollout``), so memory grows with days, not steps.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import sys
@@ -78,7 +79,7 @@ from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS
 from geojax.loop.rollout import rollout_fn
 from geojax.loop.setup import prepare, unstack
 from geojax.parallel import shard_batch
-from geojax.params import LEAF_TABLES, REQUIRED, Field, Params, check_table
+from geojax.params import LEAF_TABLES, REQUIRED, Field, Params, check_table, degrees
 
 
 # Katz 2025, Table 1 and Secs. 3.1-3.3, per thrust mode ("+-" excursions as the paper states them).
@@ -712,4 +713,36 @@ def _write(out, spec, problem, hist, theta_starts, best, message, wall_s):
     attrs = {"kind": "tune", "scenario": spec.scenario.name, "parameters": ",".join(spec.parameters),
              "status": message, "tune_toml": spec.text,
              "controller": spec.scenario.controller}
-    store.write_h5(out, groups, scenario_mod.to_toml(spec.scenario.config), wall_s, attrs=attrs)
+    store.write_h5(out, groups, scenario_mod.to_toml(spec.scenario.config), wall_s, attrs=attrs, dims=TUNE_DIMS)
+    if best["theta"] is not None and message != "running":
+        store.atomic_write(tuned_scenario_path(out), tuned_scenario_toml(spec, params).encode())
+
+
+# Axis names of a tuning file's datasets (geojax.results).
+TUNE_DIMS = {"iterations": ("iteration", "start"), "iterations/theta": ("iteration", "start", "parameter"),
+             "iterations/constraint": ("iteration", "start", "box_axis"),
+             **{f"iterations/{k}": ("iteration",) for k in ("temperature", "best_dv_per_year_mps", "wall_s")},
+             "starts": ("start", "parameter"), "best/theta": ("parameter",)}
+
+
+def tuned_scenario_path(out) -> Path:
+    """Where ``geojax tune --out FILE.h5`` writes the tuned scenario: ``FILE-tuned.toml`` beside it."""
+    out = Path(out)
+    return out.with_name(f"{out.stem}-tuned.toml")
+
+
+def tuned_scenario_toml(spec: TuneSpec, params: Params) -> str:
+    """The tuned scenario as TOML (``geojax simulate FILE-tuned.toml`` runs it): the tuning's scenario with
+    each tuned key set to its best value, in the key's own unit."""
+    config = copy.deepcopy(spec.scenario.config)
+    for entry in tuned(spec.scenario, spec.controller, spec.parameters):
+        leaf = np.asarray(getattr(params, entry.table)[entry.field.si], dtype=float)
+        if entry.field.to_si is degrees:
+            value = np.degrees(leaf).tolist()
+        else:
+            value = entry.field.from_si(leaf)
+        config[entry.table][entry.name.rpartition(".")[2]] = value
+    config["name"] = f"{spec.scenario.name}-tuned"
+    header = (f"# {spec.scenario.name} with the gains tuned by geojax tune ({', '.join(spec.parameters)});\n"
+              f"# run it with: geojax simulate THIS_FILE\n")
+    return header + scenario_mod.to_toml(config)

@@ -28,13 +28,14 @@ class PropagationResult(NamedTuple):
     wall_s: float
 
 
-def cycle_count(days: float) -> int:
-    """Cycles for a run of ``days`` solar days.
+def propagated_cycles(days: float) -> int:
+    """Cycles propagated for a run of ``days`` solar days.
 
-    Cycle means refer to mid-cycle times, so the first and last means are
-    ``n - 1`` cycles apart; n = ceil(days / sidereal day) + 1 makes that span
-    at least ``days`` (365.25 days -> 368 cycles), so the change over exactly
-    ``days`` can be read off by interpolation (``drift_summary``).
+    A run of ``days`` is ``loop.setup.cycle_count(days)`` cycles (365.25 days -> 366), in ``propagate`` as
+    in ``simulate``; that many are written and drawn.  Cycle means refer to mid-cycle times, so the first
+    and last means are ``n - 1`` cycles apart; the propagation goes on to n = ceil(days / sidereal day) + 1
+    (365.25 days -> 368) so that span covers ``days`` and the change over exactly ``days`` is read off by
+    interpolation (``drift_summary``), not extrapolated.
     """
     return max(1, math.ceil(days * SECONDS_PER_DAY / SIDEREAL_DAY_S - 1e-9) + 1)
 
@@ -48,7 +49,7 @@ def propagate_scenario(scenario: Scenario, progress: bool | None = None) -> Prop
     start = time.perf_counter()
     n_steps = steps_per_cycle(scenario.step_s)
     step_s = SIDEREAL_DAY_S / n_steps
-    n_cycles = cycle_count(scenario.days)
+    n_cycles = propagated_cycles(scenario.days)
     block = math.ceil(n_cycles / min(20, n_cycles))
     n_blocks = math.ceil(n_cycles / block)
     dynamics = DYNAMICS[scenario.dynamics]
@@ -66,12 +67,16 @@ def propagate_scenario(scenario: Scenario, progress: bool | None = None) -> Prop
             means = records.cycles.means._replace(t_s=records.cycles.means.t_s + b * block * SIDEREAL_DAY_S)
             pieces.append(jax.tree_util.tree_map(np.asarray, means))
             bar.update(min(block, n_cycles - b * block))
+            if b == 0:  # the first block compiled the step: the rate and the ETA start after it
+                bar.restart(f"compiled and ran the first {block} cycles in {time.perf_counter() - start:.1f} s")
     cycles = jax.tree_util.tree_map(lambda *xs: np.concatenate(xs)[:n_cycles], *pieces)
     return PropagationResult(cycles, step_s, time.perf_counter() - start)
 
 
-def cycles_table(cycles: CycleMeans) -> dict[str, np.ndarray]:
-    """The ``/cycles`` datasets of ``geojax propagate`` in their edge units (degrees, days)."""
+def cycles_table(cycles: CycleMeans, n_cycles: int | None = None) -> dict[str, np.ndarray]:
+    """The ``/cycles`` datasets of ``geojax propagate`` in their edge units (degrees, days): the first
+    ``n_cycles`` (default all)."""
+    cycles = jax.tree_util.tree_map(lambda x: np.asarray(x)[:n_cycles], cycles)
     return {
         "t_s": cycles.t_s,
         "lon_deg": np.degrees(cycles.lon_rad),

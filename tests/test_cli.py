@@ -1,4 +1,5 @@
-"""The command line: propagate, plot, HDF5 contract, exit status 2 on bad input."""
+"""The command line: propagate, plot, HDF5 contract, exit status 2 on bad input, -q / -v on every command, one
+meaning of --days, paper comparisons with their caveat, per-grid-point sweep summaries."""
 
 import h5py
 import numpy as np
@@ -9,13 +10,16 @@ from geojax import cli
 
 def test_propagate_writes_the_hdf5_contract(tmp_path, capsys):
     out = tmp_path / "run.h5"
-    assert cli.main(["propagate", "li2022", "--days", "3", "--step", "1800", "--out", str(out), "--quiet"]) == 0
+    assert cli.main(["propagate", "li2022", "--days", "3", "--step", "1800", "--out", str(out)]) == 0
     assert "inclination-vector change" in capsys.readouterr().out
     with h5py.File(out) as f:
         for name in ("t_s", "lon_deg", "drift_deg_per_day", "ex", "ey", "ix", "iy", "a_m"):
-            assert f[f"cycles/{name}"].shape == (5,)  # ceil(3 d / sidereal day) + 1
-        for attr in ("geojax_version", "config_toml", "created_utc", "wall_s", "device"):
+            assert f[f"cycles/{name}"].shape == (3,)  # round(3 d / sidereal day), as in simulate
+            assert f[f"cycles/{name}"].dims[0].label == "cycle"
+        for attr in ("geojax_version", "jax_version", "jaxlib_version", "source_revision", "config_toml",
+                     "created_utc", "wall_s", "device"):
             assert attr in f.attrs
+        assert f["cycles/lon_deg"].attrs["units"] == "deg" and f["cycles/t_s"].attrs["units"] == "s"
         assert 'name = "li2022"' in f.attrs["config_toml"]
         assert "days = 3.0" in f.attrs["config_toml"]
         # One-cycle means around 96 deg E, a near the synchronous radius.
@@ -56,7 +60,10 @@ def test_demo_writes_its_figure(tmp_path, capsys):
 def test_simulate_writes_metrics_and_cycles(tmp_path, capsys):
     out = tmp_path / "sim.h5"
     assert cli.main(["simulate", "li2022-qffc", "--days", "5", "--out", str(out)]) == 0
-    assert "dv_per_year_mps" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "dv_per_year_mps" in printed and "compiled in" in printed and "5 cycles" in printed
+    # A 5-day run beside Li's one-year numbers: said so, with what differs.
+    assert "Li 2022 (its own run)" in printed and "duration.days = 5" in printed
     with h5py.File(out) as f:
         for name in ("dv_per_year_mps", "burns_total", "burns_per_thruster_per_orbit", "max_abs_dlon_deg",
                      "max_abs_dlat_deg", "max_abs_de", "max_abs_di", "mean_beta_deg", "cpu_s_per_orbit"):
@@ -107,3 +114,47 @@ def test_scenarios_align_and_show_a_toml_that_loads_as_the_same_scenario(tmp_pat
     copy = tmp_path / "mine.toml"
     copy.write_text(capsys.readouterr().out)
     assert scenario.load(copy).config == scenario.load("katz2025-discrete").config
+
+
+COMMANDS = {"demo": [], "propagate": ["li2022"], "simulate": ["li2022-qffc"], "tune": ["t.toml", "--out", "t.h5"],
+            "sweep": ["s.toml", "--out", "s.h5"], "plot": ["x.h5"], "scenarios": []}
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_every_command_takes_q_and_v_and_documents_days(command, capsys):
+    parser = cli._parser()
+    for flag, field in (("-q", "quiet"), ("--quiet", "quiet"), ("-v", "verbose"), ("--verbose", "verbose")):
+        assert getattr(parser.parse_args([command, *COMMANDS[command], flag]), field)
+    with pytest.raises(SystemExit):
+        parser.parse_args([command, *COMMANDS[command], "-q", "-v"])  # one or the other
+    capsys.readouterr()
+    with pytest.raises(SystemExit):
+        parser.parse_args([command, "--help"])
+    help_text = capsys.readouterr().out
+    if "--days" in help_text:
+        assert "sidereal-day cycles" in " ".join(help_text.split())
+
+
+def test_quiet_prints_only_the_files_written_and_days_mean_cycles_everywhere(tmp_path, capsys):
+    sim, prop = tmp_path / "sim.h5", tmp_path / "prop.h5"
+    assert cli.main(["simulate", "li2022-qffc", "--days", "4", "--out", str(sim), "-q"]) == 0
+    assert cli.main(["propagate", "li2022", "--days", "4", "--out", str(prop), "-q"]) == 0
+    assert capsys.readouterr().out.splitlines() == [f"wrote {sim}", f"wrote {prop}"]
+    with h5py.File(sim) as a, h5py.File(prop) as b:
+        assert a["cycles/lon_deg"].shape == b["cycles/lon_deg"].shape == (4,)
+
+
+def test_sweep_summary_per_grid_point_and_identical_repetitions_warned():
+    from types import SimpleNamespace
+
+    spec = SimpleNamespace(controllers=("qffc", "fompc"), grid={"thrusters.beta_max_deg": [60.0, 90.0]}, repetitions=3)
+    dv = np.array([[[62.0, 62.0, 62.0], [58.0, 58.0, 58.0]],  # qffc: every repetition the same
+                   [[57.0, 58.0, 59.0], [55.0, 55.5, 56.0]]])
+    metrics = {"dv_per_year_mps": dv, "max_abs_dlon_deg": np.full_like(dv, 0.01), "max_abs_dlat_deg": np.full_like(dv, 0.006)}
+    status = np.zeros(dv.shape, np.int8)
+    status[1, 1, 2] = 2
+    lines = cli.sweep_summary(spec, {"metrics": metrics, "status": {"code": status}})
+    text = "\n".join(lines)
+    assert "beta_max_deg 60: ΔV 62.00 ± 0.00 m/s/yr" in text and "beta_max_deg 90: ΔV 55.50 ± 0.41 m/s/yr" in text
+    assert "1 left the longitude box" in text
+    assert "identical for qffc:" in text and "fompc:" not in lines[-1]

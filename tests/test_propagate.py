@@ -10,14 +10,14 @@ from geojax.physics.dynamics import SpacecraftState
 from geojax.physics.forces import ForceModel
 from geojax.loop.simulate import propagate as propagate_cycles
 from geojax.physics.propagate import MEE, CycleMeans, environment_grid, steps_per_cycle
-from geojax.uncontrolled import cycle_count, drift_summary
+from geojax.uncontrolled import propagated_cycles, drift_summary
 
 EPOCH = 7305 * 86400.0 + 69.184
 
 
 def test_cycle_count_spans_the_requested_days():
-    assert cycle_count(365.25) == 368  # 367 sidereal days between first and last mean >= 365.25 d
-    assert (cycle_count(30) - 2) * c.SIDEREAL_DAY_S < 30 * 86400 <= (cycle_count(30) - 1) * c.SIDEREAL_DAY_S
+    assert propagated_cycles(365.25) == 368  # 367 sidereal days between first and last mean >= 365.25 d
+    assert (propagated_cycles(30) - 2) * c.SIDEREAL_DAY_S < 30 * 86400 <= (propagated_cycles(30) - 1) * c.SIDEREAL_DAY_S
 
 
 def test_vmapped_batch_equals_one_by_one():

@@ -129,7 +129,9 @@ def test_sqp_walks_into_the_box_and_never_back_out():
 def test_cli_tune_writes_results_and_rejects_bad_files(tmp_path):
     good = tmp_path / "t.toml"
     good.write_text('scenario = "katz2025-constant"\ndays = 2.0\nstarts = 2\niterations = 0\n')
-    assert cli.main(["tune", str(good), "--out", str(tmp_path / "t.h5"), "--quiet"]) in (0, 1)
+    code = cli.main(["tune", str(good), "--out", str(tmp_path / "t.h5"), "--quiet"])
+    assert code in (0, 1)
+    assert (tmp_path / "t-tuned.toml").is_file() == (code == 0)  # the tuned scenario, where a feasible point was found
     groups, attrs = store.read_h5(tmp_path / "t.h5")
     assert attrs["kind"] == "tune" and groups["iterations"]["theta"].shape == (1, 2, 2)
     bad = tmp_path / "bad.toml"

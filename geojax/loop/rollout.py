@@ -41,7 +41,8 @@ class Result(NamedTuple):
     final: SpacecraftState
     params: Params
     step_s: float
-    wall_s: float
+    wall_s: float  # compilation included
+    compile_s: float = float("nan")  # measured where ``on_compiled`` was given
 
     def cycles(self) -> dict[str, np.ndarray]:
         """The per-cycle records in edge units (``/cycles``) of a single rollout."""
@@ -86,7 +87,7 @@ def _batched(params, keys, shared, reference_env, controller, step_s, dynamics, 
 
 
 def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None = None, keep_steps: bool = False,
-             key=None) -> Result:
+             key=None, on_compiled=None) -> Result:
     """One closed-loop rollout of ``scenario`` (its registered controller, or ``controller``).
 
     ``seed`` (or a ``jax.random`` ``key``) draws the orbit-determination and attitude errors
@@ -94,19 +95,21 @@ def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None
     the per-step records (``records.steps``, leaves [n_cycles, n_steps, ...]).
     """
     result = simulate_batch([scenario], seeds=[seed], controller=controller, keep_steps=keep_steps,
-                            keys=None if key is None else jnp.stack([key]))
+                            keys=None if key is None else jnp.stack([key]), on_compiled=on_compiled)
     first = lambda tree: jax.tree_util.tree_map(lambda x: x[0], tree)  # noqa: E731
     return result._replace(metrics=first(result.metrics), status=result.status[0], records=first(result.records),
                            final=first(result.final), params=first(result.params))
 
 
 def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None = None, *, seeds=None, keys=None,
-                   controller: Controller | None = None, keep_steps: bool = False) -> Result:
+                   controller: Controller | None = None, keep_steps: bool = False, on_compiled=None) -> Result:
     """A batch of rollouts, vmapped in one compiled call.
 
     Either a list of scenarios (one sample each), or one scenario with ``params`` whose leaves carry a
     leading batch axis (e.g. 100 initial states: start from ``prepare_params(scenario, n)`` and replace
     ``params.initial``).  ``seeds`` [n] (default 0, 1, ...) or ``keys`` [n] draw each sample's errors.
+    ``on_compiled(seconds)``: compile first (timed, reported to this callback, e.g. the command line's
+    "compiled in X s"), then run; the result's ``compile_s`` is then set.
     """
     start = time.perf_counter()
     scenarios = [scenarios] if isinstance(scenarios, Scenario) else list(scenarios)
@@ -119,13 +122,23 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     if keys is None:
         seeds = range(n) if seeds is None else seeds
         keys = jnp.stack([jax.random.key(int(s)) for s in seeds])
-    final, records, metrics = _batched(params, keys, batch.shared, _reference_env(batch), batch.controller,
-                                       batch.step_s, for_lanes(batch.dynamics, n), keep_steps)
+    args = (params, keys, batch.shared, _reference_env(batch))
+    static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, n),
+                  keep_steps=keep_steps)
+    compile_s = float("nan")
+    if on_compiled is None:
+        final, records, metrics = _batched(*args, **static)
+    else:
+        begun = time.perf_counter()
+        compiled = _batched.lower(*args, **static).compile()  # the same executable a plain call would cache
+        compile_s = time.perf_counter() - begun
+        on_compiled(compile_s)
+        final, records, metrics = compiled(*args)
     metrics = {k: np.asarray(v) for k, v in metrics.items()}
     status = metrics.pop("status")
     to_numpy = lambda tree: jax.tree_util.tree_map(np.asarray, tree)  # noqa: E731
     return Result(metrics, status, to_numpy(records), to_numpy(final), to_numpy(params), batch.step_s,
-                  time.perf_counter() - start)
+                  time.perf_counter() - start, compile_s)
 
 
 def prepare_params(scenario: Scenario, n: int, controller: Controller | None = None) -> Params:

@@ -1,0 +1,153 @@
+"""Results as labelled arrays: units, descriptions and dimension names of every dataset geojax writes, and
+``open_results`` (an ``xarray.Dataset``).
+
+The labels live in the HDF5 file itself, so any HDF5 reader sees them: each dataset carries ``units``
+and ``description`` attributes, its axes are named with HDF5 dimension labels (``h5py``'s
+``dataset.dims[i].label``; ``controller``, every swept key, ``repetition``, ``cycle``, ``step``,
+``iteration``, ``start``), and the ``/grid`` datasets of a sweep are attached as dimension scales (the
+coordinates).  ``open_results`` turns that into one ``xarray.Dataset``: the ``/metrics`` datasets under
+their own names (``dv_per_year_mps``), every other group's as ``GROUP__NAME`` (``cycles__lon_deg``),
+the status as ``status``, the file's attributes (provenance, the scenario's TOML) as the Dataset's.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+# Unit of a dataset by the end of its name (the project's naming rule: the name says the unit).
+UNIT_SUFFIXES = (
+    ("_per_year_mps", "m/s/yr"), ("_deg_per_day", "deg/day"), ("_mps2", "m/s^2"), ("_mps", "m/s"),
+    ("_deg", "deg"), ("_rad", "rad"), ("_km", "km"), ("_kg", "kg"), ("_m2", "m^2"), ("_m", "m"), ("_s", "s"),
+)
+DIMENSIONLESS = {"ex", "ey", "ix", "iy", "max_abs_de", "max_abs_di", "duty_x", "duty_y", "duty_z", "ns_fraction",
+                 "burns_per_thruster_per_orbit", "burns_total", "cycles_without_solution", "code", "active",
+                 "loss", "step_norm", "theta", "temperature", "trust_radius", "constraint", "constraint_lon",
+                 "constraint_lat", "status"}
+DESCRIPTIONS = {
+    "dv_per_year_mps": "delta-V per year of the whole run",
+    "mass_used_kg": "propellant used",
+    "max_abs_dlon_deg": "largest |longitude - station| at any step (osculating sub-satellite point)",
+    "max_abs_dlat_deg": "largest |latitude| at any step",
+    "mean_dlon_deg": "mean longitude offset from the station over every step",
+    "dlon_half_range_deg": "half the range of the longitude offset over the run",
+    "dlat_half_range_deg": "half the range of the latitude over the run",
+    "max_abs_mean_dlon_deg": "largest |one-cycle mean longitude - station| after the first cycle (Li 2022's measure)",
+    "max_abs_de": "largest |mean e vector - target| after the first cycle",
+    "max_abs_di": "largest |mean i vector (MEE h, k) - target| after the first cycle",
+    "burns_total": "burns fired in the run",
+    "burns_per_thruster_per_orbit": "burns per thruster per orbit",
+    "mean_beta_deg": "mean pitch angle of the burns",
+    "cycles_without_solution": "cycles whose plan had no solution",
+    "code": "status: 0 ok, 1 cycles without a solution, 2 left the longitude box, 3 left the latitude box, ...",
+    "lon_deg": "one-cycle mean longitude (east)",
+    "ex": "one-cycle mean eccentricity vector, x (MEE f)", "ey": "one-cycle mean eccentricity vector, y (MEE g)",
+    "ix": "one-cycle mean inclination vector, x (MEE h)", "iy": "one-cycle mean inclination vector, y (MEE k)",
+    "dv_mps": "delta-V used so far", "t_s": "time since the start of the run",
+    "dlon_deg": "longitude - station longitude", "lat_deg": "latitude",
+    "ux_mps2": "delivered acceleration, ECEF x", "uy_mps2": "delivered acceleration, ECEF y",
+    "uz_mps2": "delivered acceleration, ECEF z",
+    "constraint": "box constraints (longitude, latitude); <= 0 inside",
+    "best_dv_per_year_mps": "best feasible delta-V per year so far",
+}
+
+
+# Axis names of the groups every single-run file has (a sweep's and a tuning's are given by their writers).
+DEFAULT_DIMS = {"cycles": ("cycle",), "reference": ("reference_cycle",), "steps": ("step",)}
+
+
+def units_of(name: str) -> str:
+    """The unit of a dataset named ``name`` ("" where dimensionless or unknown)."""
+    if name in DIMENSIONLESS:
+        return ""
+    return next((unit for suffix, unit in UNIT_SUFFIXES if name.endswith(suffix)), "")
+
+
+def label_datasets(f, dims: dict[str, tuple[str, ...]]) -> None:
+    """Write units, descriptions and dimension labels into an open ``h5py.File``; attach ``/grid`` as scales.
+
+    ``dims``: {"GROUP" or "GROUP/NAME": names of the leading axes}; a longer dataset's further axes are
+    named ``NAME_axisK``.
+    """
+    import h5py
+
+    dims = {**DEFAULT_DIMS, **dims}
+    scales = {}
+    if "grid" in f and isinstance(f["grid"], h5py.Group):
+        for name, ds in f["grid"].items():
+            dim = "controller" if name == "controller" else name.replace("__", ".")
+            ds.make_scale(dim)
+            scales[dim] = ds
+    for group_name, group in f.items():
+        if not isinstance(group, h5py.Group):
+            continue
+        for name, ds in group.items():
+            if ds.attrs.get("CLASS") == b"DIMENSION_SCALE":
+                _set_units(ds, name)
+                continue
+            _set_units(ds, name)
+            names = dims.get(f"{group_name}/{name}", dims.get(group_name, ()))
+            for axis in range(ds.ndim):
+                label = names[axis] if axis < len(names) else f"{name}_axis{axis}"
+                ds.dims[axis].label = label
+                if label in scales and scales[label].shape == (ds.shape[axis],):
+                    ds.dims[axis].attach_scale(scales[label])
+
+
+def _set_units(ds, name: str) -> None:
+    ds.attrs["units"] = units_of(name)
+    if name in DESCRIPTIONS:
+        ds.attrs["description"] = DESCRIPTIONS[name]
+
+
+def open_results(path: str | Path):
+    """A geojax results file (sweep, simulate, propagate, tune) as an ``xarray.Dataset`` with named dimensions,
+    coordinates (the swept values and the controllers of a sweep) and units.
+
+    >>> ds = geojax.open_results("fig09.h5")
+    >>> ds.dv_per_year_mps.sel(controller="fompc").mean("repetition")      # ΔV against β_max
+    """
+    import h5py
+    import xarray as xr
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{str(path)!r}: no such file")
+    try:
+        f = h5py.File(path, "r")
+    except OSError:
+        raise ValueError(f"{str(path)!r}: not an HDF5 file") from None
+    with f:
+        if "config_toml" not in f.attrs:
+            raise ValueError(f"{str(path)!r}: not a geojax results file")
+        coords, variables = {}, {}
+        for group_name, group in f.items():
+            if not isinstance(group, h5py.Group):
+                continue
+            for name, ds in group.items():
+                if group_name == "grid":
+                    dim = "controller" if name == "controller" else name.replace("__", ".")
+                    values = ds[()]
+                    coords[dim] = xr.Variable(dim, [v.decode() for v in values] if values.dtype.kind == "S" else values,
+                                              _attrs(ds))
+                    continue
+                dims = [ds.dims[axis].label or f"{name}_axis{axis}" for axis in range(ds.ndim)]
+                key = name if group_name == "metrics" else ("status" if group_name == "status" and name == "code"
+                                                            else f"{group_name}__{name}")
+                variables[key] = xr.Variable(dims, ds[()], _attrs(ds))
+        attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    return xr.Dataset(variables, coords={k: v for k, v in coords.items()}, attrs=attrs)
+
+
+def _attrs(ds) -> dict:
+    out = {}
+    for key in ("units", "description"):
+        if key in ds.attrs:
+            value = ds.attrs[key]
+            out[key] = value.decode() if isinstance(value, bytes) else str(value)
+    return out
+
+
+def dims_of_sweep(grid_keys, cycles: bool) -> dict[str, tuple[str, ...]]:
+    """The dimension names of a sweep file's groups."""
+    axes = ("controller", *grid_keys, "repetition")
+    return {"metrics": axes, "status": axes, **({"cycles": (*axes, "cycle")} if cycles else {})}
