@@ -53,7 +53,7 @@ UNIT_SUFFIXES = {"_mps2": "m/s²", "_mps": "m/s", "_deg": "deg", "_rad": "rad", 
 SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
 
-def _styled(plot):
+def styled(plot):
     """``plot`` drawn under ``STYLE`` whatever the caller's rcParams, which it leaves as they were."""
     @functools.wraps(plot)
     def styled(*args, **kwargs):
@@ -62,7 +62,7 @@ def _styled(plot):
     return styled
 
 
-@_styled
+@styled
 def plot_cycles(cycles: dict[str, np.ndarray], path: str | Path, title: str = "", dpi: int = 150) -> Path:
     """Mean-element histories of a run: longitude, drift, eccentricity and inclination vectors, a.
 
@@ -85,18 +85,19 @@ def plot_cycles(cycles: dict[str, np.ndarray], path: str | Path, title: str = ""
         xs, ys = (np.asarray(cycles[k]) / 10.0**power for k in (x, y))
         a.plot(xs, ys)
         a.plot(xs[:1], ys[:1], "o", ms=4, label="start")
-        a.set(xlabel=_label(xname, "", power), ylabel=_label(yname, "", power), aspect="equal")
+        a.set(xlabel=_label(xname, "", power), ylabel=_label(yname, "", power))
+        _square(a, xs, ys)
         a.legend(loc="best")
     label, (incl,) = _scaled("mean inclination", "deg", np.degrees(2 * np.arctan(np.hypot(cycles["ix"], cycles["iy"]))))
     ax[5].plot(days, incl)
     ax[5].set(xlabel="days", ylabel=label)
-    for a in ax:
+    for a in ax[[0, 1, 2, 5]]:
         a.xaxis.set_major_locator(MaxNLocator(5))
         a.yaxis.set_major_locator(MaxNLocator(5))
     return _save(fig, ax, title, path, dpi)
 
 
-@_styled
+@styled
 def plot_station_keeping(cycles, reference, target, path: str | Path, title: str = "",
                          box_half_width_deg: float | None = None, dpi: int = 150) -> Path:
     """Li 2022 Figs. 4-8 from a closed-loop run: mean longitude offset; the (δe_x, δe_y) and (δi_x, δi_y) planes
@@ -116,13 +117,14 @@ def plot_station_keeping(cycles, reference, target, path: str | Path, title: str
     ax[0].plot(days, dlon)
     ax[0].set(xlabel="days", ylabel=label)
     for a, (x, y, name) in zip(ax[1:3], [("ex", "ey", "e"), ("ix", "iy", "i")]):
-        power = decade(*(np.asarray(g[k]) - target[k] for g in (reference, cycles) for k in (x, y)))
-        ref_x, ref_y, x_, y_ = ((np.asarray(g[k]) - target[k]) / 10.0**power for g in (reference, cycles) for k in (x, y))
+        offsets = [np.asarray(g[k]) - target[k] for g in (reference, cycles) for k in (x, y)]
+        power = decade(*offsets)
+        ref_x, ref_y, x_, y_ = (o / 10.0**power for o in offsets)
         a.plot(ref_x, ref_y, "r--", lw=0.8, label=f"uncontrolled, {_days_text(np.ptp(ref_days))} days")
         a.plot(x_, y_, "C0", label=run)
         a.plot(0.0, 0.0, "k+", ms=7, label="target")
-        a.set(xlabel=_label(f"δ{name}_x", "", power), ylabel=_label(f"δ{name}_y", "", power), aspect="equal",
-              xlim=_padded(np.r_[ref_x, x_], 1.1), ylim=_padded(np.r_[ref_y, y_], 1.1))
+        a.set(xlabel=_label(f"δ{name}_x", "", power), ylabel=_label(f"δ{name}_y", "", power))
+        _square(a, np.r_[ref_x, x_, 0.0], np.r_[ref_y, y_, 0.0])
         if 0.0 < _extent(x_, y_) < INSET_RATIO * _extent(ref_x, ref_y):
             _zoom(a, x_, y_, np.r_[ref_x, x_], np.r_[ref_y, y_])
         _legend_above(a)
@@ -155,7 +157,7 @@ def plot_station_keeping(cycles, reference, target, path: str | Path, title: str
     return _save(fig, ax, title, path, dpi)
 
 
-@_styled
+@styled
 def plot_sweep(groups, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
                label: str = "", dpi: int = 150) -> Path:
     """A sweep's metric against its first swept parameter: mean and spread (min-max) over the
@@ -164,7 +166,7 @@ def plot_sweep(groups, axes_names: list[str], path: str | Path, metric: str = "d
     return plot_sweeps([(label, groups)], axes_names, path, metric, title, dpi=dpi)
 
 
-@_styled
+@styled
 def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
                 dpi: int = 150) -> Path:
     """``plot_sweep`` for several sweeps over the same parameter on one axis: ``runs`` is [(label, groups)]."""
@@ -197,13 +199,14 @@ def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv
     return _save(fig, [ax], title, path, dpi)
 
 
-@_styled
+@styled
 def plot_feedback(steps, box_half_width_deg: float, path_stem: str | Path, title: str = "", dpi: int = 150,
                   fmt: str = "png") -> list[Path]:
     """Katz 2025 Figs. 1-7 from a feedback run (``/steps`` of ``geojax simulate --out``: t_s, dlon_deg, lat_deg and
     the delivered ECEF acceleration ux_mps2, uy_mps2, uz_mps2): the ground track (λ − λ_d, latitude) inside the
     box, to ``{path_stem}-ground-track.{fmt}``; the acceleration per axis and its norm over the run and a two-day
-    close-up of the z axis mid-run (Fig. 5), in µm/s², to ``{path_stem}-thrust.{fmt}``."""
+    close-up of the z axis mid-run (Fig. 5), in µm/s² on one scale for the three axes, to
+    ``{path_stem}-thrust.{fmt}``."""
     if fmt not in FORMATS:
         raise ValueError(f"fmt: one of {', '.join(FORMATS)}, got {fmt!r}")
     days = np.asarray(steps["t_s"]) / DAY_S
@@ -224,6 +227,8 @@ def plot_feedback(steps, box_half_width_deg: float, path_stem: str | Path, title
                                ["u_x", "u_y", "u_z", "|u|"]):
         a.plot(days, series, lw=0.4)
         a.set(xlabel="days", ylabel=f"{name} (µm/s²)")
+    for a in axes[[1, 2, 4]]:  # one scale for the three axes: a component at rounding level (1e-16) reads as zero
+        a.sharey(axes[0])
     mid = days[len(days) // 2]
     close = (days >= mid) & (days <= mid + 2.0)
     axes[4].step(days[close], u_um[close, 2], where="post", lw=0.8)
@@ -233,7 +238,7 @@ def plot_feedback(steps, box_half_width_deg: float, path_stem: str | Path, title
     return [track, history]
 
 
-@_styled
+@styled
 def plot_tuning(groups, path: str | Path, title: str = "", dpi: int = 150) -> Path:
     """The convergence of a ``geojax tune`` results file against iteration: the exact-law ΔV of every start (thin
     lines; a diverged start's iterations are left out) with the best feasible ΔV so far (thick steps) and the best
@@ -269,6 +274,7 @@ def plot_tuning(groups, path: str | Path, title: str = "", dpi: int = 150) -> Pa
     axes[1].axhline(0.0, color="k", ls="--", lw=0.8, label="box edge (inside below)")
     if np.nanmax(np.abs(g), initial=0.0) > 10.0:  # a start far outside would flatten the rest
         axes[1].set_yscale("symlog", linthresh=1.0)
+        axes[1].set_ylim(bottom=np.nanmin(g) - 0.1)  # the constraint is at least -1 (no excursion at all)
     axes[1].set(xlabel="iteration", ylabel="max box constraint")
     if panels == 3:
         step = _finite_or_nan(np.where(alive, hist["step_norm"], np.nan))
@@ -378,8 +384,8 @@ def _padded(values, factor: float = 1.5):
 
 
 def _zoom(ax, x, y, all_x, all_y, size: float = 0.38):
-    """A zoomed inset of the path (x, y) in the corner of ``ax`` holding the fewest of the points (all_x, all_y),
-    with the zoomed region marked on ``ax``."""
+    """A zoomed inset of the path (x, y), its magnification written in it, in the corner of ``ax`` holding the
+    fewest of the points (all_x, all_y); the zoomed region is marked on ``ax``."""
     (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
     u, v = (np.asarray(all_x) - x0) / (x1 - x0), (np.asarray(all_y) - y0) / (y1 - y0)
     corners = [(0.02, 0.02), (1 - size - 0.02, 0.02), (0.02, 1 - size - 0.02), (1 - size - 0.02, 1 - size - 0.02)]
@@ -387,16 +393,27 @@ def _zoom(ax, x, y, all_x, all_y, size: float = 0.38):
              for cx, cy in corners]
     inset = ax.inset_axes([*corners[int(np.argmin(crowd))], size, size])
     inset.plot(x, y, "C0", lw=0.8)
-    inset.plot(0.0, 0.0, "k+", ms=6)
-    half = 0.5 * max(np.ptp(x), np.ptp(y)) * 1.3
-    cx, cy = 0.5 * (np.max(x) + np.min(x)), 0.5 * (np.max(y) + np.min(y))
-    inset.set(xlim=(cx - half, cx + half), ylim=(cy - half, cy + half))
-    inset.set_aspect("equal", adjustable="datalim")
-    inset.tick_params(labelsize=6, length=2, pad=1)
+    _square(inset, x, y, 1.3)
+    # Tick labels would crowd a box this small; its magnification says the scale instead.
+    inset.tick_params(labelbottom=False, labelleft=False, length=2, direction="in")
     inset.xaxis.set_major_locator(MaxNLocator(3))
     inset.yaxis.set_major_locator(MaxNLocator(3))
+    zoom = float(f"{(x1 - x0) / np.ptp(inset.get_xlim()):.2g}")
+    inset.text(0.04, 0.96, f"×{zoom:g}", transform=inset.transAxes, ha="left", va="top", fontsize=6)
     ax.indicate_inset_zoom(inset, edgecolor="0.4")
     return inset
+
+
+def _square(ax, x, y, pad: float = 1.1) -> None:
+    """Equal, square data ranges around the points (x, y), ``pad`` times their larger extent: a square box with
+    equal aspect, whatever the shape of the path (an inset in it is then square too)."""
+    x, y = _finite_or_nan(x), _finite_or_nan(y)
+    cx, cy = 0.5 * (np.nanmax(x) + np.nanmin(x)), 0.5 * (np.nanmax(y) + np.nanmin(y))
+    half = max(0.5 * pad * max(np.nanmax(x) - np.nanmin(x), np.nanmax(y) - np.nanmin(y)),
+               1e-9 * max(1.0, abs(cx), abs(cy)))
+    ax.set(xlim=(cx - half, cx + half), ylim=(cy - half, cy + half), aspect="equal")
+    ax.xaxis.set_major_locator(MaxNLocator(4))
+    ax.yaxis.set_major_locator(MaxNLocator(4))
 
 
 def _legend_above(ax) -> None:
@@ -415,9 +432,9 @@ def _save(fig, axes, title: str, path: str | Path, dpi: int = 150) -> Path:
             raise ValueError(f"figure {str(path)!r}: the suffix must be one of {', '.join('.' + f for f in FORMATS)}")
         with matplotlib.rc_context(STYLE):
             for a in axes:
-                a.grid(True, alpha=STYLE["grid.alpha"], lw=STYLE["grid.linewidth"])
-            for a in fig.axes:  # figures built outside STYLE (studies/) included
-                for axis in (a.xaxis, a.yaxis):
+                a.grid(True, alpha=STYLE["grid.alpha"], linewidth=STYLE["grid.linewidth"])
+            for parent in fig.axes:  # insets, and figures built outside STYLE (studies/), included
+                for axis in (axis for a in (parent, *parent.child_axes) for axis in (a.xaxis, a.yaxis)):
                     if isinstance(axis.get_major_formatter(), ScalarFormatter):
                         axis.get_major_formatter().set_useOffset(False)
             if title:

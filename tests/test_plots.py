@@ -29,3 +29,178 @@ def test_libration_matches_keplers_equation_to_second_order():
     assert np.max(np.abs(d_lon - model_lon)) < 3e-7
     assert np.max(np.abs(lat - model_lat)) < 3e-7
     assert np.max(np.abs(model_lat)) > 8e-4
+
+
+# ---------------------------------------------------------------- every figure kind, from synthetic results
+# Magnitudes as in a real run: longitude near 96 deg E varying by 1e-3 deg, e and i components 1e-5 to 1e-4,
+# thrust about 1e-6 m/s^2.  Each figure is written as PDF and PNG; its figures are kept (``plt.close`` patched)
+# and drawn, to read back what a reader sees: no offset text on any axes, a label on both axes of every panel.
+
+import matplotlib.pyplot as plt  # noqa: E402
+import pytest  # noqa: E402
+
+DAY = 86164.0905
+
+
+def _cycles(n=40, controlled=True):
+    t = np.arange(n) * DAY
+    phase = 2 * np.pi * np.arange(n) / 365.25
+    wobble = 1e-3 * np.sin(np.arange(n) / 3.0)
+    scale = 1e-6 if controlled else 1e-4
+    table = {"t_s": t, "lon_deg": 96.0 + wobble, "drift_deg_per_day": 1e-4 * np.cos(np.arange(n) / 3.0),
+             "ex": scale * np.cos(phase), "ey": 1e-4 + scale * np.sin(phase), "ix": 3e-6 + 2e-6 * np.sin(phase),
+             "iy": 3e-5 + 1e-6 * np.cos(phase), "a_m": 42164.17e3 + 50.0 * np.sin(np.arange(n) / 5.0)}
+    table.update(dv_ns_mps=0.05 + 0.01 * np.sin(phase), v1_mps=0.04 + 0 * t, v2_mps=0.03 + 0 * t)
+    return table
+
+
+def _reference(n=41):
+    phase = 2 * np.pi * np.arange(n) / 365.25
+    return {"t_s": np.arange(n) * DAY, "lon_deg": 96.0 + 0.02 * np.arange(n) ** 2 / n,
+            "ex": 1e-4 * np.sin(3 * phase), "ey": 1e-4 * np.cos(3 * phase), "ix": 2e-4 * np.arange(n) / n,
+            "iy": 3e-5 + 1e-4 * np.arange(n) / n}
+
+
+TARGET = {"lon_deg": 96.0, "ex": 0.0, "ey": 1e-4, "ix": 0.0, "iy": 3e-5}
+
+
+def _steps(days=3.0, step_s=900.0):
+    t = np.arange(int(days * 86400 / step_s)) * step_s
+    turn = 2 * np.pi * t / DAY
+    return {"t_s": t, "dlon_deg": 0.03 * np.sin(turn / 5) + 0.005 * np.sin(turn), "lat_deg": 0.02 * np.sin(turn),
+            # u_x at rounding level, as a real run's x axis can be: it must not bring a 1e-16 scale along.
+            "ux_mps2": 1e-22 * np.sin(7 * turn), "uy_mps2": 2e-6 * np.cos(turn),
+            "uz_mps2": 1e-6 * (np.sin(3 * turn) > 0)}
+
+
+def _sweep():
+    grid = {"controller": np.array([b"qffc", b"fompc"]), "controller__di_max": np.array([2e-5, 4e-5, 8e-5, 1.6e-4])}
+    rng = np.random.default_rng(0)
+    dv = 50.0 + rng.normal(0.0, 0.5, (2, 4, 3))
+    status = np.zeros((2, 4, 3), int)
+    status[1, 0, 0] = 2
+    return {"grid": grid, "metrics": {"dv_per_year_mps": dv}, "status": {"code": status}}
+
+
+def _tuning(iterations=8, starts=4):
+    it = np.arange(iterations)[:, None]
+    dv = 30.0 + 10.0 * np.exp(-it / 3.0) + np.arange(starts)
+    dv[2, 1] = np.inf
+    shape = (iterations, starts)
+    constraint = np.stack([np.broadcast_to(0.2 * np.exp(-it / 2.0) - 0.05, shape), np.full(shape, -0.5)], -1)
+    best = np.minimum.accumulate(np.where(np.max(constraint, -1) <= 0, dv, np.inf).min(axis=1))
+    active = np.ones((iterations, starts), np.int8)
+    active[5:, 3] = 0
+    return {"iterations": {"dv_per_year_mps": dv, "constraint": constraint, "loss": dv,
+                           "step_norm": np.broadcast_to(0.5 ** it, shape),
+                           "theta": np.zeros((iterations, starts, 2)), "temperature": np.ones(iterations),
+                           "active": active, "trust_radius": np.ones((iterations, starts)),
+                           "best_dv_per_year_mps": best, "wall_s": np.arange(iterations, dtype=float)},
+            "best": {"k_h": 1.0, "theta": np.zeros(2)},
+            "metrics": {"dv_per_year_mps": best[-1], "constraint_lon": -0.01, "constraint_lat": -0.5}}
+
+
+FIGURES = {
+    "cycles": lambda path, dpi: [plots.plot_cycles(_cycles(), path, title="cycles", dpi=dpi)],
+    "station_keeping": lambda path, dpi: [plots.plot_station_keeping(_cycles(), _reference(), TARGET, path, "sk",
+                                                                      box_half_width_deg=0.05, dpi=dpi)],
+    "sweep": lambda path, dpi: [plots.plot_sweep(_sweep(), ["controller", "controller.di_max"], path, dpi=dpi)],
+    "feedback": lambda path, dpi: plots.plot_feedback(_steps(), 0.05, path.with_suffix(""), "katz", dpi=dpi,
+                                                      fmt=path.suffix[1:]),
+    "tuning": lambda path, dpi: [plots.plot_tuning(_tuning(), path, title="tune", dpi=dpi)],
+}
+MAGIC = {"pdf": b"%PDF", "png": b"\x89PNG"}
+
+
+@pytest.fixture
+def closed_figures(monkeypatch):
+    """The figures ``plots`` closes, kept open so the test can draw and read them."""
+    kept, close = [], plt.close
+    monkeypatch.setattr(plots.plt, "close", kept.append)
+    yield kept
+    for fig in kept:
+        close(fig)
+
+
+@pytest.mark.parametrize("kind", sorted(FIGURES))
+@pytest.mark.parametrize("fmt", sorted(MAGIC))
+def test_every_figure_is_written_in_the_format_of_its_suffix(kind, fmt, tmp_path):
+    written = FIGURES[kind](tmp_path / f"{kind}.{fmt}", 72)
+    assert written and all(p.suffix == f".{fmt}" for p in written)
+    for path in written:
+        assert path.read_bytes()[:4] == MAGIC[fmt], path
+
+
+@pytest.mark.parametrize("kind", sorted(FIGURES))
+def test_no_offset_text_and_every_panel_labelled(kind, tmp_path, closed_figures):
+    FIGURES[kind](tmp_path / f"{kind}.png", 50)
+    assert closed_figures
+    for fig in closed_figures:
+        fig.canvas.draw()
+        for ax in fig.axes:
+            assert ax.get_xlabel() and ax.get_ylabel(), (kind, ax.get_xlabel(), ax.get_ylabel())
+            for a in (ax, *ax.child_axes):
+                for axis in (a.xaxis, a.yaxis):
+                    assert axis.get_offset_text().get_text() == "", (kind, ax.get_xlabel(), ax.get_ylabel())
+
+
+def test_station_keeping_draws_the_box_a_zoomed_inset_and_states_the_run(tmp_path, closed_figures):
+    plots.plot_station_keeping(_cycles(), _reference(), TARGET, tmp_path / "sk.png", box_half_width_deg=0.05)
+    (fig,) = closed_figures
+    fig.canvas.draw()
+    e_plane, i_plane, track = fig.axes[1:4]
+    # The controlled e path spans 2e-6 against the reference's 2e-4: zoomed; in i, 3e-5 against 2e-4: zoomed.
+    assert len(e_plane.child_axes) == 1 and len(i_plane.child_axes) == 1
+    legend = [t.get_text() for t in track.get_legend().get_texts()]
+    # 41 reference boundaries one sidereal day apart: 39.9 days drawn in full, the first 30 in the ground track.
+    assert legend == ["uncontrolled, first 30 days", "controlled, 40 days", "box ±0.05°"]
+    e_legend = [t.get_text() for t in e_plane.get_legend().get_texts()]
+    assert e_legend == ["uncontrolled, 40 days", "controlled, 40 days", "target"]
+    (x0, x1), (y0, y1) = track.get_xlim(), track.get_ylim()
+    assert x0 < -0.05 and x1 > 0.05 and y0 < -0.05 and y1 > 0.05
+    assert e_plane.get_xlabel() == "δe_x (10⁻⁴)"
+
+
+def test_thrust_is_in_micrometres_per_second_squared(tmp_path, closed_figures):
+    plots.plot_feedback(_steps(), 0.05, tmp_path / "katz", fmt="svg")
+    assert (tmp_path / "katz-ground-track.svg").read_text().lstrip().startswith("<?xml")
+    history = closed_figures[1]
+    assert history.axes[1].get_ylabel() == "u_y (µm/s²)"
+    # u_y = 2e-6 cos: 2 µm/s² at its peak.
+    assert np.max(history.axes[1].get_lines()[0].get_ydata()) == pytest.approx(2.0)
+
+
+def test_an_unknown_suffix_is_refused(tmp_path, closed_figures):
+    with pytest.raises(ValueError, match="suffix"):
+        plots.plot_cycles(_cycles(), tmp_path / "cycles.jpg")
+    assert closed_figures and not (tmp_path / "cycles.jpg").exists()
+
+
+def test_rcparams_are_left_as_they_were(tmp_path):
+    before = dict(plt.rcParams)
+    plots.plot_sweep(_sweep(), ["controller", "controller.di_max"], tmp_path / "sweep.png")
+    assert dict(plt.rcParams) == before
+    assert plt.rcParams["axes.formatter.useoffset"] == before["axes.formatter.useoffset"]
+
+
+def test_label_for_names_the_quantity_and_its_unit():
+    assert plots.label_for("thrusters.beta_max_deg") == "β_max (deg)"
+    assert plots.label_for("controller.horizon") == "horizon N (cycles)"
+    assert plots.label_for("controller.di_max") == "Δi_max"
+    assert plots.label_for("errors.h_rv") == "H_rv"
+    assert plots.label_for("dv_per_year_mps") == "ΔV per year (m/s/yr)"
+    assert plots.label_for("max_abs_dlon_deg") == "max |δλ| (deg)"
+    # The fallback: the section dropped, the unit suffix read (the longer suffix first: _mps2 before _mps, _s).
+    assert plots.label_for("spacecraft.mass_kg") == "mass (kg)"
+    assert plots.label_for("spacecraft.srp_area_m2") == "srp_area (m²)"
+    assert plots.label_for("noise_mps2") == "noise (m/s²)"
+    assert plots.label_for("thrusters.min_burn_s") == "min_burn (s)"
+    assert plots.label_for("thrusters.count") == "count"
+
+
+def test_decade_brings_small_values_near_one_and_leaves_ordinary_ones():
+    assert plots.decade(np.array([1.2e-4, -3e-5])) == -4
+    assert plots.decade(np.array([96.0, 95.9])) == 0
+    assert plots.decade(np.array([0.05]), np.array([np.inf, np.nan])) == 0
+    assert plots.decade(np.array([2e-6])) == -6
+    assert plots.decade(np.zeros(3)) == 0

@@ -80,6 +80,16 @@ def test_a_tuning_opens_with_iteration_and_start_dimensions(tmp_path):
     assert ds.iterations__dv_per_year_mps.dims == ("iteration", "start")
     assert ds.iterations__theta.dims == ("iteration", "start", "parameter")
     assert ds.iterations__temperature.dims == ("iteration",)
+    # `geojax plot` on a tuning file draws its convergence, in the format asked for.
+    assert cli.main(["plot", str(tmp_path / "t.h5"), "--out", str(tmp_path / "fig"), "--format", "pdf", "-q"]) == 0
+    assert (tmp_path / "fig" / "t-convergence.pdf").read_bytes().startswith(b"%PDF")
+
+
+def test_plot_a_sweep_as_svg_and_refuse_a_bad_dpi(sweep_file, tmp_path, capsys):
+    assert cli.main(["plot", str(sweep_file), "--out", str(tmp_path), "--format", "svg", "--dpi", "300"]) == 0
+    assert b"<svg" in (tmp_path / "s.svg").read_bytes()[:500]
+    assert cli.main(["plot", str(sweep_file), "--dpi", "0"]) == 2
+    assert "--dpi" in capsys.readouterr().err
 
 
 def test_the_tuned_scenario_loads_back_with_the_tuned_gains(tmp_path):

@@ -2,6 +2,7 @@
 
     python studies/katz2025/table.py [--days 365.25] [--starts 16] [--iterations 40] [--modes ...]
                                      [--paper-tunings] [--out studies/katz2025/results]
+    python studies/katz2025/table.py --figures     # only the figures again, from table.json (about a minute)
 
 For each thrust mode (scenarios ``katz2025-continuous``, ``-discrete``,
 ``-constant``; the continuous one is eq. (5) as printed, zero thrust above u0):
@@ -73,9 +74,14 @@ def main() -> None:
     parser.add_argument("--modes", nargs="+", default=list(TUNINGS))
     parser.add_argument("--paper-tunings", action="store_true", help="run the (k_h, k_e) tunings here too")
     parser.add_argument("--out", default=str(Path(__file__).resolve().parent / "results"))
+    parser.add_argument("--figures", action="store_true",
+                        help="only redraw the figures: rerun the paper's gains and each mode's best verified tuning "
+                             "recorded in table.json")
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.figures:
+        return figures_again(out, args.days)
     rows = []
     for mode in args.modes:
         sc = scenario.load(f"katz2025-{mode}", {"duration.days": args.days})
@@ -107,6 +113,28 @@ def main() -> None:
         rows.append(row)
         (out / "table.json").write_text(json.dumps(rows, indent=1))
     (out / "table.md").write_text(markdown(rows, args))
+
+
+def figures_again(out: Path, days: float) -> None:
+    """The figures of the paper's gains and of the best verified tuning of each mode in ``table.json``."""
+    for row in json.loads((out / "table.json").read_text()):
+        mode = row["mode"]
+        sc = scenario.load(f"katz2025-{mode}", {"duration.days": days})
+        plots.plot_feedback(simulate_feedback(sc).steps, 0.05, out / f"{mode}-paper-gains", title=f"{mode}, Katz's gains")
+        kept = [t for t in row["tunings"] if t.get("verified", {}).get("box_ok") and "gains" in t]
+        if not kept:
+            continue
+        best = min(kept, key=lambda t: t["verified"]["dv_per_year_mps"])
+        gains = {k: v for k, v in best["gains"].items() if k not in ("u0_km_per_s2", "surrogate_temperature")}
+        sigma = [gains.pop(f"sigma_{axis}_km_per_s2") for axis in "xyz" if f"sigma_{axis}_km_per_s2" in gains]
+        overrides = {f"controller.{k}": v for k, v in gains.items()}
+        if sigma:
+            overrides["controller.sigma_km_per_s2"] = sigma
+        overrides.update({"duration.days": days, "controller.thrust_mode": best["thrust_mode"]})
+        run = simulate_feedback(scenario.load(f"katz2025-{mode}", overrides))
+        print(f"{mode}: best tuning {run.metrics['dv_per_year_mps']:.3f} m/s/yr (table.json: "
+              f"{best['verified']['dv_per_year_mps']:.3f})", flush=True)
+        plots.plot_feedback(run.steps, 0.05, out / f"{mode}-tuned", title=f"{mode}, tuned {', '.join(best['parameters'])}")
 
 
 def add_verified(entry: dict, sc, params, best):

@@ -87,6 +87,7 @@ def _per_year(result, name: str) -> float:
     return float(np.sum(result.cycles[name])) * 365.25 * 86400 / (n * 86164.0905)
 
 
+@plots.styled
 def plot_ns(results, path: Path, title: str) -> Path:
     """Li 2022 Figs. 7-8: Delta-V_NS per cycle and mean pitch over the first half-year, both controllers."""
     fig, axes = plt.subplots(2, 1, figsize=(10, 7), constrained_layout=True)
@@ -119,7 +120,8 @@ def main() -> None:
         results[controller] = run_year(controller, args.limits, args.days, args.seed)
         title = f"li2022, {controller.upper()}, {args.limits} limits"
         plots.plot_station_keeping(results[controller].cycles, results[controller].reference,
-                                   results[controller].target, out / f"one_year_{args.limits}_{controller}.png", title)
+                                   results[controller].target, out / f"one_year_{args.limits}_{controller}.png", title,
+                                   box_half_width_deg=0.05)
     plot_ns(results, out / f"one_year_{args.limits}_ns.png", f"li2022, {args.limits} limits: Li 2022 Figs. 7-8")
     n = len(results["qffc"].cycles["t_s"])
     lines = [f"# li2022, QFFC and FOMPC, {args.limits} limits, {n} cycles", "",
