@@ -312,14 +312,15 @@ def _quantity(key: str) -> tuple[str, str]:
 
 def decade(*arrays) -> int:
     """The power of ten to show ``arrays`` in (as values / 10**power): 0 while their largest finite magnitude is
-    between 0.01 and 1000, else that magnitude's power of ten (1.2e-4 -> -4)."""
+    between 0.01 and 99,999 (ΔV in m/s/yr, H_rv = 1000 read best as they are), else that magnitude's power of
+    ten (1.2e-4 -> -4)."""
     finite = np.concatenate([np.ravel(np.asarray(a, float)) for a in arrays])
     finite = np.abs(finite[np.isfinite(finite)])
     largest = float(np.max(finite, initial=0.0))
     if largest == 0.0:
         return 0
     power = int(np.floor(np.log10(largest)))
-    return 0 if -2 <= power <= 2 else power
+    return 0 if -2 <= power <= 4 else power
 
 
 def _label(name: str, unit: str = "", power: int = 0) -> str:

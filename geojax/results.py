@@ -120,6 +120,10 @@ def open_results(path: str | Path):
         if "config_toml" not in f.attrs:
             raise ValueError(f"{str(path)!r}: not a geojax results file")
         coords, variables = {}, {}
+        fallback = dict(DEFAULT_DIMS)  # files written before the axes were labelled in the file
+        if f.attrs.get("kind") == "sweep" and "grid_axes" in f.attrs:
+            axes = str(f.attrs["grid_axes"]).split(",")
+            fallback.update(dims_of_sweep(axes[1:], cycles=True))
         for group_name, group in f.items():
             if not isinstance(group, h5py.Group):
                 continue
@@ -130,7 +134,9 @@ def open_results(path: str | Path):
                     coords[dim] = xr.Variable(dim, [v.decode() for v in values] if values.dtype.kind == "S" else values,
                                               _attrs(ds))
                     continue
-                dims = [ds.dims[axis].label or f"{name}_axis{axis}" for axis in range(ds.ndim)]
+                known = fallback.get(group_name, ())
+                dims = [ds.dims[axis].label or (known[axis] if axis < len(known) else f"{name}_axis{axis}")
+                        for axis in range(ds.ndim)]
                 key = name if group_name == "metrics" else ("status" if group_name == "status" and name == "code"
                                                             else f"{group_name}__{name}")
                 variables[key] = xr.Variable(dims, ds[()], _attrs(ds))

@@ -204,3 +204,4 @@ def test_decade_brings_small_values_near_one_and_leaves_ordinary_ones():
     assert plots.decade(np.array([0.05]), np.array([np.inf, np.nan])) == 0
     assert plots.decade(np.array([2e-6])) == -6
     assert plots.decade(np.zeros(3)) == 0
+    assert plots.decade(np.array([1000.0, 222.0])) == 0 and plots.decade(np.array([3e5])) == 5  # ΔV, H_rv as they are
