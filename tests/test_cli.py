@@ -5,6 +5,7 @@ import h5py
 import numpy as np
 import pytest
 
+import geojax
 from geojax import cli
 
 
@@ -74,6 +75,10 @@ def test_simulate_writes_metrics_and_cycles(tmp_path, capsys):
         fired = f["cycles/v1_mps"][()] > 0
         assert np.all((f["cycles/beta1_deg"][()][fired] >= 0) & (f["cycles/beta1_deg"][()][fired] <= 70 + 1e-9))
         assert f["reference/ix"].shape == (6,) and f["target/iy"][()] == 3e-5
+    ds = geojax.open_results(out)  # as labelled arrays
+    assert ds.dv_per_year_mps.dims == () and ds.dv_per_year_mps.attrs["units"] == "m/s/yr"
+    assert ds.cycles__lon_deg.dims == ("cycle",) and ds.cycles__lon_deg.size == 5
+    assert ds.reference__ix.dims == ("reference_cycle",) and ds.attrs["scenario"] == "li2022-qffc"
     assert cli.main(["plot", str(out), "--out", str(tmp_path)]) == 0
     assert (tmp_path / "sim-station-keeping.png").stat().st_size > 10_000
 

@@ -62,29 +62,6 @@ def test_provenance_and_the_resolved_base_scenario(sweep_file):
     assert base.config["duration"]["days"] == 3.0 and base.config["errors"]["h_rv"] == 2.0  # [set] applied
 
 
-def test_a_simulation_opens_with_cycle_dimensions(tmp_path):
-    out = tmp_path / "sim.h5"
-    assert cli.main(["simulate", "li2022-qffc", "--days", "2", "--out", str(out), "-q"]) == 0
-    ds = open_results(out)
-    assert ds.dv_per_year_mps.dims == () and ds.dv_per_year_mps.attrs["units"] == "m/s/yr"
-    assert ds.cycles__lon_deg.dims == ("cycle",) and ds.cycles__lon_deg.size == 2
-    assert ds.reference__ix.dims == ("reference_cycle",)
-    assert ds.attrs["kind"] == "simulate" and ds.attrs["scenario"] == "li2022-qffc"
-
-
-def test_a_tuning_opens_with_iteration_and_start_dimensions(tmp_path):
-    spec_file = tmp_path / "t.toml"
-    spec_file.write_text('scenario = "katz2025-constant"\ndays = 2.0\nstarts = 2\niterations = 0\n')
-    assert cli.main(["tune", str(spec_file), "--out", str(tmp_path / "t.h5"), "-q"]) in (0, 1)
-    ds = open_results(tmp_path / "t.h5")
-    assert ds.iterations__dv_per_year_mps.dims == ("iteration", "start")
-    assert ds.iterations__theta.dims == ("iteration", "start", "parameter")
-    assert ds.iterations__temperature.dims == ("iteration",)
-    # `geojax plot` on a tuning file draws its convergence, in the format asked for.
-    assert cli.main(["plot", str(tmp_path / "t.h5"), "--out", str(tmp_path / "fig"), "--format", "pdf", "-q"]) == 0
-    assert (tmp_path / "fig" / "t-convergence.pdf").read_bytes().startswith(b"%PDF")
-
-
 def test_plot_a_sweep_as_svg_and_refuse_a_bad_dpi(sweep_file, tmp_path, capsys):
     assert cli.main(["plot", str(sweep_file), "--out", str(tmp_path), "--format", "svg", "--dpi", "300"]) == 0
     assert b"<svg" in (tmp_path / "s.svg").read_bytes()[:500]

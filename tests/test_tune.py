@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+import geojax
 from geojax import cli, scenario, store, tune
 
 
@@ -134,6 +135,13 @@ def test_cli_tune_writes_results_and_rejects_bad_files(tmp_path):
     assert (tmp_path / "t-tuned.toml").is_file() == (code == 0)  # the tuned scenario, where a feasible point was found
     groups, attrs = store.read_h5(tmp_path / "t.h5")
     assert attrs["kind"] == "tune" and groups["iterations"]["theta"].shape == (1, 2, 2)
+    # As labelled arrays (geojax.open_results), and its convergence figure in the format asked for.
+    ds = geojax.open_results(tmp_path / "t.h5")
+    assert ds.iterations__dv_per_year_mps.dims == ("iteration", "start")
+    assert ds.iterations__theta.dims == ("iteration", "start", "parameter")
+    assert ds.iterations__temperature.dims == ("iteration",)
+    assert cli.main(["plot", str(tmp_path / "t.h5"), "--out", str(tmp_path / "fig"), "--format", "pdf", "-q"]) == 0
+    assert (tmp_path / "fig" / "t-convergence.pdf").read_bytes().startswith(b"%PDF")
     bad = tmp_path / "bad.toml"
     bad.write_text('scenario = "katz2025-constant"\nparameters = ["k_x"]\n')
     assert cli.main(["tune", str(bad), "--out", str(tmp_path / "b.h5")]) == 2
