@@ -494,8 +494,8 @@ def _scenarios(args) -> int:
     width = max(map(len, names))
     for name in names:
         print(f"{name:{width}s}  {scenario.load(name).config['description']}")
-    print(f"\n`geojax scenarios --show NAME` prints a scenario's TOML (to copy and edit: "
-          f"`geojax scenarios --show li2022-qffc > mine.toml`).")
+    print("\n`geojax scenarios --show NAME` prints a scenario's TOML (to copy and edit: "
+          "`geojax scenarios --show li2022-qffc > mine.toml`).")
     return 0
 
 

@@ -31,7 +31,6 @@ os.environ.setdefault("XLA_FLAGS", f"--xla_force_host_platform_device_count={os.
 import argparse  # noqa: E402
 import dataclasses  # noqa: E402
 import json  # noqa: E402
-import math  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 from types import SimpleNamespace
