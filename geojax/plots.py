@@ -16,6 +16,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+from geojax.results import split_unit  # noqa: E402
 from matplotlib.ticker import MaxNLocator, ScalarFormatter  # noqa: E402
 
 FORMATS = ("png", "pdf", "svg")
@@ -48,8 +50,6 @@ QUANTITIES = {
     "dlat_half_range_deg": ("δφ half-range", "deg"), "max_abs_de": ("max |δe|", ""), "max_abs_di": ("max |δi|", ""),
     "mass_used_kg": ("propellant used", "kg"), "cycles_without_solution": ("cycles without solution", ""),
 }
-UNIT_SUFFIXES = {"_mps2": "m/s²", "_mps": "m/s", "_deg": "deg", "_rad": "rad", "_km": "km", "_kg": "kg",
-                 "_m2": "m²", "_m": "m", "_n": "N", "_s": "s", "_days": "days"}
 SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
 
@@ -303,11 +303,10 @@ def _quantity(key: str) -> tuple[str, str]:
     if key in QUANTITIES:
         return QUANTITIES[key]
     name = key.rsplit(".", 1)[-1]
-    if "_per_" not in name:
-        for suffix, unit in UNIT_SUFFIXES.items():
-            if name.endswith(suffix) and len(name) > len(suffix):
-                return name[: -len(suffix)], unit
-    return name, ""
+    if "_per_" in name:
+        return name, ""
+    stem, unit = split_unit(name)  # the units of the results files (geojax.results), drawn with superscripts
+    return stem, unit.replace("^2", "²")
 
 
 def decade(*arrays) -> int:

@@ -15,13 +15,8 @@ class Progress:
         self.enabled = self.stream.isatty() if enabled is None else enabled
         self.done = 0
         self.note = ""  # shown after the ETA (a cluster's workers alive)
-        self._resumed = 0  # done before this run: counted, not in the rate
+        self._resumed = 0  # done before the last restart: counted, not in the rate
         self.start = time.perf_counter()
-
-    def resumed(self, n: int) -> None:
-        """``n`` units done by an earlier run (a resumed sweep): shown as done, left out of the rate."""
-        self._resumed += n
-        self.update(n)
 
     def restart(self, note: str = "") -> None:
         """Start the rate and ETA afresh from here (after a compilation, which says nothing of the rate)."""

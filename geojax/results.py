@@ -18,6 +18,7 @@ from pathlib import Path
 UNIT_SUFFIXES = (
     ("_per_year_mps", "m/s/yr"), ("_deg_per_day", "deg/day"), ("_mps2", "m/s^2"), ("_mps", "m/s"),
     ("_deg", "deg"), ("_rad", "rad"), ("_km", "km"), ("_kg", "kg"), ("_m2", "m^2"), ("_m", "m"), ("_s", "s"),
+    ("_n", "N"), ("_days", "days"),
 )
 DIMENSIONLESS = {"ex", "ey", "ix", "iy", "max_abs_de", "max_abs_di", "duty_x", "duty_y", "duty_z", "ns_fraction",
                  "burns_per_thruster_per_orbit", "burns_total", "cycles_without_solution", "code", "active",
@@ -55,11 +56,17 @@ DESCRIPTIONS = {
 DEFAULT_DIMS = {"cycles": ("cycle",), "reference": ("reference_cycle",), "steps": ("step",)}
 
 
+def split_unit(name: str) -> tuple[str, str]:
+    """(stem, unit) of a name that ends in a unit suffix ("mass_kg" -> ("mass", "kg")), else (name, "")."""
+    for suffix, unit in UNIT_SUFFIXES:
+        if name.endswith(suffix) and len(name) > len(suffix):
+            return name[: -len(suffix)], unit
+    return name, ""
+
+
 def units_of(name: str) -> str:
     """The unit of a dataset named ``name`` ("" where dimensionless or unknown)."""
-    if name in DIMENSIONLESS:
-        return ""
-    return next((unit for suffix, unit in UNIT_SUFFIXES if name.endswith(suffix)), "")
+    return "" if name in DIMENSIONLESS else split_unit(name)[1]
 
 
 def label_datasets(f, dims: dict[str, tuple[str, ...]]) -> None:
