@@ -1,1 +1,22 @@
-import geojax  # noqa: F401  (turns on float64 before any test builds arrays)
+"""Suite-wide set-up.
+
+The tests that run ``geojax`` in subprocesses (kill -9 and resume, Ray workers, the command line) compile the
+same programs again in every process.  One persistent JAX compilation cache for the session, in a temporary
+folder removed at its end, lets each later process load them instead (a cache hit is the same executable, so
+bit-for-bit comparisons are unaffected); it halves ``test_kill.py``.  The variables are set before JAX is
+imported, and subprocesses inherit them.
+"""
+
+import atexit
+import os
+import shutil
+import tempfile
+
+if "JAX_COMPILATION_CACHE_DIR" not in os.environ:
+    _cache = tempfile.mkdtemp(prefix="geojax-test-jax-cache-")
+    atexit.register(shutil.rmtree, _cache, ignore_errors=True)
+    os.environ["JAX_COMPILATION_CACHE_DIR"] = _cache
+    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
+    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES", "0")
+
+import geojax  # noqa: E402,F401  (turns on float64 before any test builds arrays)
