@@ -16,6 +16,11 @@ that boundary, the same definition the controller reads).  Nothing here feeds ba
 model's alone (linear impulsive burns against finite burns with shadow interruptions; the reference's
 drift against the controlled orbit's).
 
+A second predictor is Li's as printed: eq. (22)'s longitude entry of a tangential burn, -3 c_i / V_s
+(ours, from the dynamics, -6 pi c_i / V_s: ``control.effects``), and eq. (27)'s drift step
+Δλ = λ̇_{k-1} T_s (ours adds half the cycle's change of drift).  If Li's simulations used the printed
+model, this is the accuracy its state predictor had.
+
 Writes ``results/li_predictor_error.md``, ``.json`` and ``.png``: per N, the RMS and the largest error
 of longitude (deg), drift (deg/day), eccentricity vector and inclination vector (MEE (h, k), the units of
 Δi_max = 8e-5), over every start k of the year.
@@ -34,6 +39,7 @@ import numpy as np
 import geojax
 from geojax import plots
 from geojax.control import qffc
+from geojax.control.effects import V_SYNC_MPS, remaining_fraction
 from geojax.control.predictor import estimate_mean, predict_next
 from geojax.loop.setup import prepare
 from geojax.physics.elements import wrap_angle
@@ -76,20 +82,36 @@ def predictor_errors(controller: str, days: float, horizon: int) -> dict:
     l_start = true_l_start(cycles.boundary, np.asarray(batch.shared.env.earth_angle_rad[:n, 0, 0]))
     burns = delivered_burns(cycles)
     kicks = jax.vmap(qffc.effect)(burns, l_start)  # [n, 6]
+    # Li's printed eq. (22): the tangential burn's longitude entry -3 c_i / V_s instead of -6 pi c_i / V_s
+    c_i = np.asarray(remaining_fraction(burns.l_rad, l_start[:, None]))
+    printed_lon = np.sum(3 * c_i * burns.dv_rsw_mps[..., 1] * (2 * np.pi - 1) / V_SYNC_MPS, axis=1)
+    kicks_printed = kicks.at[:, 0].add(printed_lon)
 
-    @jax.jit
-    def ahead(x, k0):
-        """x_{k0+N} predicted from x = x_{k0}, N = 1 .. horizon."""
-        def one(x, j):
-            k = k0 + j
-            x = predict_next(x, ref_mean[k], ref_mean[k + 1], cycle_s) + kicks[k]
-            return x, x
-        return jax.lax.scan(one, x, jnp.arange(horizon))[1]
+    def ahead(kicks, printed):
+        @jax.jit
+        def predict(x, k0):
+            """x_{k0+N} predicted from x = x_{k0}, N = 1 .. horizon."""
+            def one(x, j):
+                k = k0 + j
+                x_next = predict_next(x, ref_mean[k], ref_mean[k + 1], cycle_s)
+                if printed:  # eq. (27): the drift of the cycle before, no change over the cycle
+                    x_next = x_next.at[0].set(x[0] + cycle_s * x[1])
+                x = x_next + kicks[k]
+                return x, x
+            return jax.lax.scan(one, x, jnp.arange(horizon))[1]
+        return jax.vmap(predict)
 
     starts = np.arange(n - horizon)
-    predicted = np.asarray(jax.vmap(ahead)(truth[starts], starts))  # [k, N, 6]
     actual = truth[starts[:, None] + np.arange(1, horizon + 1)[None, :]]
-    err = predicted - actual
+    out = {"controller": controller, "dv_per_year_mps": float(result.metrics["dv_per_year_mps"]), "starts": int(len(starts)),
+           "mean_burn_di_mee": float(np.mean(np.hypot(kicks[:, 4], kicks[:, 5])))}
+    for label, model in (("ours", ahead(kicks, False)), ("printed", ahead(kicks_printed, True))):
+        out[label] = errors(np.asarray(model(truth[starts], starts)) - actual)
+    return out
+
+
+def errors(err) -> dict:
+    """RMS and largest error per N of longitude, drift, e and i from state errors [k, N, 6]."""
     err[..., 0] = np.asarray(wrap_angle(err[..., 0]))
     quantities = {
         "lon_deg": np.degrees(np.abs(err[..., 0])),
@@ -97,12 +119,8 @@ def predictor_errors(controller: str, days: float, horizon: int) -> dict:
         "e": np.hypot(err[..., 2], err[..., 3]),
         "i_mee": np.hypot(err[..., 4], err[..., 5]),
     }
-    out = {"controller": controller, "dv_per_year_mps": float(result.metrics["dv_per_year_mps"]), "starts": int(len(starts))}
-    for name, values in quantities.items():
-        out[name] = {"rms": np.sqrt(np.mean(values**2, axis=0)).tolist(), "max": values.max(axis=0).tolist()}
-    # the size of what is predicted, for scale: the QFFC's per-cycle inclination correction
-    out["mean_burn_di_mee"] = float(np.mean(np.hypot(kicks[:, 4], kicks[:, 5])))
-    return out
+    return {name: {"rms": np.sqrt(np.mean(values**2, axis=0)).tolist(), "max": values.max(axis=0).tolist()}
+            for name, values in quantities.items()}
 
 
 def markdown(rows, args) -> str:
@@ -114,11 +132,13 @@ def markdown(rows, args) -> str:
     for row in rows:
         lines += [f"## {row['controller'].upper()} ({row['dv_per_year_mps']:.2f} m/s/yr, {row['starts']} starts; "
                   f"mean per-cycle inclination change by the burns {row['mean_burn_di_mee']:.2e})", "",
-                  "| N | longitude deg | drift deg/day | e | i (MEE h, k) | i error / Δi_max |", "|---:|---:|---:|---:|---:|---:|"]
+                  "| N | longitude deg | drift deg/day | e | i (MEE h, k) | i error / Δi_max | longitude deg, Li's printed model |",
+                  "|---:|---:|---:|---:|---:|---:|---:|"]
+        ours, printed = row["ours"], row["printed"]
         for k in range(args.horizon):
-            cell = lambda q, fmt: f"{row[q]['rms'][k]:{fmt}} ({row[q]['max'][k]:{fmt}})"  # noqa: E731
-            lines.append(f"| {k + 1} | {cell('lon_deg', '.2e')} | {cell('drift_deg_per_day', '.2e')} | {cell('e', '.2e')} | "
-                         f"{cell('i_mee', '.2e')} | {row['i_mee']['rms'][k] / DI_MAX:.3f} |")
+            cell = lambda e, q: f"{e[q]['rms'][k]:.2e} ({e[q]['max'][k]:.2e})"  # noqa: E731
+            lines.append(f"| {k + 1} | {cell(ours, 'lon_deg')} | {cell(ours, 'drift_deg_per_day')} | {cell(ours, 'e')} | "
+                         f"{cell(ours, 'i_mee')} | {ours['i_mee']['rms'][k] / DI_MAX:.3f} | {cell(printed, 'lon_deg')} |")
         lines.append("")
     return "\n".join(lines)
 
@@ -128,12 +148,15 @@ def figure(rows, path):
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(7.0, 3.0))
     for row in rows:
-        n = np.arange(1, len(row["lon_deg"]["rms"]) + 1)
-        axes[0].semilogy(n, row["lon_deg"]["rms"], marker="o", label=row["controller"].upper())
-        axes[1].semilogy(n, row["i_mee"]["rms"], marker="o", label=row["controller"].upper())
+        n = np.arange(1, len(row["ours"]["lon_deg"]["rms"]) + 1)
+        name = row["controller"].upper()
+        axes[0].semilogy(n, row["ours"]["lon_deg"]["rms"], marker="o", label=name)
+        axes[0].semilogy(n, row["printed"]["lon_deg"]["rms"], marker="x", linestyle=":", label=f"{name}, Li's printed model")
+        axes[1].semilogy(n, row["ours"]["i_mee"]["rms"], marker="o", label=name)
     axes[1].axhline(DI_MAX, color="0.5", linestyle="--", label="Δi_max")
     axes[0].set(xlabel="cycles ahead N", ylabel="RMS longitude error (deg)")
     axes[1].set(xlabel="cycles ahead N", ylabel="RMS inclination error (MEE)")
+    axes[0].legend()
     axes[1].legend()
     fig.tight_layout()
     fig.savefig(path, dpi=150)
