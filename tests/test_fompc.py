@@ -112,3 +112,21 @@ def test_warm_start_repeats_the_last_planned_cycle_whatever_the_padding():
     np.testing.assert_array_equal(fompc.shifted(w, 4), [0.8, 1.2, 0.9, 0.9, 0.9, 0.9, 0.9])
     np.testing.assert_array_equal(fompc.shifted(w[:4], 4), [0.8, 1.2, 0.9, 0.9])
     np.testing.assert_array_equal(fompc.shifted(w, 1), jnp.full(7, 0.5))
+
+
+def test_dv_exponent_one_scores_the_fuel_of_each_cycle(windows):
+    """With ``dv_exponent`` = 1 and no penalty, J is half the sum over the horizon of V_1k + V_2k, the burns
+    the QFFC model plans cycle by cycle (``qffc.model_cycle``, the model J is built on): a second,
+    independent sum over the same cycles."""
+    from geojax.control import qffc
+    ref_mean, cycle_s = windows
+    x0 = start_states(1, seed=5)[0]
+    w = jnp.asarray(np.random.default_rng(6).uniform(0.2, 1.5, ANNEALING.n_max))
+    mpc = fompc.MpcParams(horizon=jnp.asarray(4), penalty=jnp.asarray(0.0), dv_exponent=jnp.asarray(1.0))
+    x, fuel = x0, 0.0
+    for k in range(4):
+        _, burns, x = qffc.model_cycle(x, ref_mean[k:k + 3], TARGET, 0.3, LIMITS, cycle_s, 0.0, w[k])
+        fuel += float(jnp.sum(burns.v_mps))
+    np.testing.assert_allclose(float(cost_of(windows, w, x0, mpc)), 0.5 * fuel, rtol=1e-12)
+    squares = float(cost_of(windows, w, x0, mpc._replace(dv_exponent=jnp.asarray(2.0))))
+    assert squares < 0.5 * fuel  # every V < 1 m/s: the squares are smaller

@@ -10,6 +10,9 @@ the end of each cycle, and eq. (42) scores the sequence:
     J = 1/2 sum_k [V_1k^2 + V_2k^2 + zeta_k |i_T - i_k|^2],
     zeta_k = P if |i_T - i_k| > Delta i_max else 0.
 
+(``controller.dv_exponent`` = 1 scores V_1k + V_2k, the fuel, instead of the squares: an ablation of
+the printed J, ``studies/ablation/fompc_annealing.py``.)
+
 Choices where the paper is silent:
 
 * u_k is searched as a fraction w_k of the QFFC's full correction of that
@@ -54,6 +57,7 @@ class MpcParams(NamedTuple):
     horizon: jnp.ndarray = np.asarray(6)  # N, cycles (<= Annealing.n_max)
     di_max: jnp.ndarray = np.asarray(8e-5)  # Delta i_max, MEE (h, k)
     penalty: jnp.ndarray = np.asarray(1e8)  # P, (m/s)^2 per unit (h, k)^2
+    dv_exponent: jnp.ndarray = np.asarray(2.0)  # J sums V^dv_exponent per burn: 2 as eq. (42), 1 the fuel
 
 
 class Annealing(NamedTuple):
@@ -85,7 +89,7 @@ def horizon_cost(fractions, x0, ref_windows, target, l_start_rad, limits, cycle_
         _, burns, after = model_cycle(x, window, target, l_start_rad, limits, cycle_s, vdt_estimate, fractions[k])
         di = jnp.hypot(target[4] - after[4], target[5] - after[5])
         zeta = jnp.where(di > mpc.di_max, mpc.penalty, 0.0)
-        cost = jnp.sum(burns.v_mps**2) + zeta * di**2 + jnp.where(burns.feasible, 0.0, mpc.penalty * mpc.di_max**2)
+        cost = jnp.sum(burns.v_mps**mpc.dv_exponent) + zeta * di**2 + jnp.where(burns.feasible, 0.0, mpc.penalty * mpc.di_max**2)
         return after, 0.5 * jnp.where(k < mpc.horizon, cost, 0.0)
 
     _, costs = jax.lax.scan(one, x0, jnp.arange(n_max))
@@ -163,7 +167,7 @@ def controller(annealing: Annealing = Annealing()) -> Controller:
         c = params.controller
         inputs = qffc.model_inputs(params, estimate, context)
         prediction, _, _ = model_cycle(*inputs)
-        mpc = MpcParams(c["horizon"], c["di_max"], c["penalty"])
+        mpc = MpcParams(c["horizon"], c["di_max"], c["penalty"], c["dv_exponent"])
         planned = plan(jax.random.fold_in(key, 1), *inputs, mpc, annealing, warm_start)
         flown = burns_mod.fly(params, planned.burns, prediction, planned.fractions[0], estimate, context, key)
         return flown, shifted(planned.fractions, c["horizon"])

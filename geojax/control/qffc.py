@@ -69,6 +69,8 @@ FIELDS = {
     "horizon": Field(int, 6, lower=1, upper=11, lower_inclusive=True, si="horizon"),
     "di_max": Field(NUMBER, 8e-5, lower=0.0, si="di_max", transform=LOG),
     "penalty": Field(NUMBER, 1e8, lower=0.0, si="penalty", transform=LOG),
+    # The power of each burn's Delta-V in J: 2 as eq. (42) prints it (V_1k^2 + V_2k^2); 1 scores the fuel itself.
+    "dv_exponent": Field(NUMBER, 2.0, lower=1.0, upper=3.0, lower_inclusive=True, si="dv_exponent"),
     "chains": Field(int, 8, lower=1, upper=1025, lower_inclusive=True, static=True),
     "iterations": Field(int, 64, lower=0, upper=100001, lower_inclusive=True, static=True),
 }

@@ -35,7 +35,11 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+import jax  # noqa: E402
+
 import geojax  # noqa: E402
+from geojax.loop.metrics import ns_delta_v_mps  # noqa: E402
+from geojax.physics.constants import SIDEREAL_DAY_S  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 LI = {"qffc": 60.2, "fompc": 54.2}
@@ -59,7 +63,20 @@ VARIANTS = {
                           "β_max = 45°, Δi_max 1.6e-4"),
     "beta-90-di-double": ({"thrusters.beta_max_deg": 90.0, "thrusters.alpha_max_deg": 90.0, "controller.di_max": 1.6e-4},
                           "β_max = 90°, Δi_max 1.6e-4"),
+    # The printed J sums squared ΔV (eq. (42)); the fuel is their sum.  Does scoring the fuel change the trend?
+    "fuel-j": ({"controller.dv_exponent": 1.0, "controller.penalty": 1e9}, "J sums V_1k + V_2k (the fuel), P = 1e9 "
+               "(the squares' P = 1e8 times 1/V for the typical V ≈ 0.1 m/s)"),
+    "beta-45-fuel-j": ({"thrusters.beta_max_deg": 45.0, "thrusters.alpha_max_deg": 90.0, "controller.dv_exponent": 1.0,
+                        "controller.penalty": 1e9}, "β_max = 45°, J of the fuel"),
+    "beta-90-fuel-j": ({"thrusters.beta_max_deg": 90.0, "thrusters.alpha_max_deg": 90.0, "controller.dv_exponent": 1.0,
+                        "controller.penalty": 1e9}, "β_max = 90°, J of the fuel"),
 }
+
+
+def ns_per_year(result, days: float) -> list[float]:
+    """The planned out-of-plane ΔV of the fired burns (Li eq. (45)) per year, per sample."""
+    ns = np.asarray(jax.vmap(ns_delta_v_mps)(result.records.cycles.controller))
+    return [float(x) for x in ns.sum(axis=1) * 365.25 / (ns.shape[1] * SIDEREAL_DAY_S / 86400.0)]
 
 
 def run(overrides: dict, seeds: int, days: float) -> dict:
@@ -68,7 +85,8 @@ def run(overrides: dict, seeds: int, days: float) -> dict:
     result = geojax.simulate_batch([sc] * seeds, seeds=list(range(seeds)))
     wall_s = time.perf_counter() - start
     m = result.metrics
-    return {"dv": [float(x) for x in m["dv_per_year_mps"]], "status": [int(s) for s in result.status],
+    return {"dv": [float(x) for x in m["dv_per_year_mps"]], "dv_ns": ns_per_year(result, days),
+            "status": [int(s) for s in result.status],
             "max_abs_mean_dlon_deg": float(np.max(m["max_abs_mean_dlon_deg"])),
             "max_abs_di": float(np.max(m["max_abs_di"])), "wall_s": wall_s}
 
@@ -89,10 +107,11 @@ def main() -> None:
         plant = tuple(sorted((k, v) for k, v in overrides.items() if not k.startswith("controller.")))
         if plant not in qffc_cache:
             sc = geojax.load_scenario("li2022-qffc", {"duration.days": args.days, **dict(plant)})
-            qffc_cache[plant] = float(geojax.simulate(sc).metrics["dv_per_year_mps"])
+            result = geojax.simulate_batch([sc])
+            qffc_cache[plant] = (float(result.metrics["dv_per_year_mps"][0]), ns_per_year(result, args.days)[0])
         return qffc_cache[plant]
 
-    dv_qffc = qffc_dv({})
+    dv_qffc = qffc_dv({})[0]
     rows = {}
     saved = out / "fompc_annealing.json"
     if saved.is_file():  # keep the rows of earlier runs of the same length and seeds
@@ -101,8 +120,8 @@ def main() -> None:
             rows = {k: v for k, v in earlier["rows"].items() if k in VARIANTS and k not in args.variants}
     for name in args.variants:
         overrides, what = VARIANTS[name]
-        rows[name] = {"what": what, "overrides": overrides, "qffc_dv": qffc_dv(overrides),
-                      **run(overrides, args.seeds, args.days)}
+        rows[name] = {"what": what, "overrides": overrides, "qffc_dv": qffc_dv(overrides)[0],
+                      "qffc_dv_ns": qffc_dv(overrides)[1], **run(overrides, args.seeds, args.days)}
         dv = np.array(rows[name]["dv"])
         print(f"{name}: ΔV {dv.mean():.3f} ± {dv.std():.3f} m/s/yr, saving "
               f"{100 * (1 - dv.mean() / rows[name]['qffc_dv']):.2f} % "
@@ -112,18 +131,25 @@ def main() -> None:
     lines = [f"# FOMPC ablation: optimizer or formulation? ({args.days:g} days, {args.seeds} annealing seeds)", "",
              f"`python studies/ablation/fompc_annealing.py`; li2022, normal limits, no errors. QFFC {dv_qffc:.2f} "
              f"m/s/yr (Li {LI['qffc']}); Li's FOMPC {LI['fompc']} (a 10.0 % saving).", "",
-             "| variant | what it changes | ΔV (m/s/yr) | QFFC (same spacecraft) | saving vs QFFC | max mean δλ (°) | "
-             "max Δi (MEE) | status | wall s |", "|---|---|---|---|---|---|---|---|---|"]
+             "| variant | what it changes | ΔV (m/s/yr) | QFFC (same spacecraft) | saving vs QFFC | "
+             "out-of-plane ΔV: FOMPC / QFFC | max mean δλ (°) | max Δi (MEE) | status | wall s |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for name in [v for v in VARIANTS if v in rows]:
         r = rows[name]
         dv = np.array(r["dv"])
         base = r.get("qffc_dv", dv_qffc)
         lines.append(f"| {name} | {r['what']} | {dv.mean():.3f} ± {dv.std():.3f} | {base:.2f} | "
-                     f"{100 * (1 - dv.mean() / base):.2f} % | "
+                     f"{100 * (1 - dv.mean() / base):.2f} % | {_ns(r)} | "
                      f"{r['max_abs_mean_dlon_deg']:.4f} | {r['max_abs_di']:.2e} | {sorted(set(r['status']))} | "
                      f"{r['wall_s']:.0f} |")
     (out / "fompc_annealing.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
+
+
+def _ns(row: dict) -> str:
+    if "dv_ns" not in row or "qffc_dv_ns" not in row:
+        return ""
+    return f"{np.mean(row['dv_ns']):.2f} / {row['qffc_dv_ns']:.2f}"
 
 
 if __name__ == "__main__":
