@@ -103,6 +103,7 @@ def plan(key, x0, ref_windows, target, l_start_rad, limits, cycle_s, vdt_estimat
     ``warm_start`` [n_max] (the previous cycle's best sequence, shifted by one
     cycle) starts every chain but the first, which starts at the QFFC's w = 1.
     """
+    limits = qffc.arm_trig(limits)  # once per plan, not per candidate cycle
     cost = lambda w: horizon_cost(w, x0, ref_windows, target, l_start_rad, limits, cycle_s, vdt_estimate, mpc)  # noqa: E731
     n, chains, iters = annealing.n_max, annealing.chains, annealing.iterations
     w0 = jnp.ones(n)

@@ -110,75 +110,188 @@ def full_correction_mps(delta_x):
     return 2 * V_SYNC_MPS * jnp.hypot(delta_x[4], delta_x[5])
 
 
-def solve(delta_x, l_start_rad, limits: ArmLimits, vdt_raises_mps=None, coast_offset_s=0.0, v_n_mps=None) -> BurnPair:
+def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None, coast_offset_s=0.0,
+          v_n_mps=None, search: str = "structured") -> BurnPair:
     """Two burns that cancel the predictive deviation ``delta_x`` [6] (see module docstring).
 
     ``coast_offset_s`` is added to the coast T_i of eq. (20) when the deviation
     refers to a time after the end of the cycle (a mean over the next cycle).
     ``v_n_mps`` (>= 0) replaces the north-south total 2 V_s |di| of eq. (30).
+    ``search`` (static) finds the smallest feasible raise of V_DT: ``"all"`` tests every candidate,
+    ``"structured"`` (the default) the few that ``first_feasible_window`` brackets; both return the same
+    candidate (``tests/test_qffc.py`` checks them against each other on random deviations).
     """
     vdt_raises_mps = default_vdt_raises() if vdt_raises_mps is None else vdt_raises_mps
+    trig = arm_trig(limits)
     d_lon, d_drift, dex, dey, dix, diy = (delta_x[j] for j in range(6))
-    v_s, r_s = V_SYNC_MPS, R_SYNC_M
+    v_s = V_SYNC_MPS
 
     l2 = jnp.arctan2(diy, dix)  # eq. (31)
     l1 = l2 - jnp.pi
     coast = jnp.stack([cycle_coast_s(l1, l_start_rad), cycle_coast_s(l2, l_start_rad)]) + coast_offset_s
-
-    v_r_diff = v_s * (dex * jnp.sin(l1) - dey * jnp.cos(l1))
-    v_t_diff = 0.5 * v_s * (dex * jnp.cos(l1) + dey * jnp.sin(l1))
+    plane = InPlane(-R_SYNC_M / 3 * d_drift, v_s * (dex * jnp.sin(l1) - dey * jnp.cos(l1)),
+                    0.5 * v_s * (dex * jnp.cos(l1) + dey * jnp.sin(l1)), d_lon, coast)
     v_n_total = full_correction_mps(delta_x) if v_n_mps is None else jnp.maximum(v_n_mps, 0.0)
 
-    # In-plane parts of both burns for every candidate V_DT: [raises, 2].
-    v_dt = -r_s / 3 * d_drift + vdt_raises_mps
-    v_t = 0.5 * jnp.stack([v_dt + v_t_diff, v_dt - v_t_diff], -1)
-    v_r_sum = -0.5 * v_s * d_lon - 1.5 * v_s / r_s * (v_t @ coast)
-    v_r = 0.5 * jnp.stack([v_r_sum + v_r_diff, v_r_sum - v_r_diff], -1)
-    in_plane = jnp.hypot(v_r, v_t)
-    scale = jnp.maximum(in_plane, 1e-9)
-
-    ok_in_plane = (v_r <= 1e-12 * scale) & _yaw_ok(-v_r, -v_t, limits, 1e-12 * scale)
-    n_lo, n_hi = _pitch_interval(in_plane, limits)
-    # The pitch floor: both burns at beta >= beta_min need |V_N| >= tan(beta_min) (p_1 + p_2).  A smaller
-    # correction is raised to it (the inclination overshoots by the excess and the next cycle takes it
-    # back) rather than flying nothing; with beta_min = 0 this never acts.
-    v_n = jnp.maximum(v_n_total, n_lo[:, 0] + n_lo[:, 1])  # [raises]
-    # n_1 within its own interval and V_N - n_1 within thruster 2's.
-    lo = jnp.maximum(n_lo[:, 0], v_n - n_hi[:, 1])
-    hi = jnp.minimum(n_hi[:, 0], v_n - n_lo[:, 1])
-    ok_pitch = lo <= hi + 1e-12 * (v_n + scale[:, 0] + scale[:, 1])
-    feasible = jnp.all(ok_in_plane, axis=-1) & ok_pitch  # [raises]
-
-    i = jnp.argmax(feasible)  # the smallest raise that works (0 if none does)
-    p1, p2 = in_plane[i, 0], in_plane[i, 1]
-    equal_pitch = jnp.where(p1 + p2 > 0, v_n[i] * p1 / jnp.where(p1 + p2 > 0, p1 + p2, 1.0), 0.5 * v_n[i])
-    n1 = jnp.clip(equal_pitch, lo[i], jnp.maximum(lo[i], hi[i]))
+    tried = vdt_raises_mps if search == "all" else vdt_raises_mps[first_feasible_window(plane, vdt_raises_mps,
+                                                                                      v_n_total, trig)]
+    c = candidates(plane, tried, v_n_total, trig)
+    i = jnp.argmax(c.feasible)  # the smallest raise that works (the first tried if none does)
+    v_r, v_t, (p1, p2), v_n, lo, hi = c.v_r[i], c.v_t[i], c.in_plane[i], c.v_n[i], c.lo[i], c.hi[i]
+    equal_pitch = jnp.where(p1 + p2 > 0, v_n * p1 / jnp.where(p1 + p2 > 0, p1 + p2, 1.0), 0.5 * v_n)
+    n1 = jnp.clip(equal_pitch, lo, jnp.maximum(lo, hi))
     dv = jnp.stack([
-        jnp.stack([v_r[i, 0], v_t[i, 0], -n1]),
-        jnp.stack([v_r[i, 1], v_t[i, 1], v_n[i] - n1]),
+        jnp.stack([v_r[0], v_t[0], -n1]),
+        jnp.stack([v_r[1], v_t[1], v_n - n1]),
     ])
     v = jnp.linalg.norm(dv, axis=-1)
     # Eq. (14): dv = -V (cos b cos a, cos b sin a, sin b).
     alpha = jnp.arctan2(-dv[:, 1], -dv[:, 0])
     beta = jnp.arcsin(jnp.clip(-dv[:, 2] / jnp.where(v > 0, v, 1.0), -1.0, 1.0))
-    return BurnPair(dv, v, alpha, beta, jnp.stack([l1, l2]), vdt_raises_mps[i], jnp.any(feasible))
+    return BurnPair(dv, v, alpha, beta, jnp.stack([l1, l2]), tried[i], jnp.any(c.feasible))
 
 
-def _yaw_ok(x, y, limits: ArmLimits, tol):
-    """Eq. (1) yaw limits for in-plane vectors (x, y) = (-v_r, -v_t) [..., 2] with x >= 0, without atan2."""
-    lo = jnp.stack([-limits.alpha_min_rad, -limits.alpha_max_rad])
+class InPlane(NamedTuple):
+    """What fixes the in-plane parts of both burns as functions of the raise r of V_DT (all affine in r)."""
+
+    v_dt_mps: jnp.ndarray  # [] starting V_DT = -R_s / 3 d lambda_dot
+    v_r_diff_mps: jnp.ndarray  # [] V_R
+    v_t_diff_mps: jnp.ndarray  # [] V_ET
+    d_lon_rad: jnp.ndarray  # []
+    coast_s: jnp.ndarray  # [2] T_1, T_2
+
+
+class Candidates(NamedTuple):
+    """Burns for raises r [m] of V_DT (leading axis: candidate; last: thruster)."""
+
+    v_r: jnp.ndarray  # [m, 2]
+    v_t: jnp.ndarray  # [m, 2]
+    in_plane: jnp.ndarray  # [m, 2] p = |(v_r, v_t)|
+    v_n: jnp.ndarray  # [m] |V_N| flown (raised to the pitch floor where needed)
+    lo: jnp.ndarray  # [m] bounds on n_1 = |v_n1|
+    hi: jnp.ndarray  # [m]
+    feasible: jnp.ndarray  # [m] bool
+
+
+def candidates(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig) -> Candidates:
+    """The burns of each raise of V_DT [m] and whether every constraint holds (eqs. (1), (34))."""
+    v_dt = plane.v_dt_mps + raises_mps
+    v_t = 0.5 * jnp.stack([v_dt + plane.v_t_diff_mps, v_dt - plane.v_t_diff_mps], -1)
+    v_r_sum = -0.5 * V_SYNC_MPS * plane.d_lon_rad - 1.5 * V_SYNC_MPS / R_SYNC_M * (v_t @ plane.coast_s)
+    v_r = 0.5 * jnp.stack([v_r_sum + plane.v_r_diff_mps, v_r_sum - plane.v_r_diff_mps], -1)
+    in_plane = jnp.hypot(v_r, v_t)
+    scale = jnp.maximum(in_plane, 1e-9)
+    ok_in_plane = (v_r <= 1e-12 * scale) & _yaw_ok(-v_r, -v_t, trig, 1e-12 * scale)
+    n_lo, n_hi = _pitch_interval(in_plane, trig)
+    # The pitch floor: both burns at beta >= beta_min need |V_N| >= tan(beta_min) (p_1 + p_2).  A smaller
+    # correction is raised to it (the inclination overshoots by the excess and the next cycle takes it
+    # back) rather than flying nothing; with beta_min = 0 this never acts.
+    v_n = jnp.maximum(v_n_total, n_lo[..., 0] + n_lo[..., 1])
+    # n_1 within its own interval and V_N - n_1 within thruster 2's.
+    lo = jnp.maximum(n_lo[..., 0], v_n - n_hi[..., 1])
+    hi = jnp.minimum(n_hi[..., 0], v_n - n_lo[..., 1])
+    ok_pitch = lo <= hi + 1e-12 * (v_n + scale[..., 0] + scale[..., 1])
+    return Candidates(v_r, v_t, in_plane, v_n, lo, hi, jnp.all(ok_in_plane, axis=-1) & ok_pitch)
+
+
+def in_plane_coefficients(plane: InPlane):
+    """(v_r, v_t) of both burns as q0 + q1 r and t0 + r / 2 [2] (eqs. (32)-(33) with V_DT raised by r)."""
+    k = -1.5 * V_SYNC_MPS / R_SYNC_M
+    t0 = 0.5 * jnp.stack([plane.v_dt_mps + plane.v_t_diff_mps, plane.v_dt_mps - plane.v_t_diff_mps])
+    s0 = -0.5 * V_SYNC_MPS * plane.d_lon_rad + k * (t0 @ plane.coast_s)
+    s1 = k * 0.5 * (plane.coast_s[0] + plane.coast_s[1])
+    return 0.5 * jnp.stack([s0 + plane.v_r_diff_mps, s0 - plane.v_r_diff_mps]), 0.5 * s1, t0
+
+
+def first_feasible_window(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, width: int = 4):
+    """Indices [width] into the sorted ``raises_mps`` that hold its first feasible candidate, found without
+    testing them all.
+
+    The in-plane parts are affine in the raise r, so the sign and yaw constraints (v_r <= 0, eq. (1)) each
+    bound r on one side: together an interval [r_lo, r_hi].  The pitch limits hold where the north-south
+    correction fits under beta_max, |V_N| <= tan(beta_max) P(r) with P = p_1 + p_2 (the floor of beta_min
+    only raises |V_N| to tan(beta_min) P <= tan(beta_max) P); P, a sum of norms of affine functions, is
+    convex.  So the first feasible candidate is the first one in [r_lo, r_hi] if P is large enough there;
+    else P is below the bound from there up to its right root, beyond which it stays above: that root in
+    closed form, and the first candidate past it.  The window starts one candidate before it, so that
+    ``candidates`` (with its tolerances) makes the final choice; with no feasible candidate it starts at
+    the first one, as the exhaustive search returns.
+    """
+    q0, q1, t0 = in_plane_coefficients(plane)
+    n = raises_mps.shape[0]
+    # g0 + g1 r <= 0 for each burn: v_r <= 0, alpha <= its upper limit, alpha >= its lower limit.
+    g0 = jnp.concatenate([q0, -t0 * trig.cos_yaw_hi + q0 * trig.sin_yaw_hi, t0 * trig.cos_yaw_lo - q0 * trig.sin_yaw_lo])
+    g1 = jnp.concatenate([jnp.broadcast_to(q1, (2,)), -0.5 * trig.cos_yaw_hi + q1 * trig.sin_yaw_hi,
+                          0.5 * trig.cos_yaw_lo - q1 * trig.sin_yaw_lo])
+    bound = -g0 / jnp.where(g1 == 0, 1.0, g1)
+    r_lo = jnp.max(jnp.where(g1 < 0, bound, -jnp.inf))
+    r_hi = jnp.min(jnp.where(g1 > 0, bound, jnp.inf))
+    constant_ok = jnp.all((g1 != 0) | (g0 <= 0))
+    j_lo = jnp.searchsorted(raises_mps, r_lo, side="left", method="compare_all")
+    j_hi = jnp.searchsorted(raises_mps, r_hi, side="right", method="compare_all") - 1
+
+    need = jnp.where(trig.vertical, 0.0, v_n_total / trig.tan_pitch_max)  # beta_max = 90 deg: no bound
+    j_start = jnp.clip(j_lo, 0, n - 1)
+    r_start = raises_mps[j_start]
+    ok_start = jnp.sum(jnp.hypot(q0 + q1 * r_start, t0 + 0.5 * r_start)) >= need
+    # Else the first candidate past the right root of P(r) = c.  P = |A_1 + r B| + |A_2 + r B| with
+    # A_b = (q0_b, t0_b), B = (q1, 1/2); squaring twice, (Q_1 - Q_2 - c^2)^2 = 4 c^2 Q_2 with
+    # Q_b = |A_b + r B|^2, a quadratic in r (Q_1 - Q_2 is linear), whose roots are where P = c (its other
+    # solutions need |f_1 - f_2| = c, and |f_1 - f_2| <= |A_1 - A_2| <= min P < c here).
+    b2 = q1 * q1 + 0.25
+    a_b = q0 * q1 + 0.5 * t0  # A_b . B
+    a_sq = q0 * q0 + t0 * t0
+    c2 = need * need
+    d0, d1 = a_sq[0] - a_sq[1] - c2, 2 * (a_b[0] - a_b[1])
+    quad = d1 * d1 - 4 * c2 * b2
+    lin = 2 * d1 * d0 - 8 * c2 * a_b[1]
+    const = d0 * d0 - 4 * c2 * a_sq[1]
+    root = jnp.sqrt(jnp.maximum(lin * lin - 4 * quad * const, 0.0))
+    # quad <= 0 (|d1| <= 2 |A_1 - A_2| |B| <= 2 c |B|): the larger root takes -root
+    safe = jnp.where(quad < 0, quad, -1.0)
+    r_right = jnp.where(quad < 0, (-lin - root) / (2 * safe), -const / jnp.where(lin == 0, 1.0, lin))
+    j_pitch = jnp.searchsorted(raises_mps, r_right, side="left", method="compare_all")
+    j = jnp.where(ok_start, j_start, jnp.maximum(j_pitch, j_start))
+    found = constant_ok & (j_lo <= j_hi) & (j <= j_hi) & (j_lo < n)
+    first = jnp.where(found, j - 1, 0)
+    return jnp.clip(first + jnp.arange(width), 0, n - 1)
+
+
+class ArmTrig(NamedTuple):
+    """The trigonometry of the arm limits that ``solve`` reads (``arm_trig``): a planner that solves many
+    candidate cycles with the same limits (the FOMPC) computes it once per plan."""
+
+    cos_yaw_hi: jnp.ndarray  # [2] upper yaw limit of each thruster: alpha_max, alpha_min
+    sin_yaw_hi: jnp.ndarray
+    cos_yaw_lo: jnp.ndarray  # [2] lower yaw limit: -alpha_min, -alpha_max
+    sin_yaw_lo: jnp.ndarray
+    tan_pitch_min: jnp.ndarray  # []
+    tan_pitch_max: jnp.ndarray  # [] (finite; ``vertical`` marks beta_max = 90 deg: no upper bound)
+    vertical: jnp.ndarray  # [] bool
+
+
+def arm_trig(limits: ArmLimits | ArmTrig) -> ArmTrig:
+    """``ArmTrig`` of eq. (1)'s limits (an ``ArmTrig`` is returned as it is)."""
+    if isinstance(limits, ArmTrig):
+        return limits
     hi = jnp.stack([limits.alpha_max_rad, limits.alpha_min_rad])
-    below_hi = y * jnp.cos(hi) - x * jnp.sin(hi) <= tol
-    above_lo = y * jnp.cos(lo) - x * jnp.sin(lo) >= -tol
+    lo = jnp.stack([-limits.alpha_min_rad, -limits.alpha_max_rad])
+    finite = lambda b: jnp.tan(jnp.minimum(b, jnp.pi / 2 - 1e-12))  # noqa: E731
+    return ArmTrig(jnp.cos(hi), jnp.sin(hi), jnp.cos(lo), jnp.sin(lo), finite(limits.beta_min_rad),
+                   finite(limits.beta_max_rad), jnp.cos(limits.beta_max_rad) < 1e-12)
+
+
+def _yaw_ok(x, y, trig: ArmTrig, tol):
+    """Eq. (1) yaw limits for in-plane vectors (x, y) = (-v_r, -v_t) [..., 2] with x >= 0, without atan2."""
+    below_hi = y * trig.cos_yaw_hi - x * trig.sin_yaw_hi <= tol
+    above_lo = y * trig.cos_yaw_lo - x * trig.sin_yaw_lo >= -tol
     return below_hi & above_lo
 
 
-def _pitch_interval(in_plane_mps, limits: ArmLimits):
+def _pitch_interval(in_plane_mps, trig: ArmTrig):
     """Eq. (1) pitch limits as bounds on |v_n| for in-plane magnitudes p [..., 2]: [p tan b_min, p tan b_max]."""
-    vertical = jnp.cos(limits.beta_max_rad) < 1e-12  # beta_max = 90 deg: no upper bound
-    hi = jnp.where(vertical, jnp.inf, in_plane_mps * jnp.tan(jnp.minimum(limits.beta_max_rad, jnp.pi / 2 - 1e-12)))
-    lo = in_plane_mps * jnp.tan(jnp.minimum(limits.beta_min_rad, jnp.pi / 2 - 1e-12))
-    return lo, hi
+    hi = jnp.where(trig.vertical, jnp.inf, in_plane_mps * trig.tan_pitch_max)
+    return in_plane_mps * trig.tan_pitch_min, hi
 
 
 def estimated_drift_rad_s(next_deviation, l_start_rad):
