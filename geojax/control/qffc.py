@@ -177,7 +177,7 @@ def candidates(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig) -> Candidat
     """The burns of each raise of V_DT [m] and whether every constraint holds (eqs. (1), (34))."""
     v_dt = plane.v_dt_mps + raises_mps
     v_t = 0.5 * jnp.stack([v_dt + plane.v_t_diff_mps, v_dt - plane.v_t_diff_mps], -1)
-    v_r_sum = -0.5 * V_SYNC_MPS * plane.d_lon_rad - 1.5 * V_SYNC_MPS / R_SYNC_M * (v_t @ plane.coast_s)
+    v_r_sum = -0.5 * V_SYNC_MPS * plane.d_lon_rad - 1.5 * V_SYNC_MPS / R_SYNC_M * (v_t[..., 0] * plane.coast_s[0] + v_t[..., 1] * plane.coast_s[1])
     v_r = 0.5 * jnp.stack([v_r_sum + plane.v_r_diff_mps, v_r_sum - plane.v_r_diff_mps], -1)
     in_plane = jnp.hypot(v_r, v_t)
     scale = jnp.maximum(in_plane, 1e-9)
@@ -198,7 +198,7 @@ def in_plane_coefficients(plane: InPlane):
     """(v_r, v_t) of both burns as q0 + q1 r and t0 + r / 2 [2] (eqs. (32)-(33) with V_DT raised by r)."""
     k = -1.5 * V_SYNC_MPS / R_SYNC_M
     t0 = 0.5 * jnp.stack([plane.v_dt_mps + plane.v_t_diff_mps, plane.v_dt_mps - plane.v_t_diff_mps])
-    s0 = -0.5 * V_SYNC_MPS * plane.d_lon_rad + k * (t0 @ plane.coast_s)
+    s0 = -0.5 * V_SYNC_MPS * plane.d_lon_rad + k * (t0[0] * plane.coast_s[0] + t0[1] * plane.coast_s[1])
     s1 = k * 0.5 * (plane.coast_s[0] + plane.coast_s[1])
     return 0.5 * jnp.stack([s0 + plane.v_r_diff_mps, s0 - plane.v_r_diff_mps]), 0.5 * s1, t0
 
@@ -322,7 +322,8 @@ def effect(burns: BurnPair, l_start_rad, coast_offset_s=0.0):
     """B_1 v_1 + B_2 v_2 (eq. (29)) of a solution, for checking it."""
     coast = cycle_coast_s(burns.l_rad, l_start_rad) + coast_offset_s
     matrices = effect_matrix(burns.l_rad, coast)  # [2, 6, 3]
-    return jnp.einsum("nij,nj->i", matrices, burns.dv_rsw_mps)
+    # written out (no dot): inside a vmapped planner a dot_general adds transposes around it
+    return sum(matrices[n, :, j] * burns.dv_rsw_mps[n, j] for n in range(2) for j in range(3))
 
 
 def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_estimate=0.0, v_n_fraction=None):
