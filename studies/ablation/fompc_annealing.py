@@ -63,6 +63,14 @@ VARIANTS = {
                           "β_max = 45°, Δi_max 1.6e-4"),
     "beta-90-di-double": ({"thrusters.beta_max_deg": 90.0, "thrusters.alpha_max_deg": 90.0, "controller.di_max": 1.6e-4},
                           "β_max = 90°, Δi_max 1.6e-4"),
+    # Fig. 13: is our optimum horizon (N = 5-6 at every level) the search's?  A longer horizon is a larger
+    # space for the same 8 x 64 moves.
+    "horizon-3": ({"controller.horizon": 3}, "N = 3"),
+    "horizon-10": ({"controller.horizon": 10}, "N = 10"),
+    "horizon-3-budget-x16": ({"controller.horizon": 3, "controller.chains": 32, "controller.iterations": 256},
+                             "N = 3, 16x the moves"),
+    "horizon-10-budget-x16": ({"controller.horizon": 10, "controller.chains": 32, "controller.iterations": 256},
+                              "N = 10, 16x the moves"),
     # The printed J sums squared ΔV (eq. (42)); the fuel is their sum.  Does scoring the fuel change the trend?
     "fuel-j": ({"controller.dv_exponent": 1.0, "controller.penalty": 1e9}, "J sums V_1k + V_2k (the fuel), P = 1e9 "
                "(the squares' P = 1e8 times 1/V for the typical V ≈ 0.1 m/s)"),
