@@ -77,7 +77,7 @@ from geojax.physics.dynamics import SpacecraftState
 from geojax.physics.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian
 from geojax.physics.forces import ForceModel, perturbing_acceleration, point_mass
 from geojax.loop.simulate import propagate as propagate_cycles
-from geojax.physics.propagate import MEE, environment_at, environment_grid, steps_per_cycle
+from geojax.physics.propagate import MEE, environment_at, environment_grid, for_lanes, steps_per_cycle
 from geojax.parallel import replicate, shard_batch
 from geojax.uncontrolled import propagated_cycles, inclination_vector_deg
 
@@ -351,8 +351,12 @@ class GeojaxRunner:
         n_steps, step_s, env, _ = self.environment(step_request_s)
         key = (n_steps, batch)
         if key not in self._compiled:
+            # the step compiled for the lanes each device runs (fusion boundaries from 8 lanes on), as in
+            # ``geojax sweep`` and ``simulate_batch``
+            lanes = batch // jax.device_count() if batch % jax.device_count() == 0 else batch
+            dynamics = for_lanes(MEE, lanes)
             batched = jax.vmap(
-                lambda state, env, fm: propagate_cycles(MEE, state, env, fm, step_s), in_axes=(0, None, None)
+                lambda state, env, fm: propagate_cycles(dynamics, state, env, fm, step_s), in_axes=(0, None, None)
             )
             lowered = jax.jit(batched).lower(self.states(batch), env, self.problem.force_model)
             compiled, timing = timed(lowered.compile)
