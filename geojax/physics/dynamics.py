@@ -91,13 +91,14 @@ def _trig(angle):
 
 
 def mee_rhs(state: SpacecraftState, env: Environment, fm: ForceModel, thrust: Thrust,
-            boundaries: bool = False) -> SpacecraftState:
+            boundaries: bool = False, rates_boundary: bool = False) -> SpacecraftState:
     """Time derivative of a MEE spacecraft state (``orbit``: an array [6] or a tuple of six components).
 
     The perturbations depend on position only, so the RSW basis comes straight from the elements (no
     velocity, no cross products).  cos L, sin L and the perturbing acceleration are computed behind fusion
-    boundaries (``fusion.materialized``) when ``boundaries`` (static; ``physics.propagate.for_lanes``):
-    every later term reads them.
+    boundaries (``fusion.materialized``) when ``boundaries``, and the six rates too when ``rates_boundary``
+    (both static; ``physics.propagate.for_lanes``): every later term reads them, and XLA's CPU fusion would
+    otherwise evaluate them again inside each of the RK4 stage and combination kernels.
     """
     p, f, g, h, k, true_lon = _components(state.orbit)
     anchor = env.earth_angle_rad
@@ -109,7 +110,8 @@ def mee_rhs(state: SpacecraftState, env: Environment, fm: ForceModel, thrust: Th
     accel, mass_rate = _thrust_rates(state, thrust)
     d = thrust.direction_rsw
     a_r, a_t, a_n = (sum(row[j] * a_eci[j] for j in range(3)) + accel * d[..., i] for i, row in enumerate(rows))
-    rates = gauss_rates(p, f, g, h, k, cos_l, sin_l, a_r, a_t, a_n, fm.mu_m3_s2)
+    rates = materialized(gauss_rates, p, f, g, h, k, cos_l, sin_l, a_r, a_t, a_n, fm.mu_m3_s2, anchor=anchor,
+                         enabled=rates_boundary)
     return SpacecraftState(_like(state.orbit, rates), mass_rate, accel)
 
 
