@@ -180,7 +180,7 @@ def table(ours: dict, epochs: dict, command: str) -> str:
     if epochs:
         names = sorted({e for row in epochs.values() for e in row})
         lines += ["", "Other epochs (the Moon's node Ω_sm of eq. (8) moves eq. (7)'s drift between 20.2e-4 and "
-                  "25.4e-4 °/day): ΔV (m/s/yr), drift-model ΔV of eq. (7), accuracy filtered (°), path, "
+                  "25.4e-4 °/day): ΔV (m/s/yr), drift-model ΔV of eq. (7), accuracy filtered (°), "
                   "share of cycles whose drift points outside the SK sector, path, capture (days)", "",
                   "| example | epoch | ΔV | eq. (7) | accuracy | drift outside the sector | path | capture |",
                   "|---|---|---|---|---|---|---|---|"]
