@@ -121,8 +121,8 @@ def validate(config: dict) -> None:
 def max_daily_drift_rad(sun_removed: float, moon_removed: float) -> float:
     """d_max per solar day (rad): the largest drift of eq. (7) plus the rates of the long-period terms kept.
 
-    Eq. (7) at its largest (cos Omega_sm = 1): (22.79 + 2.59) 1e-4 deg/day; a term of amplitude A and
-    period pi / n_k (eqs. (14), (17)) adds at most 2 n_k A.
+    Eq. (7) is at most hypot(22.79 + 2.59, 3.5) 1e-4 deg/day over the Moon's nodal cycle; a kept term of
+    amplitude A and period pi / n_k (eqs. (14), (17)) adds at most 2 n_k A.
     """
     nutation = math.radians(math.hypot(22.79 + 2.59, 3.5) * 1e-4)
     sun = 2 * SUN_RATE_RAD_S * SUN_AMPLITUDE_RAD * SECONDS_PER_DAY
