@@ -150,7 +150,7 @@ def table(ours: dict, epochs: dict, command: str) -> str:
         "",
         f"`{command}`",
         "",
-        "Ours run J2, C22/S22, Sun, Moon, SRP with shadow, 80 mN, Isp 3000 s, 2800.4 kg at 170° E, epoch "
+        "Ours run J2, Sun, Moon, SRP with shadow (as li2022; no tesseral terms, as Ye), 80 mN, Isp 3000 s, 2800.4 kg at 170° E, epoch "
         "2020-01-01 12:00 UTC (the marked choices of `geojax/scenarios/ye2022-ex*.toml`); the paper runs its own "
         "drift model. Inclination vector: i (cos Ω, sin Ω) = 2 (h, k), degrees. Capture: the first cycle in "
         "the normal zone; accuracy: the largest distance from the target after capture; path: "
@@ -169,8 +169,8 @@ def table(ours: dict, epochs: dict, command: str) -> str:
             f"| {s['burn_s'][0]:.0f}–{s['burn_s'][1]:.0f} | {s['dlon']:.4f} | {s['status']} |")
     lines += ["", "Where the ΔV goes (m/s/yr): the least ΔV that cancels the filtered vector's natural drift cycle by "
               "cycle, in the full force model (Σ|d_k| V_s) and in the paper's drift model (eq. (7)); the in-plane "
-              "part of the tilted burns; the arc loss (eq. (34)); the largest angle of the natural drift from +y "
-              "beside the SK sector's half-width Δλ_max (beyond it the drift cannot be cancelled).", "",
+              "part of the tilted burns; the arc loss (eq. (34)); the share of cycles whose natural drift points "
+              "outside the SK sector (more than Δλ_max from +y: the drift cannot be cancelled that cycle).", "",
               "| example | ΔV ours | drift, full force | drift, eq. (7) | in-plane (tilt) | arc loss "
               "| drift outside the sector |",
               "|---|---|---|---|---|---|---|"]
