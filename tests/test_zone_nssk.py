@@ -188,12 +188,16 @@ def test_filter_removes_the_long_period_terms_and_follows_the_drift_model(uncont
 
 
 def test_registered_and_one_burn_per_cycle():
-    """Independent check: the registry names the module, and a 3-day run fires once per cycle, north."""
+    """Independent check: the registry names the module; a 3-day run fires once per cycle, north, in working
+    condition five at t_min (Tables 1-2), and its per-cycle table says so."""
     assert REGISTRY["zone_nssk"] is z
     result = simulate(scenario.load("ye2022-ex1", {"duration.days": 3, "integration.step_s": 3600.0}))
     rec = result.records.cycles.controller
     assert np.all(rec["fired_s"][:, 0] >= 3426 - 1e-6) and np.all(rec["fired_s"][:, 1] == 0)
     assert np.all(rec["burns"].dv_rsw_mps[:, 0, 2] > 0)
+    table = result.cycles()  # what /cycles of an HDF5 file holds
+    assert table["zone"].shape == (3,) and np.all(table["zone"] == 5)  # Table 2: example one starts in five
+    assert np.all(table["burn_ns_s"] == 3426.0)  # five flies t_min (Table 1)
 
 
 def test_a_year_of_example_one_at_a_coarse_step():
