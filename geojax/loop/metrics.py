@@ -137,6 +137,13 @@ def cycle_table(records) -> dict[str, np.ndarray]:
             "burn1_s": rec["fired_s"][:, 0], "burn2_s": rec["fired_s"][:, 1],
             "ns_fraction": rec["ns_fraction"],
         })
+    if "zone" in rec:  # control.zone_nssk: the working condition (0 normal) and what the planner saw
+        table.update({
+            "zone": np.asarray(rec["zone"]).astype(np.int8),
+            "i_filtered_x_deg": np.degrees(rec["i_filtered_rad"][:, 0]),
+            "i_filtered_y_deg": np.degrees(rec["i_filtered_rad"][:, 1]),
+            "burn_ns_s": rec["burn_ns_s"], "tilt_deg": np.degrees(rec["tilt_rad"]),
+        })
     if "solved" in rec:
         table["status"] = np.where(rec["solved"], 0, 1).astype(np.int8)
     return {k: np.asarray(v) for k, v in table.items()}
