@@ -164,9 +164,11 @@ class Scenario:
 
 
 def available() -> list[str]:
-    """Names of the scenarios shipped with geojax."""
+    """Names of the station-keeping scenarios shipped with geojax (a file with a ``[transfer]`` table is a
+    transfer: ``geojax.transfer.scenario.available``)."""
     folder = importlib.resources.files("geojax") / "scenarios"
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+    return sorted(p.name[:-5] for p in folder.iterdir()
+                  if p.name.endswith(".toml") and not isinstance(tomllib.loads(p.read_text()).get("transfer"), dict))
 
 
 def load(name_or_path: str | Path, overrides: dict | None = None, controller=None) -> Scenario:

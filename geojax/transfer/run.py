@@ -1,0 +1,89 @@
+"""Running transfers: one (``run``) or a batch (``batch_runner``), with their metrics as plain numbers."""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+from geojax.physics.constants import G0_MPS2, SECONDS_PER_DAY
+from geojax.physics.propagate import environment_grid
+from geojax.transfer.rollout import STATUS_MEANINGS, Static, transfer
+from geojax.transfer.scenario import TransferScenario
+
+
+class TransferResult(NamedTuple):
+    metrics: dict  # names carry units; see ``metrics``
+    records: dict  # per record interval, edge units (deg, days, km), numpy
+    wall_s: float
+
+
+def static_for(sc: TransferScenario, days: float | None = None, record_every_s: float = SECONDS_PER_DAY) -> Static:
+    """The loop's shape: the time limit (``days``, default the scenario's) in steps, grouped into records."""
+    days = sc.days if days is None else days
+    if not days > 0:
+        raise ValueError(f"duration.days: must be > 0, got {days:g}")
+    per_record = max(1, round(record_every_s / sc.step_s))
+    n_records = max(1, math.ceil(days * SECONDS_PER_DAY / (sc.step_s * per_record)))
+    return Static(sc.step_s, n_records, per_record, *sc.mpc)
+
+
+def env_grid(sc: TransferScenario, static: Static):
+    """Sun, Moon and Earth angle at every RK4 stage, shared by every transfer of a batch (same epoch)."""
+    return environment_grid(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s, static.step_s, static.n_records,
+                            static.steps_per_record)
+
+
+def run(sc: TransferScenario, days: float | None = None, record_every_s: float = SECONDS_PER_DAY) -> TransferResult:
+    """One transfer, compiled and run; metrics and records as numpy."""
+    start = time.perf_counter()
+    static = static_for(sc, days, record_every_s)
+    final, records = jax.jit(transfer, static_argnums=2)(sc.params, env_grid(sc, static), static)
+    final, records = jax.device_get((final, records))
+    return TransferResult(metrics(final, sc.params), record_table(records), time.perf_counter() - start)
+
+
+def metrics(final, params) -> dict:
+    """Scalar results of one transfer (or arrays over a batch); units in the names."""
+    m0, m1 = np.asarray(params.initial.mass_kg), np.asarray(final.craft.mass_kg)
+    stats = final.stats
+    firing = np.asarray(stats.firing_s)
+    steps = np.maximum(np.asarray(stats.track_steps), 1)
+    rms = np.sqrt(np.asarray(stats.track_sq_rad2) / steps)
+    out = {
+        "status": np.asarray(final.status),
+        "transfer_days": np.asarray(final.t_end_s) / SECONDS_PER_DAY,
+        "propellant_kg": m0 - m1,
+        "dv_mps": np.asarray(final.craft.dv_mps),
+        "rocket_dv_mps": np.asarray(params.isp_s) * G0_MPS2 * np.log(m0 / m1),
+        "firing_days": firing / SECONDS_PER_DAY,
+        "thrust_efficiency": np.asarray(stats.aligned_s) / np.maximum(firing, 1e-30),
+        "lost_to_slew_days": np.asarray(stats.lost_to_slew_s) / SECONDS_PER_DAY,
+        "max_coupling_torque_nm": np.asarray(stats.torque_max_nm),
+    }
+    for j in range(3):
+        out[f"j{j + 1}_track_max_deg"] = np.rad2deg(np.asarray(stats.track_max_rad)[..., j])
+        out[f"j{j + 1}_track_rms_deg"] = np.rad2deg(rms[..., j])
+    return out
+
+
+def record_table(records) -> dict:
+    deg = np.rad2deg
+    out = {"t_days": np.asarray(records.t_s) / SECONDS_PER_DAY, "a_km": np.asarray(records.a_m) / 1e3,
+           "e": np.asarray(records.e), "i_deg": deg(records.i_rad), "mass_kg": np.asarray(records.mass_kg),
+           "dv_mps": np.asarray(records.dv_mps), "on_fraction": np.asarray(records.on_fraction),
+           "misalignment_deg": deg(records.misalignment_rad), "torque_nm": np.asarray(records.torque_nm)}
+    for name, values in (("wished", records.wished_rad), ("body", records.body_rad)):
+        out[f"{name}_azimuth_deg"], out[f"{name}_elevation_deg"] = deg(values[..., 0]), deg(values[..., 1])
+    for j in range(3):
+        out[f"theta{j + 1}_deg"] = deg(records.theta_rad[..., j])
+        out[f"target{j + 1}_deg"] = deg(records.target_rad[..., j])
+        out[f"omega{j + 1}_deg_s"] = deg(records.omega_rad_s[..., j])
+    return out
+
+
+def describe_status(code: int) -> str:
+    return STATUS_MEANINGS[int(code)]
