@@ -19,15 +19,20 @@ from geojax.physics.elements import wrap_angle
 
 
 def slew_step(angle_rad, rate_rad_s, target_rad, rate_max_rad_s, accel_max_rad_s2, step_s):
-    """One step of a rate- and acceleration-limited slew towards ``target_rad`` (the short way round): the
-    rate heads for the fastest rate that can still stop at the target (sqrt(2 a |error|), capped by the rate
-    bound and by reaching the target within the step), changing by at most a dt.  Returns (angle, rate)."""
+    """One step of a rate- and acceleration-limited slew towards ``target_rad`` (the short way round).
+
+    The new rate w' is the fastest (up to the rate bound, and within a dt of the old rate w) that can still
+    stop at the target: the angle covered in the step, (w + w') dt / 2, plus the stopping distance w'^2 / 2a
+    must not exceed the error e, so w' <= a (sqrt(dt^2/4 + (2 e - w dt) / a) - dt/2).  Returns (angle, rate).
+    """
     error = wrap_angle(target_rad - angle_rad)
-    speed = jnp.minimum(jnp.minimum(jnp.sqrt(2 * accel_max_rad_s2 * jnp.abs(error)), rate_max_rad_s),
-                        jnp.abs(error) / step_s)
-    change = jnp.clip(jnp.sign(error) * speed - rate_rad_s, -accel_max_rad_s2 * step_s, accel_max_rad_s2 * step_s)
-    rate = rate_rad_s + change
-    return angle_rad + 0.5 * (rate_rad_s + rate) * step_s, rate
+    toward = jnp.sign(error)
+    a, dt = accel_max_rad_s2, step_s
+    stoppable = a * (jnp.sqrt(jnp.maximum(dt * dt / 4 + (2 * jnp.abs(error) - toward * rate_rad_s * dt) / a, 0.0))
+                     - dt / 2)
+    wanted = toward * jnp.minimum(stoppable, rate_max_rad_s)
+    rate = rate_rad_s + jnp.clip(wanted - rate_rad_s, -a * dt, a * dt)
+    return angle_rad + 0.5 * (rate_rad_s + rate) * dt, rate
 
 
 def body_share_rad(wished_rad, joint_low_rad, joint_high_rad):
