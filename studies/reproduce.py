@@ -1,6 +1,6 @@
 """Regenerate a paper's tables and figures with one command.
 
-    python studies/reproduce.py li2022 [katz2025 ablation ...]   # or: all
+    python studies/reproduce.py li2022 [katz2025 ablation ma2023 ...]   # or: all
     python studies/reproduce.py li2022 --only fig09 fig13         # scripts whose name contains a word
     python studies/reproduce.py all --list                         # the commands, without running them
 
@@ -30,6 +30,7 @@ STUDIES = {
     "katz2025": [("katz2025/step.py", []), ("katz2025/table.py", [])],
     "ablation": [("ablation/fompc_annealing.py", []), ("ablation/li_predictor_error.py", []),
                  ("ablation/fig13_budget.py", []), ("ablation/katz_longitude.py", [])],
+    "ma2023": [("ma2023/transfer.py", [])],
 }
 
 

@@ -6,8 +6,8 @@ and the joint MPC of Sec. 3, ``pointing`` the body slew and the body/boom split.
 """
 
 from geojax.transfer.rollout import STATUS_MEANINGS, Static, TransferParams, transfer
-from geojax.transfer.run import TransferResult, env_grid, metrics, run, static_for
+from geojax.transfer.run import TransferResult, env_grid, metrics, run, run_batch, stack, static_for
 from geojax.transfer.scenario import TransferScenario, available, load
 
 __all__ = ["STATUS_MEANINGS", "Static", "TransferParams", "TransferResult", "TransferScenario", "available",
-           "env_grid", "load", "metrics", "run", "static_for", "transfer"]
+           "env_grid", "load", "metrics", "run", "run_batch", "stack", "static_for", "transfer"]

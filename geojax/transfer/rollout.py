@@ -1,11 +1,12 @@
 """One GTO-GEO transfer as a pure function: a ``lax.scan`` over integration steps carrying a ``done`` flag.
 
-Each step: the guidance (``steering.steer``) wishes a thrust direction; the body slews towards the part the
-boom cannot reach (``pointing``); the joints' MPC tracks the rest (``boom.joint_step``); the thruster fires
-along the direction actually reached if the firing rule fires, the misalignment is within its bound, the
+Each step: the guidance (``steering.steer``) wishes a thrust direction; the thruster fires along the
+direction that body and joints reached if the firing rule fires, the misalignment is within its bound, the
 spacecraft is in sunlight (electric propulsion stops in the Earth's shadow: the conical shadow fraction
 scales the thrust) and propellant is left.  The orbit is integrated in MEE with RK4 and the full force
-model (``physics.dynamics.mee_rhs``).  When the end conditions hold (GEO radius, e and i below their
+model (``physics.dynamics.mee_rhs``).  Then, for the next step, the body slews towards the part of the end
+state's wish that the boom cannot reach (``pointing``) and the joints' MPC tracks the rest
+(``boom.joint_step``).  When the end conditions hold (GEO radius, e and i below their
 thresholds) the state freezes; termination is data, the status and the time reached, never a Python loop.
 
 Scans are nested: an outer scan over records, an inner one over ``steps_per_record`` steps, so a long
@@ -70,7 +71,6 @@ class Attitude(NamedTuple):
     theta_rad: jnp.ndarray  # [3] joint angles
     omega_rad_s: jnp.ndarray  # [3] joint rates
     ref_rad: jnp.ndarray  # [3] last joint targets (their rate feeds the MPC's extrapolation)
-    prev_ref_rad: jnp.ndarray  # [3] the targets before them
 
 
 class Stats(NamedTuple):
@@ -87,7 +87,8 @@ class Stats(NamedTuple):
 
 class Carry(NamedTuple):
     craft: SpacecraftState
-    attitude: Attitude
+    attitude: Attitude  # where body and joints point during the coming step
+    wish: steering.Command  # eq. (1) at the current state
     stats: Stats
     done: jnp.ndarray  # bool
     status: jnp.ndarray  # int, STATUS_MEANINGS
@@ -115,11 +116,16 @@ class Record(NamedTuple):
 
 
 def initial_carry(params: TransferParams) -> Carry:
-    theta0 = jnp.clip(jnp.array([0.0, jnp.pi / 2, 0.0]), params.joints.lower_rad, params.joints.upper_rad)
+    """At the start the spacecraft is already pointed: the body at its share of eq. (1)'s first wish, the joints
+    at their targets (the fixed layout's joints stay at (0, 90, 0) deg)."""
+    wish = _wish(params.initial.orbit, params)
+    body = pointing.body_share_rad(jnp.stack([wish.azimuth_rad, wish.elevation_rad]), *_joint_reach(params))
+    theta0 = _joint_targets(wish, body, params)
     zero = jnp.zeros(())
     return Carry(
         params.initial,
-        Attitude(jnp.zeros(2), jnp.zeros(2), theta0, jnp.zeros(3), theta0, theta0),
+        Attitude(body, jnp.zeros(2), theta0, jnp.zeros(3), theta0),
+        wish,
         Stats(zero, zero, zero, jnp.zeros(3), jnp.zeros(3), jnp.zeros(3), zero),
         jnp.array(False), jnp.array(0), zero, zero,
     )
@@ -144,36 +150,35 @@ def transfer(params: TransferParams, env_grid: Environment, static: Static):
     return final._replace(t_end_s=jnp.where(final.done, final.t_end_s, time_limit_s)), records
 
 
-def _step(carry: Carry, env3: Environment, params: TransferParams, static: Static):
-    step_s = static.step_s
-    craft, att = carry.craft, carry.attitude
-    mu = params.forces.mu_m3_s2
-    geometry = steering.orbit_geometry(craft.orbit)
-    wish = steering.steer(geometry, params.r_geo_m, params.deadband_m, params.i_end_rad, params.efficiency, mu)
-    wished = jnp.stack([wish.azimuth_rad, wish.elevation_rad])
+def _wish(orbit, params: TransferParams) -> steering.Command:
+    geometry = steering.orbit_geometry(orbit)
+    return steering.steer(geometry, params.r_geo_m, params.deadband_m, params.i_end_rad, params.efficiency,
+                          params.forces.mu_m3_s2)
 
-    # body: slews toward the share the joints cannot reach (joint azimuth = 90 deg + theta1, elevation = theta3)
+
+def _joint_reach(params: TransferParams):
+    """The (azimuth, elevation) range the joints reach: azimuth = 90 deg + theta1, elevation = theta3."""
     low = jnp.stack([params.joints.lower_rad[0] + jnp.pi / 2, params.joints.lower_rad[2]])
     high = jnp.stack([params.joints.upper_rad[0] + jnp.pi / 2, params.joints.upper_rad[2]])
-    body_target = pointing.body_share_rad(wished, low, high)
-    body, body_rate = pointing.slew_step(att.body_rad, att.body_rate_rad_s, body_target, params.slew_rate_rad_s,
-                                         params.slew_accel_rad_s2, step_s)
-    # joints: the inverse of eq. (9) for what the body leaves, tracked by the MPC of Sec. 3
-    residual = wrap_angle(wished - body)  # the wish relative to the body at the end of the step
-    target = jnp.clip(boom.joint_targets_rad(residual[0], residual[1]), params.joints.lower_rad,
-                      params.joints.upper_rad)
-    # Fig. 14's tracking error: joints now against the target set for now, counted where that target moved
-    # no faster than the drive can (a target that jumps, when the thrust flips between forward and backward,
-    # is a step response, not tracking)
-    trackable = jnp.abs(att.ref_rad - att.prev_ref_rad) <= params.joints.rate_rad_s * step_s
-    track_error = jnp.where(trackable, jnp.abs(att.theta_rad - att.ref_rad), 0.0)
-    theta, omega = boom.joint_step(att.theta_rad, att.omega_rad_s, target, (target - att.ref_rad) / step_s,
-                                   params.joints, params.weights, step_s, static.mpc_horizon, static.mpc_iterations)
+    return low, high
 
-    # the thrust goes where body and joints point at the start of the step
+
+def _joint_targets(wish: steering.Command, body_rad, params: TransferParams):
+    """The inverse of eq. (9) for what the body leaves of the wish, within the joint ranges."""
+    residual = wrap_angle(jnp.stack([wish.azimuth_rad, wish.elevation_rad]) - body_rad)
+    return jnp.clip(boom.joint_targets_rad(residual[0], residual[1]), params.joints.lower_rad, params.joints.upper_rad)
+
+
+def _step(carry: Carry, env3: Environment, params: TransferParams, static: Static):
+    """Fly one step with the pointing reached, then point body and joints at the wish of the step's end state
+    (known from the step just integrated), so the pointing of the next step is not a step late."""
+    step_s = static.step_s
+    craft, att, wish = carry.craft, carry.attitude, carry.wish
+    mu = params.forces.mu_m3_s2
+
     reached = att.body_rad + jnp.stack([att.theta_rad[0] + jnp.pi / 2, att.theta_rad[2]])
     direction = steering.direction_rsw(reached[0], reached[1])
-    off_by = pointing.misalignment_rad(direction, steering.direction_rsw(wished[0], wished[1]))
+    off_by = pointing.misalignment_rad(direction, steering.direction_rsw(wish.azimuth_rad, wish.elevation_rad))
     (x, y, z), _ = mee_to_rv_xyz(*(craft.orbit[j] for j in range(6)), mu)
     sunlit = 1.0 - params.forces.shadow_on * (1.0 - shadow_fraction_xyz(
         x, y, z, env3.r_sun_eci_m[0], params.forces.r_earth_m))
@@ -183,14 +188,30 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     on = wants * aligned
     torque = boom.coupling_torque_nm(att.theta_rad, params.thrust_n * on, params.d1_m, params.d2_m, params.a1_m,
                                      params.base_offset_m)
-
     stepped = rk4_step(mee_rhs, craft, env3, params.forces, Thrust(direction, params.thrust_n, params.isp_s, on),
                        step_s)
     finite = jnp.all(jnp.isfinite(stepped.orbit))
     craft = jax.tree_util.tree_map(lambda new, old: jnp.where(carry.done | ~finite, old, new), stepped, craft)
+
+    # pointing for the next step: the body slews toward the share the joints cannot reach; the joints' MPC
+    # (Sec. 3) tracks the inverse of eq. (9) for the rest
+    next_wish = _wish(craft.orbit, params)
+    wished = jnp.stack([next_wish.azimuth_rad, next_wish.elevation_rad])
+    body, body_rate = pointing.slew_step(att.body_rad, att.body_rate_rad_s,
+                                         pointing.body_share_rad(wished, *_joint_reach(params)),
+                                         params.slew_rate_rad_s, params.slew_accel_rad_s2, step_s)
+    target = _joint_targets(next_wish, body, params)
+    theta, omega = boom.joint_step(att.theta_rad, att.omega_rad_s, target, (target - att.ref_rad) / step_s,
+                                   params.joints, params.weights, step_s, static.mpc_horizon, static.mpc_iterations)
+    # Fig. 14's tracking error, counted where the target moved no faster than the drive can (a target that
+    # jumps, when the thrust flips between forward and backward, is a step response, not tracking)
+    trackable = jnp.abs(target - att.ref_rad) <= params.joints.rate_rad_s * step_s
+    track_error = jnp.where(trackable, jnp.abs(theta - target), 0.0)
+
     moving = ~carry.done
     attitude = jax.tree_util.tree_map(lambda new, old: jnp.where(moving, new, old),
-                                      Attitude(body, body_rate, theta, omega, target, att.ref_rad), att)
+                                      Attitude(body, body_rate, theta, omega, target), att)
+    next_wish = jax.tree_util.tree_map(lambda new, old: jnp.where(moving, new, old), next_wish, wish)
     s = carry.stats
     count = moving.astype(float)
     stats = Stats(s.firing_s + on * step_s, s.aligned_s + on * jnp.cos(off_by) * step_s,
@@ -208,5 +229,5 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     done = carry.done | arrived | empty | ~finite
     t_end = jnp.where(carry.done, carry.t_end_s, t_s)
     record = Record(t_s, after.a_m, after.e, after.i_rad, craft.mass_kg, craft.dv_mps, on, off_by, wished,
-                    att.body_rad, att.theta_rad, target, att.omega_rad_s, torque)
-    return Carry(craft, attitude, stats, done, status, t_end, t_s), record
+                    attitude.body_rad, attitude.theta_rad, target, attitude.omega_rad_s, torque)
+    return Carry(craft, attitude, next_wish, stats, done, status, t_end, t_s), record

@@ -11,7 +11,7 @@ import numpy as np
 
 from geojax.physics.constants import G0_MPS2, SECONDS_PER_DAY
 from geojax.physics.propagate import environment_grid
-from geojax.transfer.rollout import STATUS_MEANINGS, Static, transfer
+from geojax.transfer.rollout import STATUS_MEANINGS, Static, TransferParams, transfer
 from geojax.transfer.scenario import TransferScenario
 
 
@@ -44,6 +44,30 @@ def run(sc: TransferScenario, days: float | None = None, record_every_s: float =
     final, records = jax.jit(transfer, static_argnums=2)(sc.params, env_grid(sc, static), static)
     final, records = jax.device_get((final, records))
     return TransferResult(metrics(final, sc.params), record_table(records), time.perf_counter() - start)
+
+
+def stack(params_list) -> TransferParams:
+    """One batch of transfers (leading axis) from a list of ``TransferParams`` (any mix of layouts)."""
+    return jax.tree_util.tree_map(lambda *leaves: jax.numpy.stack(leaves), *params_list)
+
+
+def run_batch(sc: TransferScenario, params, days: float | None = None, record_every_s: float = SECONDS_PER_DAY):
+    """A batch of transfers sharing ``sc``'s epoch, step and time limit, in one compilation: vmapped, the batch
+    sharded over the local devices (one XLA CPU device per core, ``geojax.parallel``), the environment grid
+    replicated.  Returns (metrics of arrays [batch], records [batch, n_records], wall s, compile s)."""
+    from geojax.parallel import replicate, shard_batch
+
+    start = time.perf_counter()
+    static = static_for(sc, days, record_every_s)
+    size = jax.tree_util.tree_leaves(params)[0].shape[0]
+    if size % jax.device_count() == 0:
+        params = shard_batch(params)
+    grid = replicate(env_grid(sc, static))
+    batched = jax.jit(jax.vmap(transfer, in_axes=(0, None, None)), static_argnums=2)
+    compiled = batched.lower(params, grid, static).compile()
+    compile_s = time.perf_counter() - start
+    final, records = jax.device_get(compiled(params, grid))
+    return metrics(final, params), record_table(records), time.perf_counter() - start, compile_s
 
 
 def metrics(final, params) -> dict:
