@@ -9,8 +9,7 @@ Reading of eq. (1) (a marked choice; the printed formula has lost its e, which t
   direction".  Perigee and apogee both give alpha = 90 deg (thrust along S).
 * beta = -(pi/2) sin(u + pi/2) = -(pi/2) cos u, u the argument of latitude: out-of-plane thrust against the
   orbit normal at the ascending node and along it at the descending node, which lowers the inclination
-  (di/dt is proportional to cos u times the normal acceleration).  This is the plane-change phase; the
-  circularisation phase sets beta = 0.
+  (di/dt is proportional to cos u times the normal acceleration).
 * The firing rule (the paper gives none; its text: "accelerated along the orbital velocity direction at
   the apogee").  A burn dv along the velocity at true anomaly nu changes the apsis radii by
   d r_a / dv = (2a/v) [(1 + e)(2a/r - 1) + e + cos nu] and d r_p / dv = (2a/v) [(1 - e)(2a/r - 1) - e - cos nu]
@@ -22,8 +21,11 @@ Reading of eq. (1) (a marked choice; the printed formula has lost its e, which t
   orbit (sampled at 36 anomalies): burns gather at the apogee while the perigee is low, and at the perigee
   when the apogee is high.  An orbit whose apsides are both within ``deadband`` of GEO stops firing unless
   the plane change still needs thrust.
-* The plane-change phase lasts while the inclination is above half the end threshold, so lunisolar drift
-  during the circularisation cannot leave the transfer just above it.
+* The phases: while the inclination is above half the end threshold (the plane change) the thruster fires
+  all orbit long (outside the shadow) with eq. (1)'s beta; below it (the circularisation) it fires by the
+  rule above, and beta is eq. (1)'s scaled by i / i_end, so the burns keep holding the inclination against
+  the lunisolar drift (about 0.002 deg/day) without switching back to the plane change (a switch that
+  chatters at the threshold and makes the transfer time depend on the step).
 """
 
 from __future__ import annotations
@@ -93,7 +95,7 @@ def steer(geometry: OrbitGeometry, r_geo_m, deadband_m, i_end_rad, efficiency, m
     in_plane = (jnp.abs(gain) >= efficiency * best) & (apsides_off > deadband_m)
     fire = (in_plane | plane_change).astype(float)
     alpha = alpha_rad(geometry.e, geometry.true_anomaly_rad) + jnp.where(gain >= 0, 0.0, jnp.pi)
-    beta = jnp.where(plane_change, beta_rad(geometry.arg_latitude_rad), 0.0)
+    beta = beta_rad(geometry.arg_latitude_rad) * jnp.clip(geometry.i_rad / i_end_rad, 0.0, 1.0)
     return Command(alpha, beta, fire)
 
 
