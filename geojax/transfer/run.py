@@ -84,7 +84,10 @@ def metrics(final, params) -> dict:
         "dv_mps": np.asarray(final.craft.dv_mps),
         "rocket_dv_mps": np.asarray(params.isp_s) * G0_MPS2 * np.log(m0 / m1),
         "firing_days": firing / SECONDS_PER_DAY,
-        "thrust_efficiency": np.asarray(stats.aligned_s) / np.maximum(firing, 1e-30),
+        # the share of the thrust the firing rule asked for that was delivered along its direction (time lost
+        # to slewing and the cosine of the misalignment both count), and the cosine alone while firing
+        "thrust_efficiency": np.asarray(stats.aligned_s) / np.maximum(firing + np.asarray(stats.lost_to_slew_s), 1e-30),
+        "cosine_efficiency": np.asarray(stats.aligned_s) / np.maximum(firing, 1e-30),
         "lost_to_slew_days": np.asarray(stats.lost_to_slew_s) / SECONDS_PER_DAY,
         "max_coupling_torque_nm": np.asarray(stats.torque_max_nm),
     }
