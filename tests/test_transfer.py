@@ -202,3 +202,15 @@ def test_bad_fields_name_the_field(tmp_path):
         with pytest.raises(ValueError, match=message.replace("(", r"\(")):
             transfer.load(path)
     assert "ma2023-boom" not in __import__("geojax").scenario.available()
+
+
+def test_cli_writes_metrics_and_records(tmp_path, capsys):
+    """The HDF5 file holds what the summary printed (read back with h5py, an independent reader)."""
+    import h5py
+
+    out = tmp_path / "t.h5"
+    assert cli.main(["transfer", "ma2023-fixed", "--days", "0.5", "--out", str(out), "-q"]) == 0
+    with h5py.File(out) as f:
+        assert int(f["metrics/status"][()]) == 0 and f.attrs["layout"] == "fixed"
+        assert float(f["metrics/transfer_days"][()]) == pytest.approx(0.5)
+        assert f["records/a_km"].shape == (1,) and 'layout = "fixed"' in f.attrs["config_toml"]

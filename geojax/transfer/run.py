@@ -22,12 +22,14 @@ class TransferResult(NamedTuple):
 
 
 def static_for(sc: TransferScenario, days: float | None = None, record_every_s: float = SECONDS_PER_DAY) -> Static:
-    """The loop's shape: the time limit (``days``, default the scenario's) in steps, grouped into records."""
+    """The loop's shape: the time limit (``days``, default the scenario's) in steps, grouped into records (the
+    limit is rounded up to a whole number of record intervals)."""
     days = sc.days if days is None else days
     if not days > 0:
         raise ValueError(f"duration.days: must be > 0, got {days:g}")
-    per_record = max(1, round(record_every_s / sc.step_s))
-    n_records = max(1, math.ceil(days * SECONDS_PER_DAY / (sc.step_s * per_record)))
+    steps = max(1, round(days * SECONDS_PER_DAY / sc.step_s))
+    per_record = min(steps, max(1, round(record_every_s / sc.step_s)))
+    n_records = math.ceil(steps / per_record)
     return Static(sc.step_s, n_records, per_record, *sc.mpc)
 
 
