@@ -526,17 +526,21 @@ def _box_half_width_deg(attrs) -> float:
 
 
 def _scenarios(args) -> int:
-    from geojax import scenario
+    from geojax import scenario, transfer
 
     if args.show:
-        print(scenario.read_text(args.show), end="")
+        if args.show in transfer.available():
+            print((transfer.scenario._shipped() / f"{args.show}.toml").read_text(), end="")
+        else:
+            print(scenario.read_text(args.show), end="")
         return 0
     names = scenario.available()
     width = max(map(len, names))
     for name in names:
         print(f"{name:{width}s}  {scenario.load(name).config['description']}")
     print("\n`geojax scenarios --show NAME` prints a scenario's TOML (to copy and edit: "
-          "`geojax scenarios --show li2022-qffc > mine.toml`).")
+          f"`geojax scenarios --show li2022-qffc > mine.toml`); transfers (`geojax transfer NAME`): "
+          f"{', '.join(transfer.available())}.")
     return 0
 
 

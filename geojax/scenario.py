@@ -219,6 +219,10 @@ def read_text(name_or_path: str | Path) -> str:
         if not path.is_file():
             raise ValueError(f"scenario {str(name_or_path)!r}: no such file")
         return path.read_text()
+    shipped = importlib.resources.files("geojax") / "scenarios" / f"{name_or_path}.toml"
+    if str(name_or_path) not in available() and shipped.is_file():
+        raise ValueError(f"scenario {str(name_or_path)!r}: a transfer, not station keeping; run it with "
+                         f"`geojax transfer {name_or_path}`")
     if str(name_or_path) not in available():
         raise ValueError(
             f"scenario {str(name_or_path)!r}: unknown; named scenarios: {', '.join(available())} "

@@ -214,3 +214,11 @@ def test_cli_writes_metrics_and_records(tmp_path, capsys):
         assert int(f["metrics/status"][()]) == 0 and f.attrs["layout"] == "fixed"
         assert float(f["metrics/transfer_days"][()]) == pytest.approx(0.5)
         assert f["records/a_km"].shape == (1,) and 'layout = "fixed"' in f.attrs["config_toml"]
+
+
+def test_a_transfer_is_refused_by_station_keeping_and_shown_by_scenarios(capsys):
+    """The shipped-scenario list stays station keeping; a transfer named to `simulate` says where it belongs."""
+    assert cli.main(["simulate", "ma2023-boom"]) == 2
+    assert "run it with `geojax transfer ma2023-boom`" in capsys.readouterr().err
+    assert cli.main(["scenarios", "--show", "ma2023-fixed"]) == 0
+    assert 'layout = "fixed"' in capsys.readouterr().out
