@@ -222,3 +222,31 @@ def test_a_transfer_is_refused_by_station_keeping_and_shown_by_scenarios(capsys)
     assert "run it with `geojax transfer ma2023-boom`" in capsys.readouterr().err
     assert cli.main(["scenarios", "--show", "ma2023-fixed"]) == 0
     assert 'layout = "fixed"' in capsys.readouterr().out
+
+
+def test_apsis_gain_is_the_kepler_change_of_the_apsides_and_fires_at_apogee_first():
+    """G(nu) against a finite impulse: add 1 mm/s along the velocity of the Cartesian state and recompute the
+    apsides with cartesian_to_kepler (independent of the closed form); on the GTO (perigee 35,000 km short,
+    apogee 45 km short) the rule fires forward at apogee and not at perigee."""
+    from geojax.physics.elements import cartesian_to_kepler
+
+    mu, r_geo = c.MU_EARTH_M3_S2, 42164.16e3
+    for nu in np.radians([10.0, 100.0, 180.0, 260.0]):
+        mee = kepler_to_mee(24.7e6, 0.7, 0.36, 0.3, math.pi, nu)
+        geo = steering.orbit_geometry(mee)
+        r, v = (np.asarray(x) for x in mee_to_cartesian(mee, mu))
+        dv = 1e-3
+        a1, e1, *_ = cartesian_to_kepler(jnp.asarray(r), jnp.asarray(v + dv * v / np.linalg.norm(v)), mu)
+        d_perigee = float(a1 * (1 - e1)) - float(geo.perigee_m)
+        d_apogee = float(a1 * (1 + e1)) - float(geo.apogee_m)
+        expected = ((r_geo - float(geo.perigee_m)) * d_perigee + (r_geo - float(geo.apogee_m)) * d_apogee) / dv
+        gain = float(steering.apsis_gain(geo, r_geo, geo.true_anomaly_rad, mu))
+        assert gain == pytest.approx(expected, rel=1e-5)
+    span_m = 2 * c.R_EARTH_M + 964e3 + 35741e3
+    gto = dict(a_m=0.5 * span_m, e=(35741e3 - 964e3) / span_m)
+    at = {nu: steering.steer(_geometry(math.radians(nu), **gto), r_geo, 20e3, math.radians(0.1), 0.5, mu)
+          for nu in (0.0, 180.0)}
+    assert float(at[180.0].fire) == 1.0 and float(at[180.0].azimuth_rad) == pytest.approx(math.pi / 2)
+    assert float(at[0.0].fire) == 1.0  # the plane change (i = 20.8 deg) fires all orbit long ...
+    flat = _geometry(0.0, **gto, i_rad=0.0)
+    assert float(steering.steer(flat, r_geo, 20e3, math.radians(0.1), 0.5, mu).fire) == 0.0  # ... the rule: not here

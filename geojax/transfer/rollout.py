@@ -77,7 +77,7 @@ class Stats(NamedTuple):
     """Running totals over the transfer (frozen once done)."""
 
     firing_s: jnp.ndarray  # integral of the on-fraction
-    aligned_s: jnp.ndarray  # integral of on-fraction x cos(misalignment): thrust efficiency = aligned / firing
+    aligned_s: jnp.ndarray  # integral of on-fraction x cos(misalignment) (run.metrics: the efficiencies)
     lost_to_slew_s: jnp.ndarray  # time the rule fired in sunlight but the pointing was too far off
     track_max_rad: jnp.ndarray  # [3] largest |theta - target| (Fig. 14)
     track_sq_rad2: jnp.ndarray  # [3] sum of squares, for the RMS
@@ -137,12 +137,8 @@ def transfer(params: TransferParams, env_grid: Environment, static: Static):
     Returns (final ``Carry``, ``Record`` with leading axis n_records).  Pure; vmap over ``params``.
     """
 
-    def inner(carry, env3):
-        carry, record = _step(carry, env3, params, static)
-        return carry, record
-
     def outer(carry, env_block):
-        carry, records = jax.lax.scan(inner, carry, env_block)
+        carry, records = jax.lax.scan(lambda c, env3: _step(c, env3, params, static), carry, env_block)
         return carry, jax.tree_util.tree_map(lambda x: x[-1], records)
 
     final, records = jax.lax.scan(outer, initial_carry(params), env_grid)

@@ -1,7 +1,7 @@
 """Ma & Kong 2023: GTO-GEO transfer time and propellant, boom against fixed thrusters, and where the boom's
 advantage comes from.
 
-    python studies/ma2023/transfer.py [--rates 0.01 0.02 0.03 0.05 0.1 0.2] [--mc 64]
+    python studies/ma2023/transfer.py [--rates 0.01 0.02 0.03 0.05 0.1 0.2] [--mc 128] [--mc-slew 0.02]
 
 1. Both layouts (``ma2023-boom``, ``ma2023-fixed``) at every body slew rate of ``--rates`` (deg/s; the
    scenarios' 0.1 is the baseline), full transfers, one compiled batch: days, propellant, Delta-V, thrust
@@ -127,7 +127,7 @@ def sweep_figure(rows, metrics, path):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rates", type=float, nargs="+", default=[0.01, 0.02, 0.03, 0.05, 0.1, 0.2])
-    parser.add_argument("--mc", type=int, default=64, help="Monte Carlo pairs (0: skip)")
+    parser.add_argument("--mc", type=int, default=128, help="Monte Carlo pairs (0: skip)")
     parser.add_argument("--mc-slew", type=float, default=0.02,
                         help="body slew rate of the Monte Carlo, deg/s (default 0.02, where the boom's advantage shows)")
     args = parser.parse_args()
