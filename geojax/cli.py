@@ -7,6 +7,7 @@
     geojax tune TUNE.toml --out FILE.h5
     geojax plot FILE.h5 [--out DIR] [--format png|pdf|svg] [--dpi N]
     geojax scenarios [--show NAME]
+    geojax transfer SCENARIO [--days D] [--out FILE.h5]
 
 Every command takes -q (print only the files written) and -v (also compilation times and devices).
 ``--days D`` means D solar days, run as round(D / sidereal day) cycles, in every command.
@@ -130,6 +131,13 @@ def _parser() -> argparse.ArgumentParser:
     plot.add_argument("--format", choices=("png", "pdf", "svg"), default="png", help="figure format (default png)")
     plot.add_argument("--dpi", type=int, default=150, help="resolution of PNG figures (default 150)")
     plot.set_defaults(func=_plot)
+
+    xfer = command("transfer", help="GTO-GEO low-thrust transfer, gimbaled boom or fixed thrusters (Ma & Kong 2023)")
+    xfer.add_argument("scenario", help="a shipped transfer (ma2023-boom, ma2023-fixed) or a .toml path")
+    xfer.add_argument("--days", type=float, help="time limit in solar days (default: the scenario's); the transfer "
+                      "stops earlier when it reaches GEO (not sidereal-day cycles: a transfer has no control cycle)")
+    xfer.add_argument("--out", help="write /metrics and the daily /records to this HDF5 file")
+    xfer.set_defaults(func=_transfer)
 
     scen = command("scenarios", help="list the shipped scenarios, or print one's TOML")
     scen.add_argument("--show", metavar="NAME", help="print the TOML of the shipped scenario NAME")
@@ -312,6 +320,39 @@ def _check_outputs(args) -> None:
             raise ValueError(f"--plots {str(plots)!r}: exists and is not a folder")
 
 
+# Ma & Kong 2023, Sec. 4.2 and the conclusions.
+MA2023 = {"thrust_efficiency": "0.95", "j1_track_max_deg": "0.017", "j2_track_max_deg": "0.006",
+          "j3_track_max_deg": "0.011"}
+
+
+def _transfer(args) -> int:
+    import numpy as np
+
+    from geojax import store
+    from geojax import transfer
+    from geojax.scenario import to_toml
+
+    sc = transfer.load(args.scenario)
+    _check_outputs(args)
+    result = transfer.run(sc, days=args.days)
+    say = _say(args)
+    m = result.metrics
+    say(f"{sc.name}: {sc.config['description']}")
+    say(f"  status {int(m['status'])}: {transfer.STATUS_MEANINGS[int(m['status'])]}")
+    for name, value in m.items():
+        if name != "status":
+            paper = f"   (Ma 2023: {MA2023[name]})" if name in MA2023 else ""
+            say(f"  {name:24s} {float(value):12.4f}{paper}")
+    _detail(args)(f"  devices {store.device_description()}; {result.wall_s:.1f} s with compilation")
+    if args.out:
+        path = store.write_h5(args.out, {"metrics": {k: np.asarray(v) for k, v in m.items()}, "records": result.records},
+                              to_toml(sc.config), result.wall_s,
+                              attrs={"kind": "transfer", "scenario": sc.name, "layout": sc.layout,
+                                     "epoch_tt_s": sc.epoch_tt_s, "step_s": sc.step_s})
+        print(f"wrote {path}")
+    return 0
+
+
 def _tune(args) -> int:
     from geojax import scenario, tune
 
@@ -485,17 +526,21 @@ def _box_half_width_deg(attrs) -> float:
 
 
 def _scenarios(args) -> int:
-    from geojax import scenario
+    from geojax import scenario, transfer
 
     if args.show:
-        print(scenario.read_text(args.show), end="")
+        if args.show in transfer.available():
+            print((transfer.scenario._shipped() / f"{args.show}.toml").read_text(), end="")
+        else:
+            print(scenario.read_text(args.show), end="")
         return 0
     names = scenario.available()
     width = max(map(len, names))
     for name in names:
         print(f"{name:{width}s}  {scenario.load(name).config['description']}")
     print("\n`geojax scenarios --show NAME` prints a scenario's TOML (to copy and edit: "
-          "`geojax scenarios --show li2022-qffc > mine.toml`).")
+          f"`geojax scenarios --show li2022-qffc > mine.toml`); transfers (`geojax transfer NAME`): "
+          f"{', '.join(transfer.available())}.")
     return 0
 
 

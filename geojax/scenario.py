@@ -164,9 +164,11 @@ class Scenario:
 
 
 def available() -> list[str]:
-    """Names of the scenarios shipped with geojax."""
+    """Names of the station-keeping scenarios shipped with geojax (a file with a ``[transfer]`` table is a
+    transfer: ``geojax.transfer.scenario.available``)."""
     folder = importlib.resources.files("geojax") / "scenarios"
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+    return sorted(p.name[:-5] for p in folder.iterdir()
+                  if p.name.endswith(".toml") and not isinstance(tomllib.loads(p.read_text()).get("transfer"), dict))
 
 
 def load(name_or_path: str | Path, overrides: dict | None = None, controller=None) -> Scenario:
@@ -217,6 +219,10 @@ def read_text(name_or_path: str | Path) -> str:
         if not path.is_file():
             raise ValueError(f"scenario {str(name_or_path)!r}: no such file")
         return path.read_text()
+    shipped = importlib.resources.files("geojax") / "scenarios" / f"{name_or_path}.toml"
+    if str(name_or_path) not in available() and shipped.is_file():
+        raise ValueError(f"scenario {str(name_or_path)!r}: a transfer, not station keeping; run it with "
+                         f"`geojax transfer {name_or_path}`")
     if str(name_or_path) not in available():
         raise ValueError(
             f"scenario {str(name_or_path)!r}: unknown; named scenarios: {', '.join(available())} "

@@ -1,0 +1,229 @@
+"""One GTO-GEO transfer as a pure function: a ``lax.scan`` over integration steps carrying a ``done`` flag.
+
+Each step: the guidance (``steering.steer``) wishes a thrust direction; the thruster fires along the
+direction that body and joints reached if the firing rule fires, the misalignment is within its bound, the
+spacecraft is in sunlight (electric propulsion stops in the Earth's shadow: the conical shadow fraction
+scales the thrust) and propellant is left.  The orbit is integrated in MEE with RK4 and the full force
+model (``physics.dynamics.mee_rhs``).  Then, for the next step, the body slews towards the part of the end
+state's wish that the boom cannot reach (``pointing``) and the joints' MPC tracks the rest
+(``boom.joint_step``).  When the end conditions hold (GEO radius, e and i below their
+thresholds) the state freezes; termination is data, the status and the time reached, never a Python loop.
+
+Scans are nested: an outer scan over records, an inner one over ``steps_per_record`` steps, so a long
+transfer keeps one record per chosen interval (a day for a Monte Carlo, every step for the joint histories).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from geojax.physics.dynamics import SpacecraftState, Thrust, mee_rhs
+from geojax.physics.elements import mee_to_rv_xyz, wrap_angle
+from geojax.physics.forces import Environment, ForceModel, shadow_fraction_xyz
+from geojax.physics.integrate import rk4_step
+from geojax.transfer import boom, pointing, steering
+
+STATUS_MEANINGS = {0: "time limit reached first", 1: "reached GEO (end conditions met)",
+                   2: "propellant exhausted", 3: "state not finite"}
+
+
+class TransferParams(NamedTuple):
+    """One transfer's parameters; every leaf an array (SI), so a batch vmaps over any of them."""
+
+    initial: SpacecraftState  # MEE orbit [6], mass, delivered Delta-V
+    forces: ForceModel
+    dry_mass_kg: jnp.ndarray
+    thrust_n: jnp.ndarray
+    isp_s: jnp.ndarray
+    r_geo_m: jnp.ndarray  # end: |a - r_geo| < a_tol_m, e < e_end, i < i_end_rad
+    a_tol_m: jnp.ndarray
+    e_end: jnp.ndarray
+    i_end_rad: jnp.ndarray
+    deadband_m: jnp.ndarray  # firing rule, steering.steer
+    efficiency: jnp.ndarray
+    max_misalignment_rad: jnp.ndarray  # the thruster fires only closer than this to the wished direction
+    slew_rate_rad_s: jnp.ndarray  # body slew bounds
+    slew_accel_rad_s2: jnp.ndarray
+    joints: boom.JointLimits  # [3] each; the fixed layout: lower = upper = (0, 90, 0) deg
+    weights: boom.MpcWeights  # [3] each
+    d1_m: jnp.ndarray  # boom link lengths, eq. (9)
+    d2_m: jnp.ndarray
+    a1_m: jnp.ndarray
+    base_offset_m: jnp.ndarray  # [3] l_0 of eq. (8)
+
+
+class Static(NamedTuple):
+    """What fixes the compiled loop's shape."""
+
+    step_s: float
+    n_records: int
+    steps_per_record: int
+    mpc_horizon: int
+    mpc_iterations: int
+
+
+class Attitude(NamedTuple):
+    body_rad: jnp.ndarray  # [2] body azimuth and elevation offsets
+    body_rate_rad_s: jnp.ndarray  # [2]
+    theta_rad: jnp.ndarray  # [3] joint angles
+    omega_rad_s: jnp.ndarray  # [3] joint rates
+    ref_rad: jnp.ndarray  # [3] last joint targets (their rate feeds the MPC's extrapolation)
+
+
+class Stats(NamedTuple):
+    """Running totals over the transfer (frozen once done)."""
+
+    firing_s: jnp.ndarray  # integral of the on-fraction
+    aligned_s: jnp.ndarray  # integral of on-fraction x cos(misalignment) (run.metrics: the efficiencies)
+    lost_to_slew_s: jnp.ndarray  # time the rule fired in sunlight but the pointing was too far off
+    track_max_rad: jnp.ndarray  # [3] largest |theta - target| (Fig. 14)
+    track_sq_rad2: jnp.ndarray  # [3] sum of squares, for the RMS
+    track_steps: jnp.ndarray  # [3] steps counted in the RMS
+    torque_max_nm: jnp.ndarray  # largest |eq. (8)|
+
+
+class Carry(NamedTuple):
+    craft: SpacecraftState
+    attitude: Attitude  # where body and joints point during the coming step
+    wish: steering.Command  # eq. (1) at the current state
+    stats: Stats
+    done: jnp.ndarray  # bool
+    status: jnp.ndarray  # int, STATUS_MEANINGS
+    t_end_s: jnp.ndarray  # time the transfer ended (end conditions or propellant), else the time limit
+    t_s: jnp.ndarray
+
+
+class Record(NamedTuple):
+    """Sampled at the end of each record interval (leading axis: record)."""
+
+    t_s: jnp.ndarray
+    a_m: jnp.ndarray
+    e: jnp.ndarray
+    i_rad: jnp.ndarray
+    mass_kg: jnp.ndarray
+    dv_mps: jnp.ndarray
+    on_fraction: jnp.ndarray
+    misalignment_rad: jnp.ndarray
+    wished_rad: jnp.ndarray  # [2] azimuth, elevation of eq. (1)
+    body_rad: jnp.ndarray  # [2]
+    theta_rad: jnp.ndarray  # [3]
+    target_rad: jnp.ndarray  # [3]
+    omega_rad_s: jnp.ndarray  # [3]
+    torque_nm: jnp.ndarray  # [3]
+
+
+def initial_carry(params: TransferParams) -> Carry:
+    """At the start the spacecraft is already pointed: the body at its share of eq. (1)'s first wish, the joints
+    at their targets (the fixed layout's joints stay at (0, 90, 0) deg)."""
+    wish = _wish(params.initial.orbit, params)
+    body = pointing.body_share_rad(jnp.stack([wish.azimuth_rad, wish.elevation_rad]), *_joint_reach(params))
+    theta0 = _joint_targets(wish, body, params)
+    zero = jnp.zeros(())
+    return Carry(
+        params.initial,
+        Attitude(body, jnp.zeros(2), theta0, jnp.zeros(3), theta0),
+        wish,
+        Stats(zero, zero, zero, jnp.zeros(3), jnp.zeros(3), jnp.zeros(3), zero),
+        jnp.array(False), jnp.array(0), zero, zero,
+    )
+
+
+def transfer(params: TransferParams, env_grid: Environment, static: Static):
+    """Run one transfer over the environment grid (leaves [n_records, steps_per_record, 3, ...]).
+
+    Returns (final ``Carry``, ``Record`` with leading axis n_records).  Pure; vmap over ``params``.
+    """
+
+    def outer(carry, env_block):
+        carry, records = jax.lax.scan(lambda c, env3: _step(c, env3, params, static), carry, env_block)
+        return carry, jax.tree_util.tree_map(lambda x: x[-1], records)
+
+    final, records = jax.lax.scan(outer, initial_carry(params), env_grid)
+    time_limit_s = static.n_records * static.steps_per_record * static.step_s
+    return final._replace(t_end_s=jnp.where(final.done, final.t_end_s, time_limit_s)), records
+
+
+def _wish(orbit, params: TransferParams) -> steering.Command:
+    geometry = steering.orbit_geometry(orbit)
+    return steering.steer(geometry, params.r_geo_m, params.deadband_m, params.i_end_rad, params.efficiency,
+                          params.forces.mu_m3_s2)
+
+
+def _joint_reach(params: TransferParams):
+    """The (azimuth, elevation) range the joints reach: azimuth = 90 deg + theta1, elevation = theta3."""
+    low = jnp.stack([params.joints.lower_rad[0] + jnp.pi / 2, params.joints.lower_rad[2]])
+    high = jnp.stack([params.joints.upper_rad[0] + jnp.pi / 2, params.joints.upper_rad[2]])
+    return low, high
+
+
+def _joint_targets(wish: steering.Command, body_rad, params: TransferParams):
+    """The inverse of eq. (9) for what the body leaves of the wish, within the joint ranges."""
+    residual = wrap_angle(jnp.stack([wish.azimuth_rad, wish.elevation_rad]) - body_rad)
+    return jnp.clip(boom.joint_targets_rad(residual[0], residual[1]), params.joints.lower_rad, params.joints.upper_rad)
+
+
+def _step(carry: Carry, env3: Environment, params: TransferParams, static: Static):
+    """Fly one step with the pointing reached, then point body and joints at the wish of the step's end state
+    (known from the step just integrated), so the pointing of the next step is not a step late."""
+    step_s = static.step_s
+    craft, att, wish = carry.craft, carry.attitude, carry.wish
+    mu = params.forces.mu_m3_s2
+
+    reached = att.body_rad + jnp.stack([att.theta_rad[0] + jnp.pi / 2, att.theta_rad[2]])
+    direction = steering.direction_rsw(reached[0], reached[1])
+    off_by = pointing.misalignment_rad(direction, steering.direction_rsw(wish.azimuth_rad, wish.elevation_rad))
+    (x, y, z), _ = mee_to_rv_xyz(*(craft.orbit[j] for j in range(6)), mu)
+    sunlit = 1.0 - params.forces.shadow_on * (1.0 - shadow_fraction_xyz(
+        x, y, z, env3.r_sun_eci_m[0], params.forces.r_earth_m))
+    live = (~carry.done) & (craft.mass_kg > params.dry_mass_kg)
+    wants = wish.fire * sunlit * live
+    aligned = off_by <= params.max_misalignment_rad
+    on = wants * aligned
+    torque = boom.coupling_torque_nm(att.theta_rad, params.thrust_n * on, params.d1_m, params.d2_m, params.a1_m,
+                                     params.base_offset_m)
+    stepped = rk4_step(mee_rhs, craft, env3, params.forces, Thrust(direction, params.thrust_n, params.isp_s, on),
+                       step_s)
+    finite = jnp.all(jnp.isfinite(stepped.orbit))
+    craft = jax.tree_util.tree_map(lambda new, old: jnp.where(carry.done | ~finite, old, new), stepped, craft)
+
+    # pointing for the next step: the body slews toward the share the joints cannot reach; the joints' MPC
+    # (Sec. 3) tracks the inverse of eq. (9) for the rest
+    next_wish = _wish(craft.orbit, params)
+    wished = jnp.stack([next_wish.azimuth_rad, next_wish.elevation_rad])
+    body, body_rate = pointing.slew_step(att.body_rad, att.body_rate_rad_s,
+                                         pointing.body_share_rad(wished, *_joint_reach(params)),
+                                         params.slew_rate_rad_s, params.slew_accel_rad_s2, step_s)
+    target = _joint_targets(next_wish, body, params)
+    theta, omega = boom.joint_step(att.theta_rad, att.omega_rad_s, target, (target - att.ref_rad) / step_s,
+                                   params.joints, params.weights, step_s, static.mpc_horizon, static.mpc_iterations)
+    # Fig. 14's tracking error, counted where the target moved no faster than the drive can (a target that
+    # jumps, when the thrust flips between forward and backward, is a step response, not tracking)
+    trackable = jnp.abs(target - att.ref_rad) <= params.joints.rate_rad_s * step_s
+    track_error = jnp.where(trackable, jnp.abs(theta - target), 0.0)
+
+    moving = ~carry.done
+    attitude = jax.tree_util.tree_map(lambda new, old: jnp.where(moving, new, old),
+                                      Attitude(body, body_rate, theta, omega, target), att)
+    next_wish = jax.tree_util.tree_map(lambda new, old: jnp.where(moving, new, old), next_wish, wish)
+    s = carry.stats
+    count = moving.astype(float)
+    stats = Stats(s.firing_s + on * step_s, s.aligned_s + on * jnp.cos(off_by) * step_s,
+                  s.lost_to_slew_s + wants * (~aligned) * step_s,
+                  jnp.maximum(s.track_max_rad, count * track_error), s.track_sq_rad2 + count * track_error**2,
+                  s.track_steps + count * trackable, jnp.maximum(s.torque_max_nm, count * jnp.linalg.norm(torque)))
+
+    t_s = carry.t_s + step_s
+    after = steering.orbit_geometry(craft.orbit)
+    arrived = ((jnp.abs(after.a_m - params.r_geo_m) < params.a_tol_m) & (after.e < params.e_end)
+               & (after.i_rad < params.i_end_rad))
+    empty = craft.mass_kg <= params.dry_mass_kg
+    status = jnp.where(carry.done, carry.status,
+                       jnp.where(~finite, 3, jnp.where(arrived, 1, jnp.where(empty, 2, 0))))
+    done = carry.done | arrived | empty | ~finite
+    t_end = jnp.where(carry.done, carry.t_end_s, t_s)
+    record = Record(t_s, after.a_m, after.e, after.i_rad, craft.mass_kg, craft.dv_mps, on, off_by, wished,
+                    attitude.body_rad, attitude.theta_rad, target, attitude.omega_rad_s, torque)
+    return Carry(craft, attitude, next_wish, stats, done, status, t_end, t_s), record

@@ -1,0 +1,118 @@
+"""Running transfers: one (``run``) or a batch (``batch_runner``), with their metrics as plain numbers."""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+from geojax.physics.constants import G0_MPS2, SECONDS_PER_DAY
+from geojax.physics.propagate import environment_grid
+from geojax.transfer.rollout import STATUS_MEANINGS, Static, TransferParams, transfer
+from geojax.transfer.scenario import TransferScenario
+
+
+class TransferResult(NamedTuple):
+    metrics: dict  # names carry units; see ``metrics``
+    records: dict  # per record interval, edge units (deg, days, km), numpy
+    wall_s: float
+
+
+def static_for(sc: TransferScenario, days: float | None = None, record_every_s: float = SECONDS_PER_DAY) -> Static:
+    """The loop's shape: the time limit (``days``, default the scenario's) in steps, grouped into records (the
+    limit is rounded up to a whole number of record intervals)."""
+    days = sc.days if days is None else days
+    if not days > 0:
+        raise ValueError(f"duration.days: must be > 0, got {days:g}")
+    steps = max(1, round(days * SECONDS_PER_DAY / sc.step_s))
+    per_record = min(steps, max(1, round(record_every_s / sc.step_s)))
+    n_records = math.ceil(steps / per_record)
+    return Static(sc.step_s, n_records, per_record, *sc.mpc)
+
+
+def env_grid(sc: TransferScenario, static: Static):
+    """Sun, Moon and Earth angle at every RK4 stage, shared by every transfer of a batch (same epoch)."""
+    return environment_grid(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s, static.step_s, static.n_records,
+                            static.steps_per_record)
+
+
+def run(sc: TransferScenario, days: float | None = None, record_every_s: float = SECONDS_PER_DAY) -> TransferResult:
+    """One transfer, compiled and run; metrics and records as numpy."""
+    start = time.perf_counter()
+    static = static_for(sc, days, record_every_s)
+    final, records = jax.jit(transfer, static_argnums=2)(sc.params, env_grid(sc, static), static)
+    final, records = jax.device_get((final, records))
+    return TransferResult(metrics(final, sc.params), record_table(records), time.perf_counter() - start)
+
+
+def stack(params_list) -> TransferParams:
+    """One batch of transfers (leading axis) from a list of ``TransferParams`` (any mix of layouts)."""
+    return jax.tree_util.tree_map(lambda *leaves: jax.numpy.stack(leaves), *params_list)
+
+
+def run_batch(sc: TransferScenario, params, days: float | None = None, record_every_s: float = SECONDS_PER_DAY):
+    """A batch of transfers sharing ``sc``'s epoch, step and time limit, in one compilation: vmapped, the batch
+    sharded over the local devices (one XLA CPU device per core, ``geojax.parallel``), the environment grid
+    replicated.  Returns (metrics of arrays [batch], records [batch, n_records], wall s, compile s)."""
+    from geojax.parallel import replicate, shard_batch
+
+    start = time.perf_counter()
+    static = static_for(sc, days, record_every_s)
+    size = jax.tree_util.tree_leaves(params)[0].shape[0]
+    if size % jax.device_count() == 0:
+        params = shard_batch(params)
+    grid = replicate(env_grid(sc, static))
+    batched = jax.jit(jax.vmap(transfer, in_axes=(0, None, None)), static_argnums=2)
+    compiled = batched.lower(params, grid, static).compile()
+    compile_s = time.perf_counter() - start
+    final, records = jax.device_get(compiled(params, grid))
+    return metrics(final, params), record_table(records), time.perf_counter() - start, compile_s
+
+
+def metrics(final, params) -> dict:
+    """Scalar results of one transfer (or arrays over a batch); units in the names."""
+    m0, m1 = np.asarray(params.initial.mass_kg), np.asarray(final.craft.mass_kg)
+    stats = final.stats
+    firing = np.asarray(stats.firing_s)
+    steps = np.maximum(np.asarray(stats.track_steps), 1)
+    rms = np.sqrt(np.asarray(stats.track_sq_rad2) / steps)
+    out = {
+        "status": np.asarray(final.status),
+        "transfer_days": np.asarray(final.t_end_s) / SECONDS_PER_DAY,
+        "propellant_kg": m0 - m1,
+        "dv_mps": np.asarray(final.craft.dv_mps),
+        "rocket_dv_mps": np.asarray(params.isp_s) * G0_MPS2 * np.log(m0 / m1),
+        "firing_days": firing / SECONDS_PER_DAY,
+        # the share of the thrust the firing rule asked for that was delivered along its direction (time lost
+        # to slewing and the cosine of the misalignment both count), and the cosine alone while firing
+        "thrust_efficiency": np.asarray(stats.aligned_s) / np.maximum(firing + np.asarray(stats.lost_to_slew_s), 1e-30),
+        "cosine_efficiency": np.asarray(stats.aligned_s) / np.maximum(firing, 1e-30),
+        "lost_to_slew_days": np.asarray(stats.lost_to_slew_s) / SECONDS_PER_DAY,
+        "max_coupling_torque_nm": np.asarray(stats.torque_max_nm),
+    }
+    for j in range(3):
+        out[f"j{j + 1}_track_max_deg"] = np.rad2deg(np.asarray(stats.track_max_rad)[..., j])
+        out[f"j{j + 1}_track_rms_deg"] = np.rad2deg(rms[..., j])
+    return out
+
+
+def record_table(records) -> dict:
+    deg = np.rad2deg
+    out = {"t_days": np.asarray(records.t_s) / SECONDS_PER_DAY, "a_km": np.asarray(records.a_m) / 1e3,
+           "e": np.asarray(records.e), "i_deg": deg(records.i_rad), "mass_kg": np.asarray(records.mass_kg),
+           "dv_mps": np.asarray(records.dv_mps), "on_fraction": np.asarray(records.on_fraction),
+           "misalignment_deg": deg(records.misalignment_rad), "torque_nm": np.asarray(records.torque_nm)}
+    for name, values in (("wished", records.wished_rad), ("body", records.body_rad)):
+        out[f"{name}_azimuth_deg"], out[f"{name}_elevation_deg"] = deg(values[..., 0]), deg(values[..., 1])
+    for j in range(3):
+        out[f"theta{j + 1}_deg"] = deg(records.theta_rad[..., j])
+        out[f"target{j + 1}_deg"] = deg(records.target_rad[..., j])
+        out[f"omega{j + 1}_deg_s"] = deg(records.omega_rad_s[..., j])
+    return out
+
+
+def describe_status(code: int) -> str:
+    return STATUS_MEANINGS[int(code)]

@@ -1,0 +1,252 @@
+"""GTO-GEO transfers (Ma & Kong 2023): boom kinematics, steering law, body slew, joint MPC, the transfer loop.
+
+Every test names its independent check: a chain of elementary rotations, the velocity of a Kepler orbit, a
+trapezoidal slew profile, the rocket equation, Table 1's joint ranges.
+"""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from geojax import cli, transfer
+from geojax.physics import constants as c
+from geojax.physics.elements import kepler_to_mee, mee_to_cartesian
+from geojax.transfer import boom, pointing, steering
+from geojax.transfer.rollout import Static
+
+RNG = np.random.default_rng(7)
+D1, D2, A1 = 0.5, 1.5, 0.3
+
+
+@pytest.mark.parametrize("theta", RNG.uniform(-math.pi, math.pi, (4, 3)))
+def test_forward_kinematics_9_is_the_chain_of_elementary_rotations(theta):
+    """Eq. (9) against Rz(t1) [Ty(d1) Ry(t2) [Tz(d2) Rz(t3) Tx(a1)]] built from 3x3 rotations (numpy-free of
+    eq. (9)); the printed y and z translation entries agree with the chain, the x entry only with its a1
+    sign flipped (the erratum ``boom.wrist_pose`` documents)."""
+    rotation, position = boom.wrist_pose(jnp.asarray(theta), D1, D2, A1)
+    rz1, ry2, rz3 = boom.rot_z(theta[0]), boom.rot_y(theta[1]), boom.rot_z(theta[2])
+    chain_rotation = rz1 @ ry2 @ rz3
+    chain_position = rz1 @ (jnp.array([0.0, D1, 0.0]) + ry2 @ (jnp.array([0.0, 0.0, D2]) + rz3 @ jnp.array([A1, 0, 0])))
+    np.testing.assert_allclose(rotation, chain_rotation, atol=1e-14)
+    np.testing.assert_allclose(position, chain_position, atol=1e-14)
+    s1, s2, s3 = np.sin(theta)
+    c1, c2, c3 = np.cos(theta)
+    printed_x = A1 * (s1 * s3 - c1 * c2 * c3) + D2 * c1 * s2 - D1 * s1
+    printed_y = A1 * (c1 * s3 + c2 * c3 * s1) + D1 * c1 + D2 * s1 * s2
+    printed_z = D2 * c2 - A1 * c3 * s2
+    np.testing.assert_allclose([printed_y, printed_z], chain_position[1:], atol=1e-14)
+    np.testing.assert_allclose(printed_x + 2 * A1 * (c1 * c2 * c3 - s1 * s3), chain_position[0], atol=1e-14)
+
+
+def test_joint_targets_invert_the_kinematics_and_the_torque_is_r_cross_f():
+    """Inverse of (9): the wrist-y thrust axis at the targets equals the azimuth/elevation unit vector
+    (spherical coordinates, independent of eq. (9)) over Table 1's ranges; eq. (8) against numpy's cross
+    product of the chain position and the thrust."""
+    az = RNG.uniform(0.0, math.pi / 2, 20)
+    el = RNG.uniform(-math.radians(15), math.radians(15), 20)
+    for a, e in zip(az, el):
+        theta = boom.joint_targets_rad(jnp.asarray(a), jnp.asarray(e))
+        assert -math.pi / 2 <= theta[0] <= 0 and abs(theta[2]) <= math.radians(15) + 1e-15
+        expected = [math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)]
+        np.testing.assert_allclose(boom.thrust_direction_body(theta), expected, atol=1e-14)
+    theta = jnp.array([-0.4, 1.7, 0.2])
+    offset = np.array([0.1, -0.2, -1.0])
+    _, r = boom.wrist_pose(theta, D1, D2, A1)
+    force = 0.5 * np.asarray(boom.rot_z(theta[0]) @ boom.rot_y(theta[1]) @ boom.rot_z(theta[2]))[:, 1]
+    np.testing.assert_allclose(boom.coupling_torque_nm(theta, 0.5, D1, D2, A1, jnp.asarray(offset)),
+                               np.cross(np.asarray(r) + offset, force), atol=1e-14)
+
+
+def _geometry(nu_rad, e=0.7, argp_rad=math.pi, raan_rad=0.3, i_rad=math.radians(20.8), a_m=24.7e6):
+    return steering.orbit_geometry(kepler_to_mee(a_m, e, i_rad, raan_rad, argp_rad, nu_rad))
+
+
+@pytest.mark.parametrize("nu_deg", [0.0, 180.0])
+def test_steering_law_1_at_perigee_and_apogee(nu_deg):
+    """Closed form: at both apsides the velocity is perpendicular to the radius, so alpha = 90 deg (thrust
+    along S); beta = -(pi/2) cos u with u = argp + nu (perigee at the descending node: u = 180 deg -> +90 deg,
+    apogee at the ascending node: u = 360 deg -> -90 deg)."""
+    geo = _geometry(math.radians(nu_deg))
+    assert float(steering.alpha_rad(geo.e, geo.true_anomaly_rad)) == pytest.approx(math.pi / 2, abs=1e-12)
+    u = math.pi + math.radians(nu_deg)
+    assert float(steering.beta_rad(geo.arg_latitude_rad)) == pytest.approx(-math.pi / 2 * math.cos(u), abs=1e-12)
+
+
+def test_alpha_is_the_velocity_direction_and_the_printed_law_at_e_1():
+    """alpha against the velocity of the Kepler orbit (mee_to_cartesian, projected on R and S) at any anomaly;
+    the printed eq. (1), arctan[-2 cot(nu/2)(1 - sin^2(nu/2))/(1 + cos nu)], has the same tangent up to sign
+    at e = 1 (the reading documented in ``steering``)."""
+    mu = c.MU_EARTH_M3_S2
+    for nu in np.radians([20.0, 75.0, 130.0, 230.0, 320.0]):
+        mee = kepler_to_mee(24.7e6, 0.7, 0.36, 0.3, math.pi, nu)
+        r, v = (np.asarray(x) for x in mee_to_cartesian(mee, mu))
+        radial = r / np.linalg.norm(r)
+        along = np.cross(np.cross(r, v), r)
+        along /= np.linalg.norm(along)
+        geo = steering.orbit_geometry(mee)
+        assert float(steering.alpha_rad(geo.e, geo.true_anomaly_rad)) == pytest.approx(
+            math.atan2(v @ along, v @ radial), abs=1e-12)
+        half = nu / 2
+        printed = math.atan(-2 / math.tan(half) * (1 - math.sin(half) ** 2) / (1 + math.cos(nu)))
+        assert math.tan(float(steering.alpha_rad(1.0, nu))) == pytest.approx(-math.tan(printed), rel=1e-9)
+
+
+def test_a_rate_and_acceleration_limited_slew_takes_the_trapezoid_time():
+    """Kinematics closed form: a rest-to-rest slew of 30 deg at 0.1 deg/s and 0.001 deg/s^2 takes
+    30/0.1 + 0.1/0.001 = 400 s to rest at the target, never exceeding the rate bound nor overshooting."""
+    rate, accel, step = math.radians(0.1), math.radians(0.001), 1.0
+    angle, speed, t = jnp.array(0.0), jnp.array(0.0), 0.0
+    target = math.radians(30.0)
+    slew = jax.jit(pointing.slew_step)
+    while abs(float(angle) - target) > 1e-9 or abs(float(speed)) > 1e-12:
+        angle, speed = slew(angle, speed, target, rate, accel, step)
+        assert abs(float(speed)) <= rate * (1 + 1e-12) and float(angle) <= target + 1e-12
+        t += step
+        assert t < 1000
+    assert t == pytest.approx(400.0, abs=1.0)
+
+
+def test_mpc_tracks_a_ramp_within_its_limits():
+    """Double-integrator closed form: a joint can follow a ramp of 0.01 deg/s exactly, so after the start-up the
+    MPC's tracking error vanishes; the acceleration bound is never exceeded."""
+    limits = boom.JointLimits(jnp.full(3, -2.0), jnp.full(3, 2.0), jnp.full(3, math.radians(0.5)),
+                              jnp.full(3, math.radians(0.05)))
+    weights = boom.MpcWeights(jnp.ones(3), jnp.zeros(3), jnp.full(3, 1e4))
+    step, ramp = 10.0, math.radians(0.01)
+    step_fn = jax.jit(boom.joint_step, static_argnums=(7, 8))
+    theta, omega = jnp.zeros(3), jnp.zeros(3)
+    for k in range(200):
+        target = jnp.full(3, ramp * step * (k + 1))
+        new_theta, new_omega = step_fn(theta, omega, target, jnp.full(3, ramp), limits, weights, step, 10, 20)
+        assert np.all(np.abs(np.asarray(new_omega - omega)) <= math.radians(0.05) * step * (1 + 1e-9))
+        theta, omega = new_theta, new_omega
+    np.testing.assert_allclose(theta, ramp * step * 200, atol=math.radians(1e-4))
+
+
+# One compilation serves the loop tests: the same Static (2 days, a record every step) for every transfer.
+STATIC = Static(120.0, 1440, 1, 10, 20)
+
+
+@pytest.fixture(scope="module")
+def loop():
+    return jax.jit(transfer.transfer, static_argnums=2)
+
+
+def _run(loop, sc):
+    final, records = loop(sc.params, transfer.env_grid(sc, STATIC), STATIC)
+    return jax.device_get(final), jax.device_get(records)
+
+
+def test_short_transfer_delta_v_is_the_rocket_equation_and_joints_stay_in_table_1(loop):
+    """Rocket equation: the delivered Delta-V (integral of F/m) equals Isp g0 ln(m0/m1) of the mass used, and
+    both equal F x firing time / mean mass to first order; Table 1's joint ranges and the drive's rate bound
+    hold at every step of two days of the boom transfer."""
+    sc = transfer.load("ma2023-boom")
+    final, records = _run(loop, sc)
+    m0, m1 = float(sc.params.initial.mass_kg), float(final.craft.mass_kg)
+    rocket = float(sc.params.isp_s) * c.G0_MPS2 * math.log(m0 / m1)
+    assert float(final.craft.dv_mps) == pytest.approx(rocket, rel=1e-9)
+    assert float(final.craft.dv_mps) == pytest.approx(0.5 * float(final.stats.firing_s) / (0.5 * (m0 + m1)), rel=1e-4)
+    assert rocket > 20.0  # it fired
+    theta = np.degrees(records.theta_rad)
+    assert theta[:, 0].min() >= -90.0 - 1e-9 and theta[:, 0].max() <= 1e-9
+    assert np.all(np.abs(theta[:, 1] - 90.0) < 1e-9) and np.all(np.abs(theta[:, 2]) <= 15.0 + 1e-9)
+    assert np.all(np.abs(np.degrees(records.omega_rad_s)) <= 0.5 + 1e-9)
+    assert np.ptp(np.degrees(records.theta_rad[:, 2])) > 5.0  # joint 3 worked its range
+
+
+def test_fixed_layout_keeps_its_joints_and_loses_more_thrust_to_slewing(loop):
+    """The fixed layout's thruster never moves (joints frozen at (0, 90, 0) deg), so with a slow body it must
+    wait for slews the boom's joints absorb: more time lost to slewing over the same two days."""
+    slow = {"attitude.slew_rate_deg_s": 0.02}
+    boom_final, _ = _run(loop, transfer.load("ma2023-boom", slow))
+    fixed_final, fixed_records = _run(loop, transfer.load("ma2023-fixed", slow))
+    np.testing.assert_allclose(np.degrees(fixed_records.theta_rad), np.broadcast_to([0.0, 90.0, 0.0], (1440, 3)),
+                               atol=1e-12)
+    assert float(fixed_final.stats.lost_to_slew_s) > float(boom_final.stats.lost_to_slew_s) + 3600.0
+
+
+def test_a_transfer_that_starts_at_geo_ends_at_once_and_freezes(loop):
+    """Termination is data: a circular equatorial start at the GEO radius meets the end conditions after the
+    first step (status 1, t_end = one step), and the state is frozen from then on (mass unchanged)."""
+    alt_km = 42164.16 - c.R_EARTH_M / 1e3
+    sc = transfer.load("ma2023-boom", {"orbit.perigee_alt_km": alt_km, "orbit.apogee_alt_km": alt_km,
+                                       "orbit.i_deg": 0.01})
+    final, records = _run(loop, sc)
+    assert int(final.status) == 1 and float(final.t_end_s) == 120.0
+    assert np.all(records.mass_kg == records.mass_kg[0])
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["transfer", "nowhere"], "transfer scenario 'nowhere': unknown"),
+    (["transfer", "ma2023-boom", "--days", "0"], "duration.days: must be > 0"),
+    (["transfer", "li2022"], "transfer scenario 'li2022': unknown"),
+])
+def test_bad_input_exits_2_with_one_line(argv, message, capsys):
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_bad_fields_name_the_field(tmp_path):
+    """A transfer file's mistakes are one line naming the field (the station-keeping scenarios' convention)."""
+    text = (transfer.scenario._shipped() / "ma2023-boom.toml").read_text()
+    for old, new, message in [('layout = "boom"', 'layout = "arm"', "thruster.layout: must be one of"),
+                              ("dry_mass_kg = 2000.0", "dry_mass_kg = 3000.0", "spacecraft.dry_mass_kg: must be less"),
+                              ("j2_deg = [75.0, 105.0]", "j2_deg = [95.0, 105.0]", "boom.j2_deg: must contain")]:
+        path = tmp_path / "bad.toml"
+        path.write_text(text.replace(old, new))
+        with pytest.raises(ValueError, match=message.replace("(", r"\(")):
+            transfer.load(path)
+    assert "ma2023-boom" not in __import__("geojax").scenario.available()
+
+
+def test_cli_writes_metrics_and_records(tmp_path, capsys):
+    """The HDF5 file holds what the summary printed (read back with h5py, an independent reader)."""
+    import h5py
+
+    out = tmp_path / "t.h5"
+    assert cli.main(["transfer", "ma2023-fixed", "--days", "0.5", "--out", str(out), "-q"]) == 0
+    with h5py.File(out) as f:
+        assert int(f["metrics/status"][()]) == 0 and f.attrs["layout"] == "fixed"
+        assert float(f["metrics/transfer_days"][()]) == pytest.approx(0.5)
+        assert f["records/a_km"].shape == (1,) and 'layout = "fixed"' in f.attrs["config_toml"]
+
+
+def test_a_transfer_is_refused_by_station_keeping_and_shown_by_scenarios(capsys):
+    """The shipped-scenario list stays station keeping; a transfer named to `simulate` says where it belongs."""
+    assert cli.main(["simulate", "ma2023-boom"]) == 2
+    assert "run it with `geojax transfer ma2023-boom`" in capsys.readouterr().err
+    assert cli.main(["scenarios", "--show", "ma2023-fixed"]) == 0
+    assert 'layout = "fixed"' in capsys.readouterr().out
+
+
+def test_apsis_gain_is_the_kepler_change_of_the_apsides_and_fires_at_apogee_first():
+    """G(nu) against a finite impulse: add 1 mm/s along the velocity of the Cartesian state and recompute the
+    apsides with cartesian_to_kepler (independent of the closed form); on the GTO (perigee 35,000 km short,
+    apogee 45 km short) the rule fires forward at apogee and not at perigee."""
+    from geojax.physics.elements import cartesian_to_kepler
+
+    mu, r_geo = c.MU_EARTH_M3_S2, 42164.16e3
+    for nu in np.radians([10.0, 100.0, 180.0, 260.0]):
+        mee = kepler_to_mee(24.7e6, 0.7, 0.36, 0.3, math.pi, nu)
+        geo = steering.orbit_geometry(mee)
+        r, v = (np.asarray(x) for x in mee_to_cartesian(mee, mu))
+        dv = 1e-3
+        a1, e1, *_ = cartesian_to_kepler(jnp.asarray(r), jnp.asarray(v + dv * v / np.linalg.norm(v)), mu)
+        d_perigee = float(a1 * (1 - e1)) - float(geo.perigee_m)
+        d_apogee = float(a1 * (1 + e1)) - float(geo.apogee_m)
+        expected = ((r_geo - float(geo.perigee_m)) * d_perigee + (r_geo - float(geo.apogee_m)) * d_apogee) / dv
+        gain = float(steering.apsis_gain(geo, r_geo, geo.true_anomaly_rad, mu))
+        assert gain == pytest.approx(expected, rel=1e-5)
+    span_m = 2 * c.R_EARTH_M + 964e3 + 35741e3
+    gto = dict(a_m=0.5 * span_m, e=(35741e3 - 964e3) / span_m)
+    at = {nu: steering.steer(_geometry(math.radians(nu), **gto), r_geo, 20e3, math.radians(0.1), 0.5, mu)
+          for nu in (0.0, 180.0)}
+    assert float(at[180.0].fire) == 1.0 and float(at[180.0].azimuth_rad) == pytest.approx(math.pi / 2)
+    assert float(at[0.0].fire) == 1.0  # the plane change (i = 20.8 deg) fires all orbit long ...
+    flat = _geometry(0.0, **gto, i_rad=0.0)
+    assert float(steering.steer(flat, r_geo, 20e3, math.radians(0.1), 0.5, mu).fire) == 0.0  # ... the rule: not here
