@@ -93,6 +93,19 @@ def _parser() -> argparse.ArgumentParser:
     prop.add_argument("--out", help="write the per-cycle mean elements to this HDF5 file")
     prop.set_defaults(func=_propagate)
 
+    bnd = command("bound", help="the least Delta-V that holds the scenario's box with its thrusters (a linear program), "
+                                "re-simulated in the closed loop")
+    bnd.add_argument("scenario", help="a shipped scenario name or a .toml path (its thrusters, box, forces, epoch)")
+    bnd.add_argument("--days", type=float, help=DAYS_HELP)
+    bnd.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
+    bnd.add_argument("--slot-steps", type=int, default=4,
+                     help="integration steps per thrust slot (thrust constant in RSW over a slot; default 4: 1 h)")
+    bnd.add_argument("--thrusters", choices=("arms", "gimbal", "fixed4"),
+                     help="thruster geometry: Li's two arms, Katz's gimbal, Gazzino's four fixed NE/NW/SE/SW thrusters "
+                          "(default: gimbal for a lyapunov or zone_nssk scenario, else arms)")
+    bnd.add_argument("--out", help="write /metrics, /rounds and the per-slot /slots to this HDF5 file")
+    bnd.set_defaults(func=_bound)
+
     sim = command("simulate", help="closed-loop station keeping (any controller); summary, metrics, status, HDF5")
     sim.add_argument("scenario", help="a scenario with a [controller] table, e.g. li2022-qffc, li2022-fompc, or a .toml path")
     sim.add_argument("--controller", help="override controller.kind (qffc, fompc, lyapunov, ...)")
@@ -323,6 +336,48 @@ def _check_outputs(args) -> None:
 # Ma & Kong 2023, Sec. 4.2 and the conclusions.
 MA2023 = {"thrust_efficiency": "0.95", "j1_track_max_deg": "0.017", "j2_track_max_deg": "0.006",
           "j3_track_max_deg": "0.011"}
+
+
+def _bound(args) -> int:
+    import numpy as np
+
+    from geojax import scenario, store
+    from geojax.bound import bound
+    from geojax.loop.metrics import STATUS_MEANINGS
+
+    sc = scenario.load(args.scenario, _overrides(args))
+    _check_outputs(args)
+    say = _say(args)
+    say(f"{sc.name}: the least Delta-V over {sc.days:g} days within +-{sc.config['station']['box_half_width_deg']:g} deg "
+        f"(slots of {args.slot_steps} steps); linearising about the uncontrolled run...", flush=True)
+    r = bound(sc, slot_steps=args.slot_steps, thrusters=args.thrusters, say=say)
+    gap = 100 * (r.resim["dv_per_year_mps"] - r.bound_per_year_mps) / r.bound_per_year_mps if r.lower_mps > 0 else 0.0
+    say(f"{sc.name} ({r.geometry} thrusters, {r.days:.2f} days, {r.slot_s:.0f} s slots):")
+    say(f"  bound                 {r.bound_per_year_mps:10.3f} m/s/yr  (lower bound over every direction the thrusters allow)")
+    say(f"  optimal plan          {r.plan_per_year_mps:10.3f} m/s/yr  (the linear program's, {len(r.rounds)} linearisations)")
+    say(f"  re-simulated plan     {r.resim['dv_per_year_mps']:10.3f} m/s/yr  ({gap:+.3f} % over the bound), "
+        f"status {r.resim_status} ({STATUS_MEANINGS[r.resim_status]})")
+    say(f"  box                   max |dlon| {r.resim['max_abs_dlon_deg']:.5f} deg, max |lat| "
+        f"{r.resim['max_abs_dlat_deg']:.5f} deg; linear model within {r.linear_error_deg:.2e} deg of the flight")
+    _detail(args)(f"  devices {store.device_description()}; {r.wall_s:.1f} s in all")
+    if args.out:
+        metrics = {"bound_per_year_mps": r.bound_per_year_mps, "plan_per_year_mps": r.plan_per_year_mps,
+                   "resim_dv_per_year_mps": r.resim["dv_per_year_mps"], "gap_percent": gap,
+                   "resim_max_abs_dlon_deg": r.resim["max_abs_dlon_deg"],
+                   "resim_max_abs_dlat_deg": r.resim["max_abs_dlat_deg"], "status": r.resim_status,
+                   "linear_error_deg": r.linear_error_deg}
+        rounds = {k: np.array([row[k] for row in r.rounds]) for k in r.rounds[0]}
+        slots = {"t_s": r.t_s, "dv_r_mps": r.u_rsw_mps[:, 0], "dv_s_mps": r.u_rsw_mps[:, 1],
+                 "dv_w_mps": r.u_rsw_mps[:, 2], "dv_thruster_mps": r.thruster_mps,
+                 "dlon_deg": r.lon_deg, "lat_deg": r.lat_deg}
+        path = store.write_h5(args.out, {"metrics": {k: np.asarray(v) for k, v in metrics.items()}, "rounds": rounds,
+                                         "slots": slots}, scenario.to_toml(sc.config), r.wall_s,
+                              attrs={"kind": "bound", "scenario": sc.name, "geometry": r.geometry,
+                                     "epoch_tt_s": sc.epoch_tt_s, "slot_s": r.slot_s},
+                              dims={"rounds": ("round",), "slots": ("slot",), "slots/dv_thruster_mps": ("slot", "thruster"),
+                                    "slots/dlon_deg": ("slot", "step"), "slots/lat_deg": ("slot", "step")})
+        print(f"wrote {path}")
+    return 0
 
 
 def _transfer(args) -> int:

@@ -36,7 +36,7 @@ class Thrust(NamedTuple):
     delivers exactly F/m times the firing time (overlap weighting).
     """
 
-    direction_rsw: jnp.ndarray  # [3] unit vector along (R, S, W)
+    direction_rsw: jnp.ndarray  # [3] along (R, S, W): a unit vector, or the mean of time-shared unit directions (norm < 1)
     thrust_n: jnp.ndarray  # []
     isp_s: jnp.ndarray  # []
     on_fraction: jnp.ndarray  # [] in [0, 1]

@@ -1,0 +1,181 @@
+"""``bound``: the least Delta-V that holds a scenario's box with its thrusters, and its re-simulation.
+
+1. The uncontrolled reference run (the closed loop with the null controller) is the first nominal; the
+   linear model about it (``bound.linear``) and the linear program (``bound.program``) give the least-fuel
+   slot Delta-Vs, a lower bound over the continuous direction sets, and their gap.
+2. Sequential linearisation: the plan is flown through the same RK4 steps and forces, the model is rebuilt
+   about that trajectory, and the program is solved again, until the flown plan holds the box at every step
+   start (usually one or two rounds: the reference drifts 4 deg in a year, the controlled orbit does not).
+3. The final plan is re-simulated in the closed loop (``geojax.simulate`` with the ``replay`` controller):
+   true mass and mass flow, the thrust on/off at the scenario's F with the slot's duty, the box checked at
+   every step by the loop's own status.  The gap between the program's Delta-V and the re-simulation's is
+   reported.
+
+The bound is the least fuel of any thrust history that is constant in RSW over each slot (``slot_steps``
+integration steps; 1 h by default) with the same thrusters (directions, F, one at a time, not in shadow where
+the geometry says so), the same box at every step start, from the same initial state, with no terminal
+condition.  ``lower_mps`` is rigorous for that problem's linear model (weak duality, ``bound.program``); how
+it moves with the slot length is measured (``studies/bounds``), not assumed.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Callable, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from geojax.bound import program
+from geojax.bound.directions import Geometry, geometry_of
+from geojax.bound.linear import linearize
+from geojax.control.base import Controller, no_plan, stateless_init
+from geojax.control.burns import sunlit_fraction
+from geojax.loop.metrics import SECONDS_PER_YEAR
+from geojax.loop.setup import prepare, unstack
+from geojax.physics.constants import G0_MPS2
+from geojax.physics.dynamics import Thrust
+from geojax.scenario import Scenario, from_dict
+
+# The program holds the box shrunk by this fraction, so that the flown plan (nonlinear) holds the full box.
+BOX_MARGIN = 1e-3
+# Cost per m/s of change from the nominal plan in the rounds after the first (per m/s of fuel: 1).
+PROX = 1e-3
+
+
+class BoundResult(NamedTuple):
+    scenario: str
+    geometry: str
+    days: float  # horizon, solar days (whole sidereal-day cycles)
+    slot_s: float
+    fuel_mps: float  # the program's optimum over the horizon (an achievable plan in the linear model)
+    lower_mps: float  # rigorous lower bound over the continuous direction sets (linear model)
+    bound_per_year_mps: float  # lower_mps per year
+    plan_per_year_mps: float  # fuel_mps per year
+    resim: dict  # the closed loop's metrics of the re-simulated plan (dv_per_year_mps, max_abs_dlon_deg, ...)
+    resim_status: int
+    linear_error_deg: float  # largest |nonlinear - linear| of (lon, lat) over the last round's steps
+    rounds: list  # per linearisation: dict(fuel_mps, max_abs_box_deg, prox, columns, solve_s, linear_error_deg)
+    t_s: np.ndarray  # [S] slot mid-times since the start
+    u_rsw_mps: np.ndarray  # [S, 3] Delta-V per slot
+    thruster_mps: np.ndarray  # [S, n_thrusters] Delta-V per slot per thruster
+    lon_deg: np.ndarray  # [S, T] longitude less the station's at every step start (flown plan)
+    lat_deg: np.ndarray  # [S, T] latitude
+    wall_s: float
+
+
+def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, iterations: int = 4,
+          rounds: int = 8, rtol: float = 1e-3, say: Callable = lambda *a, **k: None) -> BoundResult:
+    """The fuel bound of scenario ``sc`` over its duration (see the module docstring).
+
+    ``slot_steps`` integration steps per control slot (must divide the steps of a sidereal day);
+    ``thrusters`` the geometry (``arms``, ``gimbal``, ``fixed4``; default from the scenario's controller);
+    ``iterations`` linearisation rounds at most; ``rounds`` column-generation rounds per program;
+    ``rtol`` the relative gap between the plan and the lower bound at which column generation stops.
+    Raises ``ValueError`` (``program.Infeasible``) when the box cannot be held.
+    """
+    start = time.perf_counter()
+    geometry = geometry_of(sc.config, thrusters)
+    uncontrolled = _uncontrolled(sc)
+    batch = prepare([uncontrolled])
+    params = unstack(batch.params, 0)
+    env = batch.shared.env
+    n_cycles, n_steps = env.earth_angle_rad.shape[:2]
+    if slot_steps < 1 or n_steps % slot_steps:
+        raise ValueError(f"--slot-steps: must divide the {n_steps} integration steps of a sidereal day, got {slot_steps}")
+    n_slots = n_cycles * n_steps // slot_steps
+    slot_s = slot_steps * batch.step_s
+    env_slots = jax.tree_util.tree_map(lambda x: x.reshape((n_slots, slot_steps) + x.shape[2:]), env)
+    mass_kg = float(params.initial.mass_kg)
+    thrust_n = float(params.thrusters["thrust_n"])
+    box = float(params.station["box_half_width_rad"])
+    cap = np.full(n_slots, thrust_n / mass_kg * slot_s)
+    if geometry.dark_off:
+        steps = jax.tree_util.tree_map(lambda x: x.reshape((n_cycles * n_steps,) + x.shape[2:]), env)
+        lit = np.asarray(sunlit_fraction(steps, params.station["lon_rad"], params.forces))
+        cap = cap * lit.reshape(n_slots, slot_steps).mean(axis=1)
+    exhaust_mps = float(params.thrusters["isp_s"]) * G0_MPS2
+
+    def model_of(u, fuel):
+        spent = np.concatenate([[0.0], np.cumsum(fuel)[:-1]])  # Delta-V before each slot (rocket equation)
+        return jax.tree_util.tree_map(np.asarray, linearize(
+            params.initial.orbit, jnp.asarray(u), env_slots, params.forces, jnp.asarray(mass_kg * np.exp(-spent / exhaust_mps)),
+            params.station["lon_rad"], slot_s=slot_s, step_s=batch.step_s, dynamics=batch.dynamics))
+
+    u = np.zeros((n_slots, 3))
+    model = model_of(u, np.zeros(n_slots))
+    history, solution, prox = [], None, 0.0
+    for i in range(iterations):
+        solution = program.solve(model, u, cap, box * (1 - BOX_MARGIN), geometry, float(model.x[0, 0]),
+                                 rounds=rounds, rtol=rtol, prox=prox)
+        predicted = _linear_outputs(model, solution, u)
+        fuel = sum(w.sum(axis=1) for w in solution.w_mps)
+        u, model = solution.u_mps, model_of(solution.u_mps, fuel)
+        worst = float(np.degrees(np.max(np.abs(model.y))))
+        history.append({"fuel_mps": solution.fuel_mps, "max_abs_box_deg": worst, "prox": prox,
+                        "columns": int(sum(len(g) for g in solution.generators)), "solve_s": solution.solve_s,
+                        "linear_error_deg": float(np.degrees(np.max(np.abs(predicted - model.y))))})
+        say(f"  linearisation {i + 1}: plan {solution.fuel_mps:.4f} m/s; flown, max |box| {worst:.5f} deg of "
+            f"{np.degrees(box):g}, {history[-1]['linear_error_deg']:.1e} deg from the linear model "
+            f"({solution.solve_s:.1f} s)", flush=True)
+        if worst <= np.degrees(box):
+            break
+        prox = PROX  # sequential linearisation: from now on, the plan of least fuel nearest the nominal
+    # The bound: the unrestricted program about the flown trajectory, over the full box.
+    lower = program.solve(model, u, cap, box, geometry, float(model.x[0, 0]), rounds=rounds, rtol=rtol)
+    say(f"  bound about the flown trajectory: {lower.lower_mps:.4f} m/s ({lower.rounds} pricing rounds, "
+        f"{lower.solve_s:.1f} s)", flush=True)
+    result = _resimulate(uncontrolled, u, fuel, slot_steps, slot_s, geometry)
+    per_year = SECONDS_PER_YEAR / (n_cycles * n_steps * batch.step_s)
+    per_thruster = np.stack([w.sum(axis=1) for w in solution.w_mps], axis=1)
+    return BoundResult(
+        sc.name, geometry.name, n_cycles * n_steps * batch.step_s / 86400.0, slot_s, solution.fuel_mps,
+        lower.lower_mps, lower.lower_mps * per_year, solution.fuel_mps * per_year,
+        {k: float(v) for k, v in result.metrics.items()}, int(result.status), history[-1]["linear_error_deg"],
+        history, (np.arange(n_slots) + 0.5) * slot_s, u, per_thruster, np.degrees(model.y[..., 0]),
+        np.degrees(model.y[..., 1]), time.perf_counter() - start)
+
+
+def _uncontrolled(sc: Scenario) -> Scenario:
+    config = {k: {f: x for f, x in v.items() if x is not None} if isinstance(v, dict) else v
+              for k, v in sc.config.items()}
+    config["controller"] = {"kind": "none"}
+    return from_dict(config)
+
+
+def _linear_outputs(model, solution, u_nominal):
+    """(lon, lat) at every step start [S, T, 2] that the linear model predicts for the program's solution."""
+    dx = np.concatenate([np.zeros((1, 6)), solution.dx[:-1]])  # state deviation at each slot's start
+    return (model.y + np.einsum("ktoj,kj->kto", model.c, dx)
+            + np.einsum("ktoj,kj->kto", model.e, solution.u_mps - u_nominal))
+
+
+def replay(u_rsw_mps, fuel_mps, slot_steps: int, slot_s: float, concurrent: int = 1) -> Controller:
+    """A controller that flies slot Delta-Vs: the resultant u [S, 3] (RSW, m/s) of burns whose magnitudes add
+    up to ``fuel_mps`` [S] (the thrusters time-share the slot along their own directions).
+
+    Each step fires at the scenario's thrust (times ``concurrent`` thrusters) with the duty that spends the
+    slot's fuel at the true mass; ``Thrust.direction_rsw`` is the resultant over the fuel (norm <= 1), so the
+    orbit feels the time-shared burns' mean acceleration and the delivered Delta-V and the mass flow count
+    every burn (firing d1 then d2 within a step differs from their mean acceleration at second order).
+    """
+    accel = jnp.asarray(np.asarray(u_rsw_mps) / slot_s)
+    spend = jnp.asarray(np.maximum(np.asarray(fuel_mps), np.linalg.norm(u_rsw_mps, axis=1)) / slot_s)
+
+    def thrust(params, plan, t, state, environment):
+        k = jnp.clip(jnp.round(t / environment.step_s).astype(int) // slot_steps, 0, accel.shape[0] - 1)
+        force_n = concurrent * params.thrusters["thrust_n"]
+        on = spend[k] > 0
+        direction = jnp.where(on, accel[k] / jnp.where(on, spend[k], 1.0), jnp.array([0.0, 1.0, 0.0]))
+        return Thrust(direction, force_n, params.thrusters["isp_s"], jnp.clip(spend[k] * state.mass_kg / force_n, 0, 1))
+
+    return Controller(stateless_init, no_plan, thrust)
+
+
+def _resimulate(uncontrolled: Scenario, u, fuel, slot_steps, slot_s, geometry: Geometry):
+    from geojax.loop.rollout import simulate
+
+    concurrent = 1 if geometry.one_at_a_time else len(geometry.generators)
+    return simulate(uncontrolled, 0, controller=replay(u, fuel, slot_steps, slot_s, concurrent))
+
