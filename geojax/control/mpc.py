@@ -1,0 +1,320 @@
+"""Minimum-fuel receding-horizon controller (issue 14, item 3): one linear program per cycle, first cycle flown.
+
+Each cycle the controller solves Gazzino 2016's minimum-fuel problem (Problem 3: L1 fuel, linear dynamics,
+box constraints) over the next N cycles on Li 2022's predictor model, and flies the first cycle's burns:
+
+* State: the mean elements x_j = (lambda, lambda_dot, e_x, e_y, i_x, i_y) (MEE f, g, h, k) at the cycle
+  boundaries j = 0..N, from the estimate x_0 (``control.predictor``).  x_{j+1} = x_j + the natural drift of
+  cycle j (the shared uncontrolled reference, Li 2022 eqs. (25)-(27), as the QFFC and the FOMPC predict)
+  + B(l_1) v_1j + B(l_2) v_2j, with B of ``control.effects`` (Li 2022 eq. (22), re-derived: its longitude row
+  already carries the drift a burn leaves until the end of its cycle), and the longitude advancing by
+  the drift times the cycle length in every later cycle.  The state is eliminated (condensed): every row is
+  a linear function of the burns.
+* Burns: two per cycle as in the QFFC, thruster 1 (pushing south) at l_1 and thruster 2 (north) at
+  l_2 = l_1 + pi.  l_2 is the QFFC's rule (eq. (31)) applied to the inclination deviation the natural drift
+  leaves at the end of the horizon, so the north-south burns sit on the line of nodes of the correction the
+  horizon needs; every cycle of the horizon uses the same l_1 (the orbit turns 2 pi per cycle).  A burn's
+  Delta-V is sum_g w_g d_g, w >= 0, over a yaw x pitch grid of unit directions d_g spanning the arm's
+  rectangle (eq. (1), ``yaw_points`` x ``pitch_points``, from the thrusters' limits as traced leaves, so a
+  sweep over beta_max compiles once); the fuel is sum w (L1; a combination of generators is flown as one
+  burn along its resultant, which costs |sum w d| <= sum w).  Each burn's sum w is at most F / m times
+  ``max_burn_h``.
+* Constraints at every boundary j = 1..N (soft, below): the mean longitude within +-L of the station, L the
+  box less the daily libration 2 (|e_T| + e_max) and ``lon_margin_deg``; e within e_max and i within
+  Delta i_max of their targets, each circle as an inscribed regular polygon of ``facets`` sides (so the
+  polygon is inside the circle); and at j = N the longitude ``terminal_cycles`` cycles later at the last
+  drift, so that the horizon does not end on a drift that leaves the box just after it.
+* Soft constraints: every state row carries an exact L1 penalty of ``penalty_mps`` (m/s of Delta-V per
+  width of the row's half-interval), so the program is always feasible inside ``jit``; a cycle whose plan
+  violates a row by more than 1 % of its half-width records ``solved`` = False (status 1).
+* Solver: ``control.lp`` (ADMM in the OSQP form with OSQP's polishing, certified by the duality gap),
+  with ``iterations`` at most and ``tolerance``; warm-started from the last plan shifted by one cycle.  The
+  KKT matrix is never formed: the condensed dynamics make A'RA a diagonal plus a rank-8N term (6 per
+  boundary, 2 per cycle of burn capacities), solved by the Woodbury identity with an 8N x 8N Cholesky
+  (``CondensedOperator``).
+* The horizon N is padded to a static N_max (the largest of a batch, as the FOMPC): cycles beyond N have
+  no capacity and no rows, so a sweep over N compiles once.
+
+The first cycle's two burns are flown by ``control.burns`` exactly as the QFFC's (thrust windows, shadow,
+attitude errors, burn records).  A burn whose resultant direction leaves the arm's rectangle (a
+combination of generators at the pitch limit has a larger pitch than either) is flown at the nearest
+(yaw, pitch) inside it with the planned magnitude.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from geojax.control import burns as burns_mod
+from geojax.control import lp
+from geojax.control.base import Controller
+from geojax.control.effects import cycle_coast_s, effect_matrix
+from geojax.control.predictor import predict_next
+from geojax.control.qffc import BurnPair
+from geojax.params import LOG, NUMBER, Field, degrees, station_target
+from geojax.physics.elements import wrap_angle
+from geojax.physics.propulsion import alpha_beta_bounds, arm_limits, delta_v_direction_rsw
+
+HORIZON_LIMIT = 30  # cycles: the largest N_max accepted
+SOLVED_VIOLATION = 0.01  # a plan violating a row by more than this fraction of its half-width is "not solved"
+
+FIELDS = {
+    # Horizon N (cycles) and the limits of the mean elements about their targets.
+    "horizon": Field(int, 10, lower=1, upper=HORIZON_LIMIT + 1, lower_inclusive=True, si="horizon"),
+    "di_max": Field(NUMBER, 3e-4, lower=0.0, si="di_max", transform=LOG),  # MEE (h, k), as the FOMPC's
+    "e_max": Field(NUMBER, 2.5e-4, lower=0.0, si="e_max", transform=LOG),  # MEE (f, g)
+    "lon_margin_deg": Field(NUMBER, 0.005, lower=0.0, lower_inclusive=True, si="lon_margin_rad", to_si=degrees),
+    "terminal_cycles": Field(NUMBER, 3.0, lower=0.0, lower_inclusive=True, upper=1e3, si="terminal_cycles"),
+    # Capacity of one burn (hours at full thrust) and the soft rows' penalty (m/s per half-width violated).
+    "max_burn_h": Field(NUMBER, 2.0, lower=0.0, upper=6.0 + 1e-9, si="max_burn_s", to_si=3600.0),
+    "penalty_mps": Field(NUMBER, 100.0, lower=0.0, si="penalty_mps", transform=LOG),
+    # The solver: starting ADMM step, certificate tolerance, iterations at most (static: the loop's length).
+    "rho": Field(NUMBER, 0.1, lower=0.0, upper=1e6, si="rho"),
+    "tolerance": Field(NUMBER, 1e-6, lower=0.0, upper=1.0, si="tolerance"),
+    "iterations": Field(int, 400, lower=1, upper=100001, lower_inclusive=True, static=True),
+    # The burn directions (yaw x pitch grid per thruster) and the polygons' sides (static: shapes).
+    "yaw_points": Field(int, 4, lower=1, upper=33, lower_inclusive=True, static=True),
+    "pitch_points": Field(int, 3, lower=1, upper=33, lower_inclusive=True, static=True),
+    "facets": Field(int, 12, lower=4, upper=129, lower_inclusive=True, static=True),
+}
+
+
+class Shape(NamedTuple):
+    """What sets the compiled plan's shapes (static: hashable Python numbers)."""
+
+    n_max: int = 10  # horizon padding (cycles)
+    yaw_points: int = 4
+    pitch_points: int = 3
+    facets: int = 12  # sides of the e and i polygons (even)
+    iterations: int = 400
+
+    @property
+    def generators(self) -> int:
+        return self.yaw_points * self.pitch_points
+
+    @property
+    def rows_per_boundary(self) -> int:
+        return 2 + self.facets  # longitude, terminal longitude, facets / 2 two-sided rows each for e and i
+
+
+def generators(limits, shape: Shape):
+    """[2, G, 3] unit Delta-V directions (RSW): the yaw x pitch grid of each thruster's rectangle (eq. (1))."""
+    (a_lo, a_hi), (b_lo, b_hi) = alpha_beta_bounds(limits)
+    grid = lambda lo, hi, k: lo[:, None] + (hi - lo)[:, None] * jnp.linspace(0.0, 1.0, k)  # noqa: E731
+    alpha = grid(a_lo, a_hi, shape.yaw_points)[:, :, None]
+    beta = grid(b_lo, b_hi, shape.pitch_points)[:, None, :]
+    alpha, beta = jnp.broadcast_arrays(alpha, beta)
+    return delta_v_direction_rsw(alpha.reshape(2, -1), beta.reshape(2, -1))
+
+
+def natural_deviations(x0, target, ref_mean, cycle_s):
+    """[n + 1, 6] the mean elements' deviation from ``target`` at boundaries 0..n without burns (longitude
+    wrapped), from the estimate ``x0`` [6] and the reference's means ``ref_mean`` [n + 1, 7]."""
+
+    def one(x, refs):
+        x_next = predict_next(x, refs[0], refs[1], cycle_s)
+        return x_next, x_next
+
+    _, path = jax.lax.scan(one, x0, (ref_mean[:-1], ref_mean[1:]))
+    path = jnp.concatenate([x0[None], path]) - target
+    return path.at[:, 0].set(wrap_angle(path[:, 0]))
+
+
+class Model(NamedTuple):
+    """One plan's linear program (leaves of one sample; ``Shape`` gives the sizes)."""
+
+    effect: jnp.ndarray  # [6, 2G] change of the mean elements per m/s along each direction of burn 1, then 2
+    directions: jnp.ndarray  # [2, G, 3] the directions (RSW)
+    l_rad: jnp.ndarray  # [2] right ascensions of the burns
+    rows: jnp.ndarray  # [n_max, R, 6] state rows of boundaries 1..n_max, scaled to half-width 1
+    lower: jnp.ndarray  # [n_max, R] bounds of rows @ (state change by the burns)
+    upper: jnp.ndarray  # [n_max, R]
+    cap: jnp.ndarray  # [n_max, 2] capacity of each burn, m/s (0 beyond the horizon)
+    cap_scale: jnp.ndarray  # [] m/s, the scale of the capacity rows
+    mask: jnp.ndarray  # [n_max] 1 for the cycles of the horizon, 0 beyond
+    cycle_s: jnp.ndarray  # []
+
+
+def build(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves: dict, station: dict,
+          shape: Shape) -> Model:
+    """The program of the cycle starting at the estimate ``x0`` [6] (``ref_mean`` [n_max + 1, 7], the
+    reference's means from this boundary on; ``accel_mps2`` thrust over mass; ``leaves`` the controller's
+    SI leaves; ``station`` the station's)."""
+    n_max, k = shape.n_max, shape.facets // 2
+    horizon = jnp.clip(leaves["horizon"], 1, n_max)
+    free = natural_deviations(x0, target, ref_mean, cycle_s)
+    # Eq. (31) on the deviation left at the end of the horizon: thruster 2 at l_2, thruster 1 opposite.
+    di_end = -free[horizon, 4:]
+    l2 = jnp.arctan2(di_end[1], di_end[0])
+    l_rad = jnp.stack([l2 - jnp.pi, l2])
+    directions = generators(limits, shape)
+    b = effect_matrix(l_rad, cycle_coast_s(l_rad, l_start_rad))  # [2, 6, 3]
+    effect = jnp.einsum("bsv,bgv->sbg", b, directions).reshape(6, -1)
+
+    # Rows per boundary: longitude; terminal longitude (lon + m T drift, at j = N only); e and i facets.
+    angles = 2 * jnp.pi * jnp.arange(k) / shape.facets
+    facet = jnp.stack([jnp.cos(angles), jnp.sin(angles)], -1)  # [k, 2] normals of one side of each pair
+    e_half = leaves["e_max"] * math.cos(math.pi / shape.facets)  # inscribed polygon
+    i_half = leaves["di_max"] * math.cos(math.pi / shape.facets)
+    e_target = jnp.hypot(target[2], target[3])
+    lon_half = station["box_half_width_rad"] - 2 * (e_target + leaves["e_max"]) - leaves["lon_margin_rad"]
+    zero = jnp.zeros((k, 2))
+    rows = jnp.concatenate([
+        jnp.array([[1.0, 0, 0, 0, 0, 0]]) / lon_half,
+        jnp.stack([1.0, leaves["terminal_cycles"] * cycle_s, 0, 0, 0, 0])[None] / lon_half,
+        jnp.concatenate([jnp.zeros((k, 2)), facet, zero], 1) / e_half,
+        jnp.concatenate([jnp.zeros((k, 2)), zero, facet], 1) / i_half,
+    ])  # [R, 6]
+    rows = jnp.broadcast_to(rows, (n_max, *rows.shape))
+    boundary = jnp.arange(1, n_max + 1)[:, None]
+    row_index = jnp.arange(rows.shape[1])[None, :]
+    active = (boundary <= horizon) & ((row_index != 1) | (boundary == horizon))
+    value = jnp.einsum("jrs,js->jr", rows, free[1:])
+    lower = jnp.where(active, -1.0 - value, -jnp.inf)
+    upper = jnp.where(active, 1.0 - value, jnp.inf)
+    cap_scale = accel_mps2 * leaves["max_burn_s"]
+    mask = (jnp.arange(n_max) < horizon).astype(float)
+    cap = cap_scale * jnp.ones((n_max, 2))
+    return Model(effect, directions, l_rad, rows, lower, upper, cap, cap_scale, mask, jnp.asarray(cycle_s))
+
+
+def lag_matrices(n_max: int):
+    """(L1, L2) [n_max, n_max]: boundary j + 1 sees cycle i's burns once (i <= j) and its drift for j - i
+    whole cycles after (the longitude's lag), so dx_{j+1} = sum_i L1[j, i] e_i + T L2[j, i] e_i,drift."""
+    j, i = np.meshgrid(np.arange(n_max), np.arange(n_max), indexing="ij")
+    return (i <= j).astype(float), np.maximum(j - i, 0).astype(float)
+
+
+def condensed(model: Model, n_max: int):
+    """G [n_max, 6, n_max, 2G]: the state change at boundary j + 1 per m/s along each direction of cycle i."""
+    l1, l2 = lag_matrices(n_max)
+    drift_to_lon = jnp.zeros((6, 6)).at[0, 1].set(model.cycle_s)
+    per_lag = model.effect[None, None] * l1[:, :, None, None] + l2[:, :, None, None] * (drift_to_lon @ model.effect)
+    return jnp.transpose(per_lag * model.mask[None, :, None, None], (0, 2, 1, 3))
+
+
+def operator(model: Model, shape: Shape) -> lp.Operator:
+    """The program's rows as an ``lp.Operator`` on w [n_max * 2G] (m/s, ordered cycle, burn, direction).
+
+    Rows: w >= 0 (n); each burn's sum w / cap_scale (2 n_max); the state rows (n_max R).  A w is never
+    multiplied by a formed matrix: w -> per-cycle effects (E w_i) -> boundaries (the dynamics) -> rows.
+    The normal matrix diag(sigma) + A' diag(rho) A = Theta + G'QG, with Theta block-diagonal per cycle
+    (the bounds' and the capacities' rows) and Q per boundary (rows' diag(rho) rows, 6 x 6), is the Hessian
+    of a linear-quadratic problem over the horizon (x_{j+1} = Phi x_j + E w_j, x_0 = 0): ``riccati`` solves it
+    with one 2G x 2G Cholesky per cycle, stably whatever the spread of the interior-point weights (a
+    Woodbury solve through an 8N x 8N matrix was measured to lose all accuracy once they span 1e8).
+    """
+    n_max, g = shape.n_max, shape.generators
+    n, r = n_max * 2 * g, shape.rows_per_boundary
+    phi = transition(model.cycle_s)
+    effect = model.mask[:, None, None] * model.effect  # [n_max, 6, 2G]: no burns beyond the horizon
+    abs_rows = jnp.abs(jnp.einsum("jrs,jsn->jrn", model.rows, condensed(model, n_max).reshape(n_max, 6, n)))
+    abs_rows = abs_rows.reshape(-1, n)
+
+    def state_change(w):  # [n] -> [n_max, 6] at boundaries 1..n_max
+        def one(x, e_w):
+            x = phi @ x + e_w
+            return x, x
+
+        return jax.lax.scan(one, jnp.zeros(6), jnp.einsum("jsv,jv->js", effect, w.reshape(n_max, 2 * g)))[1]
+
+    def state_change_t(v):  # [n_max, 6] -> [n]: the adjoint, a backward pass
+        def one(lam, v_j):
+            lam = phi.T @ lam + v_j
+            return lam, lam
+
+        lam = jax.lax.scan(one, jnp.zeros(6), v, reverse=True)[1]
+        return jnp.einsum("jsv,js->jv", effect, lam).reshape(-1)
+
+    def caps(w):  # [n] -> [2 n_max]
+        return jnp.sum(w.reshape(2 * n_max, g), -1) / model.cap_scale
+
+    def caps_t(v):  # [2 n_max] -> [n]
+        return jnp.repeat(v / model.cap_scale, g)
+
+    def split(v):
+        return v[:n], v[n:n + 2 * n_max], v[n + 2 * n_max:].reshape(n_max, r)
+
+    def matvec(w):
+        rows = jnp.einsum("jrs,js->jr", model.rows, state_change(w))
+        return jnp.concatenate([w, caps(w), rows.reshape(-1)])
+
+    def rmatvec(y):
+        y_bound, y_cap, y_rows = split(y)
+        return y_bound + caps_t(y_cap) + state_change_t(jnp.einsum("jrs,jr->js", model.rows, y_rows))
+
+    def factor(rho, sigma):
+        rho_bound, rho_cap, rho_rows = split(rho)
+        q = jnp.einsum("jrs,jr,jrt->jst", model.rows, rho_rows, model.rows)
+        ones = jnp.kron(jnp.eye(2), jnp.ones((g, g)))  # [2G, 2G] the capacity rows' Gram, per unit weight
+        theta = jax.vmap(jnp.diag)((sigma + rho_bound).reshape(n_max, 2 * g)) \
+            + ones * jnp.repeat(rho_cap.reshape(n_max, 2), g, -1)[:, :, None] / model.cap_scale**2
+        return riccati(phi, effect, theta, q, n_max, g)
+
+    def norms(d, e):
+        d_bound, d_cap, d_rows = split(d)
+        caps_abs = (d_cap[:, None] * e.reshape(2 * n_max, g)) / model.cap_scale
+        rows_abs = d_rows.reshape(-1, 1) * abs_rows * e
+        row_norms = jnp.concatenate([d_bound * e, jnp.max(caps_abs, 1), jnp.max(rows_abs, 1)])
+        col_norms = jnp.maximum(jnp.maximum(d_bound * e, caps_abs.reshape(-1)), jnp.max(rows_abs, 0))
+        return row_norms, col_norms
+
+    return lp.Operator(matvec, rmatvec, factor, norms)
+
+
+def transition(cycle_s):
+    """Phi [6, 6]: the mean elements over one cycle without burns (the longitude advances by drift x T)."""
+    return jnp.eye(6).at[0, 1].set(cycle_s)
+
+
+def riccati(phi, effect, theta, q, n_max: int, g: int):
+    """The solve of (Theta + G'QG) w = b: the minimiser of 1/2 w'Theta w + 1/2 sum_j x_j'Q_j x_j - b'w over
+    x_{j+1} = Phi x_j + E_j w_j, x_0 = 0 (``effect`` [n_max, 6, 2G] E_j, ``theta`` [n_max, 2G, 2G], ``q``
+    [n_max, 6, 6] at boundaries 1..n_max).  Backward: with the cost-to-go 1/2 x'Px + p'x after cycle j,
+    H_j = Theta_j + E'PE, and P <- Q + Phi'P Phi - M'H^-1 M, M = E'P Phi (Rao, Wright & Rawlings 1998)."""
+
+    def backward(p_next, xs):
+        e, th, q_here = xs
+        h = th + e.T @ p_next @ e
+        chol = jnp.linalg.cholesky(h)
+        m = e.T @ p_next @ phi  # [2G, 6]
+        gain = jax.scipy.linalg.cho_solve((chol, True), m)
+        p_here = q_here + phi.T @ p_next @ phi - m.T @ gain
+        return p_here, (chol, gain)
+
+    q_before = jnp.concatenate([jnp.zeros((1, 6, 6)), q[:-1]])  # the state cost at each cycle's start
+    _, (chol, gain) = jax.lax.scan(backward, q[-1], (effect, theta, q_before), reverse=True)
+
+    def solve(b):
+        def costate(p_next, xs):  # p of the cost-to-go, backward: p_j = Phi'p_{j+1} - gain_j' g_j
+            e, ch, k, b_j = xs
+            g_j = e.T @ p_next - b_j
+            return phi.T @ p_next - k.T @ g_j, jax.scipy.linalg.cho_solve((ch, True), g_j)
+
+        _, h_inv_g = jax.lax.scan(costate, jnp.zeros(6), (effect, chol, gain, b.reshape(n_max, 2 * g)), reverse=True)
+
+        def forward(x, xs):
+            e, k, hg = xs
+            u = -k @ x - hg
+            return phi @ x + e @ u, u
+
+        return jax.lax.scan(forward, jnp.zeros(6), (effect, gain, h_inv_g))[1].reshape(-1)
+
+    return solve
+
+
+def program(model: Model, leaves: dict, shape: Shape):
+    """(c [n], lower [m], upper [m], penalty [m]) of the program on ``operator(model, shape)``'s rows."""
+    n = shape.n_max * 2 * shape.generators
+    cap_rows = model.cap.reshape(-1) / model.cap_scale
+    lower = jnp.concatenate([jnp.zeros(n), jnp.full(cap_rows.shape, -jnp.inf), model.lower.reshape(-1)])
+    upper = jnp.concatenate([jnp.full(n, jnp.inf), cap_rows, model.upper.reshape(-1)])
+    penalty = jnp.concatenate([jnp.full(n + cap_rows.shape[0], jnp.inf),
+                               jnp.full(model.lower.size, 1.0) * leaves["penalty_mps"]])
+    return jnp.ones(n), lower, upper, penalty
