@@ -1,6 +1,6 @@
 """Regenerate a paper's tables and figures with one command.
 
-    python studies/reproduce.py li2022 [katz2025 ye2022 ma2023 ablation ...]   # or: all
+    python studies/reproduce.py li2022 [katz2025 ye2022 ma2023 bounds ablation ...]   # or: all
     python studies/reproduce.py li2022 --only fig09 fig13         # scripts whose name contains a word
     python studies/reproduce.py all --list                         # the commands, without running them
 
@@ -32,6 +32,7 @@ STUDIES = {
     "ablation": [("ablation/fompc_annealing.py", []), ("ablation/li_predictor_error.py", []),
                  ("ablation/fig13_budget.py", []), ("ablation/katz_longitude.py", [])],
     "ma2023": [("ma2023/transfer.py", [])],
+    "bounds": [("bounds/table.py", [])],
 }
 
 

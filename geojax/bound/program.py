@@ -176,7 +176,8 @@ def _clarabel(cost, a_eq, b_eq, a_ub, b_ub, nonneg) -> dict:
     solution = clarabel.DefaultSolver(sp.csc_matrix((len(cost), len(cost))), cost, a, b, cones, settings).solve()
     status = str(solution.status)
     if "Infeasible" in status and "Dual" not in status:
-        raise Infeasible("the box cannot be held with the thrust available: the linear program is infeasible")
+        raise Infeasible("the box cannot be held with the thrusters available (the linear program is infeasible): "
+                         "a larger station.box_half_width_deg, more thrust or a shorter horizon")
     if status not in ("Solved", "AlmostSolved"):
         raise RuntimeError(f"bound: the solver stopped without an optimum ({status})")
     z = -np.asarray(solution.z)

@@ -105,6 +105,10 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, it
 
     u = np.zeros((n_slots, 3))
     model = model_of(u, np.zeros(n_slots))
+    start_lon, start_lat = np.degrees(np.abs(model.y[0, 0]))
+    if max(start_lon, start_lat) > np.degrees(box):
+        raise program.Infeasible(f"the initial state is outside the box: |dlon| {start_lon:.4f} deg, |lat| "
+                                 f"{start_lat:.4f} deg, box +-{np.degrees(box):g} deg (station.box_half_width_deg)")
     history, solution, prox = [], None, 0.0
     for i in range(iterations):
         solution = program.solve(model, u, cap, box * (1 - BOX_MARGIN), geometry, float(model.x[0, 0]),
