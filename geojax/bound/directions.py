@@ -34,6 +34,7 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 PRICING_GRID_DEG = 0.25
+PRICING_CHUNK = 256  # pricing vectors per matrix product (memory: 256 x grid points)
 
 
 class Geometry(NamedTuple):
@@ -77,9 +78,10 @@ def _grid_oracle(a_lo, a_hi, b_lo, b_hi) -> Callable:
     radius = 0.5 * math.hypot((a_hi - a_lo) / (n_a - 1), (b_hi - b_lo) / (n_b - 1))
 
     def best(g):
-        values = g @ grid.T  # [S, M]
-        index = np.argmax(values, axis=1)
-        top = values[np.arange(len(g)), index]
+        index = np.empty(len(g), int)
+        for lo in range(0, len(g), PRICING_CHUNK):  # [chunk, M] at a time: a year of slots x 100 k directions
+            index[lo:lo + PRICING_CHUNK] = np.argmax(g[lo:lo + PRICING_CHUNK] @ grid.T, axis=1)
+        top = np.sum(g * grid[index], axis=1)
         return grid[index], top + np.linalg.norm(g, axis=1) * radius**2
 
     return best
