@@ -7,7 +7,7 @@ batch, so a factory can size what is static, e.g. the FOMPC's padded horizon)
 and optionally ``validate(config)`` (checks across tables at load).
 """
 
-from geojax.control import fompc, lyapunov, none, qffc, zone_nssk
+from geojax.control import fompc, lyapunov, mpc, none, qffc, zone_nssk
 from geojax.control.base import Controller
 
 REGISTRY = {
@@ -16,6 +16,7 @@ REGISTRY = {
     "fompc": fompc,
     "lyapunov": lyapunov,
     "zone_nssk": zone_nssk,
+    "mpc": mpc,
 }
 
 __all__ = ["Controller", "REGISTRY"]

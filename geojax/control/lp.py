@@ -123,7 +123,7 @@ def solve(c, operator: Operator, lower, upper, penalty, *, tolerance, settings: 
         return (jnp.sum(jnp.where(present, s * z, 0.0)) + jnp.sum(jnp.where(soft, v * zeta, 0.0))) / count
 
     def iteration(carry):
-        state, k, _ = carry
+        state, k = carry[:2]
         x, s, z, v, zeta = state
         _, r_primal, r_dual, r_penalty = residual(state)
         mu = mu_of(s, z, v, zeta)
@@ -155,11 +155,16 @@ def solve(c, operator: Operator, lower, upper, penalty, *, tolerance, settings: 
         target = (mu_affine / mu) ** 3 * mu
         dx, ds, dz, dv, dzeta = direction(s * z + ds_a * dz_a - target, v * zeta + dv_a * dzeta_a - target)
         a = settings.step_fraction * longest(ds, dz, dv, dzeta)
-        state = (x + a * dx, s + a * ds, z + a * dz, v + a * dv, zeta + a * dzeta)
-        return state, k + 1, certify(c, op, lower, upper, penalty, state[0], multipliers(state[2]), tolerance)
+        new = (x + a * dx, s + a * ds, z + a * dz, v + a * dv, zeta + a * dzeta)
+        # Past the accuracy the weights' spread allows, a factorisation can fail (NaN): keep the last
+        # iterate and stop there.
+        finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(part)) for part in new]))
+        state = jax.tree_util.tree_map(lambda a_new, a_old: jnp.where(finite, a_new, a_old), new, state)
+        certified = certify(c, op, lower, upper, penalty, state[0], multipliers(state[2]), tolerance)
+        return state, k + 1, certified, ~finite
 
     def unfinished(carry):
-        return (carry[1] < settings.iterations) & ~carry[2]
+        return (carry[1] < settings.iterations) & ~carry[2] & ~carry[3]
 
     # Start: x = 0, slacks at least 1 (a violated soft side takes its violation up in v), multipliers 1 or
     # half the penalty (so that z + zeta = p).
@@ -169,8 +174,8 @@ def solve(c, operator: Operator, lower, upper, penalty, *, tolerance, settings: 
     s = jnp.where(present, jnp.maximum(margin + v, 1.0), 1.0)
     z = jnp.where(soft, 0.5 * p, 1.0)
     zeta = jnp.where(soft, 0.5 * p, 1.0)
-    start = ((x, s, z, v, zeta), jnp.asarray(0), jnp.asarray(False))
-    (x, _, z, _, _), iterations, certified = jax.lax.while_loop(unfinished, iteration, start)
+    start = ((x, s, z, v, zeta), jnp.asarray(0), jnp.asarray(False), jnp.asarray(False))
+    (x, _, z, _, _), iterations, certified, _ = jax.lax.while_loop(unfinished, iteration, start)
 
     y = multipliers(z)
     c, operator, lower, upper, penalty = original

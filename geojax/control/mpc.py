@@ -54,7 +54,7 @@ import numpy as np
 from geojax.control import burns as burns_mod
 from geojax.control import lp
 from geojax.control.base import Controller
-from geojax.control.effects import cycle_coast_s, effect_matrix
+from geojax.control.effects import V_SYNC_MPS, cycle_coast_s, effect_matrix
 from geojax.control.predictor import predict_next
 from geojax.control.qffc import BurnPair
 from geojax.params import LOG, NUMBER, Field, degrees, station_target
@@ -74,10 +74,9 @@ FIELDS = {
     # Capacity of one burn (hours at full thrust) and the soft rows' penalty (m/s per half-width violated).
     "max_burn_h": Field(NUMBER, 2.0, lower=0.0, upper=6.0 + 1e-9, si="max_burn_s", to_si=3600.0),
     "penalty_mps": Field(NUMBER, 100.0, lower=0.0, si="penalty_mps", transform=LOG),
-    # The solver: starting ADMM step, certificate tolerance, iterations at most (static: the loop's length).
-    "rho": Field(NUMBER, 0.1, lower=0.0, upper=1e6, si="rho"),
-    "tolerance": Field(NUMBER, 1e-6, lower=0.0, upper=1.0, si="tolerance"),
-    "iterations": Field(int, 400, lower=1, upper=100001, lower_inclusive=True, static=True),
+    # The solver (``control.lp``): the certificate's tolerance, and interior-point iterations at most (static).
+    "tolerance": Field(NUMBER, 1e-7, lower=0.0, upper=1.0, si="tolerance"),
+    "iterations": Field(int, 40, lower=1, upper=10001, lower_inclusive=True, static=True),
     # The burn directions (yaw x pitch grid per thruster) and the polygons' sides (static: shapes).
     "yaw_points": Field(int, 4, lower=1, upper=33, lower_inclusive=True, static=True),
     "pitch_points": Field(int, 3, lower=1, upper=33, lower_inclusive=True, static=True),
@@ -92,7 +91,7 @@ class Shape(NamedTuple):
     yaw_points: int = 4
     pitch_points: int = 3
     facets: int = 12  # sides of the e and i polygons (even)
-    iterations: int = 400
+    iterations: int = 40  # interior-point iterations at most
 
     @property
     def generators(self) -> int:
@@ -318,3 +317,98 @@ def program(model: Model, leaves: dict, shape: Shape):
     penalty = jnp.concatenate([jnp.full(n + cap_rows.shape[0], jnp.inf),
                                jnp.full(model.lower.size, 1.0) * leaves["penalty_mps"]])
     return jnp.ones(n), lower, upper, penalty
+
+
+class Plan(NamedTuple):
+    """A cycle's plan: the burns flown and what the program said."""
+
+    flown: burns_mod.BurnPlan
+    solved: jnp.ndarray  # [] bool: no row of the plan violated by more than SOLVED_VIOLATION of its half-width
+    fuel_mps: jnp.ndarray  # [] the program's objective (Delta-V over the horizon plus penalties)
+    violation: jnp.ndarray  # [] the largest row violation, in half-widths
+    iterations: jnp.ndarray  # [] interior-point iterations run
+    certified: jnp.ndarray  # [] bool: the solver certified the optimum (``lp.certify``)
+
+
+def first_burns(model: Model, w, limits) -> BurnPair:
+    """The burns of the first cycle from the weights ``w`` [2, G]: each resultant sum_g w_g d_g flown as one
+    burn; a direction outside the arm's rectangle is moved to its nearest (yaw, pitch) in it (Li 2022 eq.
+    (14) inverted, then clipped), with the planned magnitude."""
+    dv = jnp.einsum("bg,bgv->bv", w, model.directions)
+    v = jnp.linalg.norm(dv, axis=-1)
+    (a_lo, a_hi), (b_lo, b_hi) = alpha_beta_bounds(limits)
+    alpha = jnp.clip(jnp.arctan2(-dv[:, 1], -dv[:, 0]), a_lo, a_hi)
+    beta = jnp.clip(jnp.arcsin(jnp.clip(-dv[:, 2] / jnp.where(v > 0, v, 1.0), -1.0, 1.0)), b_lo, b_hi)
+    dv = v[:, None] * delta_v_direction_rsw(alpha, beta)
+    return BurnPair(dv, v, alpha, beta, model.l_rad, jnp.asarray(0.0), jnp.all(jnp.isfinite(dv)))
+
+
+def plan(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves: dict, station: dict,
+         shape: Shape):
+    """Solve the cycle's program; returns (the first cycle's ``BurnPair``, the ``lp.Solution``, the ``Model``)."""
+    model = build(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves, station, shape)
+    c, lower, upper, penalty = program(model, leaves, shape)
+    solution = lp.solve(c, operator(model, shape), lower, upper, penalty, tolerance=leaves["tolerance"],
+                        settings=lp.Settings(iterations=shape.iterations))
+    w = solution.x.reshape(shape.n_max, 2, shape.generators)[0]
+    w = jnp.where(jnp.all(jnp.isfinite(w)), jnp.maximum(w, 0.0), 0.0)  # never fly a failed solve
+    return first_burns(model, w, limits), solution, model
+
+
+def make(tables: list[dict]) -> Controller:
+    """The MPC for a batch of ``[controller]`` tables: its horizon padded to their largest N (a sweep over N
+    compiles once), the static sizes shared."""
+    for key in ("iterations", "yaw_points", "pitch_points", "facets"):
+        if len({t[key] for t in tables}) > 1:
+            raise ValueError(f"controller.{key}: sets the shape of the compiled plan; one value per sweep, "
+                             f"got {sorted({t[key] for t in tables})}")
+    first = tables[0]
+    return controller(Shape(max(t["horizon"] for t in tables), first["yaw_points"], first["pitch_points"],
+                            first["facets"], first["iterations"]))
+
+
+def validate(config: dict) -> None:
+    """Bad input the field bounds cannot see: an odd number of facets, and limits that leave no longitude box."""
+    c, station = config["controller"], config["station"]
+    if c["facets"] % 2:
+        raise ValueError(f"controller.facets: must be even (the polygons' sides come in opposite pairs), got {c['facets']}")
+    libration_deg = math.degrees(2 * (math.hypot(station["ex"], station["ey"]) + c["e_max"]))
+    room_deg = station["box_half_width_deg"] - libration_deg - c["lon_margin_deg"]
+    if room_deg <= 0:
+        raise ValueError(f"controller.e_max: the daily libration 2 (|e_T| + e_max) = {libration_deg:.4g} deg plus "
+                         f"controller.lon_margin_deg = {c['lon_margin_deg']:g} leave no room in the "
+                         f"+-{station['box_half_width_deg']:g} deg longitude box")
+
+
+@functools.lru_cache(maxsize=None)
+def controller(shape: Shape = Shape()) -> Controller:
+    """The MPC with static sizes ``shape`` (stateless: the interior-point method starts afresh every cycle)."""
+
+    def init(params, context):
+        return jnp.zeros(())
+
+    def plan_cycle(params, controller_state, estimate, context, key):
+        limits = arm_limits(params.thrusters)
+        target = station_target(params.station)
+        accel = params.thrusters["thrust_n"] / estimate.mass_kg
+        burns, solution, model = plan(estimate.mean, target, context.reference, estimate.fix_mee[5], limits, accel,
+                                      context.cycle_s, params.controller, params.station, shape)
+        prediction = predict_next(estimate.mean, context.reference[0], context.reference[1], context.cycle_s)
+        prediction = prediction.at[0].set(wrap_angle(prediction[0]))
+        full = 2 * V_SYNC_MPS * jnp.hypot(target[4] - prediction[4], target[5] - prediction[5])
+        ns_fraction = jnp.sum(jnp.abs(burns.dv_rsw_mps[:, 2])) / jnp.maximum(full, 1e-12)
+        flown = burns_mod.fly(params, burns, prediction, ns_fraction, estimate, context, key)
+        rows = solution.ax[-model.lower.size:]
+        violation = jnp.max(jnp.maximum(model.lower.reshape(-1) - rows, 0.0) + jnp.maximum(rows - model.upper.reshape(-1), 0.0))
+        solved = (violation <= SOLVED_VIOLATION) & jnp.all(jnp.isfinite(solution.x))
+        return Plan(flown, solved, solution.objective, violation, solution.iterations, solution.converged), controller_state
+
+    def thrust(params, plan_: Plan, t, state, environment):
+        return burns_mod.thrust(params, plan_.flown, t, state, environment)
+
+    def record(plan_: Plan) -> dict:
+        return {**burns_mod.record(plan_.flown), "solved": plan_.solved, "planned_fuel_mps": plan_.fuel_mps,
+                "violation": plan_.violation, "iterations": plan_.iterations, "certified": plan_.certified}
+
+    # Plans N_max cycles ahead: the reference at the cycle's start boundary and the n_max after it.
+    return Controller(init, plan_cycle, thrust, FIELDS, reference_cycles=shape.n_max + 1, record=record)

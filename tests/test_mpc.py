@@ -1,0 +1,180 @@
+"""The minimum-fuel MPC (``control.mpc``) and its LP solver (``control.lp``): HiGHS as the second method,
+the QFFC's burn effect as the model's check, closed loop, sweep, bad input."""
+
+import h5py
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import scipy.optimize
+
+from geojax import scenario, sweep
+from geojax.control import lp, mpc, qffc
+from geojax.control.qffc import BurnPair
+from geojax.loop.metrics import STATUS_OK
+from geojax.loop.rollout import simulate
+from geojax.loop.setup import prepare
+from geojax.params import station_target
+from geojax.physics.propulsion import arm_limits
+
+DAYS = 20.0
+
+
+def highs(c, a, lower, upper, penalty):
+    """The same program by HiGHS: soft rows get slacks s >= 0 of cost penalty (lower - s <= a x <= upper + s)."""
+    soft = np.isfinite(penalty)
+    n, k = a.shape[1], int(soft.sum())
+    slack = np.zeros((a.shape[0], k))
+    slack[np.flatnonzero(soft), np.arange(k)] = 1.0
+    rows, bounds = [], []
+    for sign, bound in ((1.0, upper), (-1.0, -lower)):
+        finite = np.isfinite(bound)
+        rows.append(np.hstack([sign * a[finite], -slack[finite]]))
+        bounds.append(bound[finite])
+    result = scipy.optimize.linprog(np.concatenate([c, penalty[soft]]), A_ub=np.vstack(rows),
+                                    b_ub=np.concatenate(bounds), bounds=[(None, None)] * n + [(0, None)] * k,
+                                    method="highs")
+    assert result.status == 0, result.message
+    return result.fun
+
+
+def random_program(rng, n=12, m=10):
+    """A feasible, bounded program: 0 <= x <= 2, two-sided rows about a feasible point (some one-sided), a
+    third of the rows soft; the cost of any sign."""
+    a = rng.normal(size=(m, n))
+    ax = a @ rng.uniform(0, 1, n)
+    lower, upper = ax - rng.uniform(0.1, 1, m), ax + rng.uniform(0.1, 1, m)
+    lower[rng.uniform(size=m) < 0.3] = -np.inf
+    penalty = np.where(rng.uniform(size=m) < 0.3, rng.uniform(0.5, 5, m), np.inf)
+    big = np.vstack([np.eye(n), a])
+    return (rng.normal(size=n), big, np.concatenate([np.zeros(n), lower]), np.concatenate([np.full(n, 2.0), upper]),
+            np.concatenate([np.full(n, np.inf), penalty]))
+
+
+def test_lp_solver_matches_highs_on_random_programs():
+    """Second method: HiGHS on the same programs (soft rows as penalised slacks), 40 random ones, batched."""
+    rng = np.random.default_rng(0)
+    programs = [random_program(rng) for _ in range(40)]
+    c, a, lower, upper, penalty = (jnp.asarray(np.stack(x)) for x in zip(*programs))
+    solve = jax.jit(jax.vmap(lambda *args: lp.solve(args[0], lp.dense_operator(args[1]), *args[2:], tolerance=1e-7)))
+    solutions = solve(c, a, lower, upper, penalty)
+    assert bool(jnp.all(solutions.converged))
+    for i, program in enumerate(programs):
+        assert float(solutions.objective[i]) == pytest.approx(highs(*program), rel=1e-4, abs=1e-9)
+
+
+@pytest.fixture(scope="module")
+def planning():
+    """A planning problem of li2022-mpc: the reference's means from cycle 40 on, a start off the targets."""
+    sc = scenario.load("li2022-mpc", {"duration.days": 45})
+    batch = prepare([sc])
+    params = jax.tree_util.tree_map(lambda x: x[0], batch.params)
+    target = station_target(params.station)
+    x0 = target + jnp.array([1e-4, 3e-10, 5e-5, -8e-5, 1.5e-4, -1e-4])
+    return dict(x0=x0, target=target, ref=batch.shared.reference.mean[40:], limits=arm_limits(params.thrusters),
+                accel=params.thrusters["thrust_n"] / params.initial.mass_kg, cycle_s=batch.step_s * 96,
+                leaves=params.controller, station=params.station)
+
+
+def build(planning, shape, **leaves):
+    return mpc.build(planning["x0"], planning["target"], planning["ref"][:shape.n_max + 1], 0.3, planning["limits"],
+                     planning["accel"], planning["cycle_s"], {**planning["leaves"], **leaves}, planning["station"],
+                     shape)
+
+
+def dense(operator, n):
+    return np.asarray(jax.vmap(operator.matvec, in_axes=1, out_axes=1)(jnp.eye(n)))
+
+
+def test_planning_program_matches_highs(planning):
+    """Second method: HiGHS on the program's explicit matrix; the operator's transpose and normal-matrix solve
+    against the dense matrix (adjoint identity, a dense solve)."""
+    shape = mpc.Shape()
+    model = build(planning, shape)
+    operator = mpc.operator(model, shape)
+    c, lower, upper, penalty = (np.asarray(v) for v in mpc.program(model, planning["leaves"], shape))
+    a = dense(operator, c.size)
+    rng = np.random.default_rng(1)
+    y = rng.normal(size=a.shape[0])
+    np.testing.assert_allclose(operator.rmatvec(jnp.asarray(y)), a.T @ y, rtol=1e-10, atol=1e-10 * np.abs(a).max())
+    rho, sigma, rhs = 10 ** rng.uniform(-4, 4, a.shape[0]), np.full(c.size, 1e-6), rng.normal(size=c.size)
+    normal = np.diag(sigma) + a.T @ (rho[:, None] * a)
+    solved = np.asarray(operator.factor(jnp.asarray(rho), jnp.asarray(sigma))(jnp.asarray(rhs)))
+    assert np.abs(normal @ solved - rhs).max() < 1e-8 * np.abs(normal).max() * np.abs(solved).max()
+    solution = jax.jit(lambda: lp.solve(jnp.asarray(c), operator, jnp.asarray(lower), jnp.asarray(upper),
+                                        jnp.asarray(penalty), tolerance=1e-7))()
+    assert bool(solution.converged) and int(solution.iterations) < 30
+    assert float(solution.objective) == pytest.approx(highs(c, a, lower, upper, penalty), rel=1e-4)
+
+
+def test_rows_follow_the_qffc_burn_effect_and_the_drift(planning):
+    """Independent model check: one cycle's burns change the first boundary's state by B_1 v_1 + B_2 v_2 as
+    ``qffc.effect`` computes it (eq. (29)), and each later boundary adds the new drift times the cycle to the
+    longitude (x_{j+1} = Phi x_j)."""
+    shape = mpc.Shape(n_max=4)
+    model = build(planning, shape)
+    rng = np.random.default_rng(2)
+    w = np.zeros((4, 2, shape.generators))
+    w[0] = rng.uniform(0, 0.05, (2, shape.generators))
+    rows = mpc.operator(model, shape).matvec(jnp.asarray(w.ravel()))[-4 * shape.rows_per_boundary:]
+    dv = np.einsum("bg,bgv->bv", w[0], model.directions)
+    burns = BurnPair(jnp.asarray(dv), None, None, None, model.l_rad, None, None)
+    first = np.asarray(qffc.effect(burns, 0.3))
+    expected = np.stack([first + np.array([k * planning["cycle_s"] * first[1], 0, 0, 0, 0, 0]) for k in range(4)])
+    np.testing.assert_allclose(rows.reshape(4, -1), np.einsum("jrs,js->jr", model.rows, expected), rtol=1e-9,
+                               atol=1e-12)
+
+
+def test_padding_the_horizon_changes_nothing(planning):
+    """A horizon of 6 padded to 10 cycles plans what a program of exactly 6 cycles plans (the mask)."""
+    plans = {}
+    for n_max in (6, 10):
+        shape = mpc.Shape(n_max=n_max)
+        burns, solution, _ = mpc.plan(planning["x0"], planning["target"], planning["ref"][:n_max + 1], 0.3,
+                                      planning["limits"], planning["accel"], planning["cycle_s"],
+                                      {**planning["leaves"], "horizon": jnp.asarray(6)}, planning["station"], shape)
+        plans[n_max] = (float(solution.objective), np.asarray(burns.dv_rsw_mps))
+    assert plans[10][0] == pytest.approx(plans[6][0], rel=1e-6)
+    np.testing.assert_allclose(plans[10][1], plans[6][1], atol=1e-6 * np.abs(plans[6][1]).max())
+
+
+def test_twenty_days_hold_the_box_with_less_fuel_than_the_qffc():
+    """Closed loop against the QFFC on the same 20 days: both hold the box (status 0); the MPC certifies every
+    plan, flies within the arms' limits, and spends less (it lets i lag within Delta i_max), but not
+    implausibly less: the inclination's natural drift alone costs 2 V_s |di| / sin(beta_max) ~ 40 m/s/yr."""
+    mpc_run = simulate(scenario.load("li2022-mpc", {"duration.days": DAYS}))
+    qffc_run = simulate(scenario.load("li2022-qffc", {"duration.days": DAYS}))
+    assert int(mpc_run.status) == STATUS_OK and int(qffc_run.status) == STATUS_OK
+    rec = mpc_run.records.cycles.controller
+    assert np.all(rec["certified"]) and np.all(rec["solved"])
+    assert np.max(np.abs(rec["burns"].beta_rad)) <= np.radians(70.0) + 1e-12
+    ratio = mpc_run.metrics["dv_per_year_mps"] / qffc_run.metrics["dv_per_year_mps"]
+    assert 0.4 < ratio < 1.0, ratio
+    assert mpc_run.metrics["max_abs_di"] < 3e-4 * 1.1
+
+
+def test_a_sweep_over_the_horizon_compiles_once(tmp_path, monkeypatch):
+    """Two horizons in one sweep: the plan is traced once (one compiled rollout), both points hold the box."""
+    traced = []
+    real_plan = mpc.plan
+    monkeypatch.setattr(mpc, "plan", lambda *args, **kw: traced.append(1) or real_plan(*args, **kw))
+    path = tmp_path / "h.toml"
+    path.write_text('scenario = "li2022-mpc"\ncontrollers = ["mpc"]\n[set]\n"duration.days" = 3.0\n'
+                    '[grid]\n"controller.horizon" = [4, 8]\n')
+    with h5py.File(sweep.run_sweep(sweep.load(path), tmp_path / "h.h5", progress=False)) as f:
+        status, dv = f["status/code"][()], f["metrics/dv_per_year_mps"][()]
+    assert len(traced) == 1
+    assert np.all(status == STATUS_OK) and np.all(dv > 0)
+
+
+@pytest.mark.parametrize("overrides, message", [
+    ({"controller.iterations": -1}, "controller.iterations: must be >= 1"),
+    ({"controller.horizon": 0}, "controller.horizon: must be >= 1"),
+    ({"controller.horizon": 31}, "controller.horizon: must be >= 1 and < 31"),
+    ({"controller.facets": 7}, "controller.facets: must be even"),
+    ({"controller.e_max": 4e-4}, "controller.e_max: the daily libration"),
+])
+def test_bad_input_is_one_line(overrides, message):
+    with pytest.raises(ValueError, match=message) as error:
+        scenario.load("li2022-mpc", overrides)
+    assert "\n" not in str(error.value)
