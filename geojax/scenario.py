@@ -93,6 +93,11 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "alpha_max_deg": Field(_NUMBER, 60.0, si="alpha_max_rad", to_si=degrees),
         "alpha_min_deg": Field(_NUMBER, 30.0, si="alpha_min_rad", to_si=degrees),
         "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True, upper=c.SIDEREAL_DAY_S, si="min_burn_s"),
+        # The thruster geometry the fuel bound uses (geojax.bound.directions): Li's two arms, Katz's gimbal,
+        # Gazzino's four fixed NE/NW/SE/SW thrusters (cant_deg from the north-south axis); unset: from the
+        # controller (gimbal for lyapunov and zone_nssk, else arms).
+        "layout": Field(str, None, choices=("arms", "gimbal", "fixed4")),
+        "cant_deg": Field(_NUMBER, 45.0, lower=0.0, lower_inclusive=True, upper=90.0),
     },
     # The [controller] table: `kind` here, the other keys from the controller's module (control.REGISTRY).
     "controller": {"kind": Field(str, "none")},

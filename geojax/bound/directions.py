@@ -119,8 +119,10 @@ GEOMETRIES = ("arms", "gimbal", "fixed4")
 
 
 def geometry_of(config: dict, name: str | None = None) -> Geometry:
-    """The thruster geometry of a scenario's validated ``config``: ``name`` if given, else the gimbal for a
-    Lyapunov law (Katz) or a zone NSSK manipulator (Ye), the arms otherwise (Li)."""
+    """The thruster geometry of a scenario's validated ``config``: ``name`` if given, else its
+    ``thrusters.layout``, else the gimbal for a Lyapunov law (Katz) or a zone NSSK manipulator (Ye), the arms
+    otherwise (Li)."""
+    name = name or config["thrusters"].get("layout")
     if name is None:
         name = "gimbal" if config["controller"]["kind"] in ("lyapunov", "zone_nssk") else "arms"
     if name not in GEOMETRIES:
@@ -129,4 +131,4 @@ def geometry_of(config: dict, name: str | None = None) -> Geometry:
         t = config["thrusters"]
         return arms(*(math.radians(float(t[k])) for k in ("beta_max_deg", "beta_min_deg", "alpha_max_deg",
                                                            "alpha_min_deg")))
-    return gimbal() if name == "gimbal" else fixed4()
+    return gimbal() if name == "gimbal" else fixed4(float(config["thrusters"].get("cant_deg", 45.0)))
