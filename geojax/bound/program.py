@@ -34,6 +34,7 @@ from geojax.bound.directions import Geometry
 
 # State deviations in units of 1e-4 of (p, 1, 1, 1, 1, 1 rad): a 4 km change of p, 1e-4 of e or i, 0.006 deg of L.
 STATE_SCALE_REL = 1e-4
+NEW_COLUMNS = 8  # columns added per thruster per column-generation round
 
 
 class Solution(NamedTuple):
@@ -200,18 +201,24 @@ def _price(solution: dict, cap_mps, geometry: Geometry):
     for i, (direction, _) in enumerate(best):
         y_cap = solution["y_cap"][0 if geometry.one_at_a_time else i]
         reduced = 1.0 - y_cap - np.sum(g * direction, axis=1)
-        new.append(_distinct(direction[reduced < -1e-9]))
+        new.append(_most_improving(direction, cap_mps * np.minimum(reduced, 0.0)))
     return lower, new
+
+
+def _most_improving(directions, gain, decimals: int = 4):
+    """At most ``NEW_COLUMNS`` distinct directions (to 1e-4), those whose slots gain most (sum of cap x reduced
+    cost): a column serves every slot, so a year of slots must not add a column per slot."""
+    keep = gain < -1e-12
+    if not np.any(keep):
+        return np.zeros((0, 3))
+    unique, inverse = np.unique(np.round(directions[keep], decimals), axis=0, return_inverse=True)
+    score = np.bincount(inverse.ravel(), weights=gain[keep], minlength=len(unique))
+    top = unique[np.argsort(score)[:NEW_COLUMNS]]
+    return top / np.linalg.norm(top, axis=1, keepdims=True)
 
 
 def _clean(values, tiny: float = 1e-12):
     return np.where(np.abs(values) < tiny, 0.0, values)
-
-
-def _distinct(directions, decimals: int = 6):
-    if not len(directions):
-        return directions
-    return np.unique(np.round(directions, decimals), axis=0)
 
 
 class _Rows:
