@@ -1,7 +1,8 @@
 """GTO-GEO transfers (Ma & Kong 2023): boom kinematics, steering law, body slew, joint MPC, the transfer loop.
 
 Every test names its independent check: a chain of elementary rotations, the velocity of a Kepler orbit, a
-trapezoidal slew profile, the rocket equation, Table 1's joint ranges.
+trapezoidal slew profile, a body under constant torque, the rotation of the thrust vector, the rocket
+equation, Table 1's joint ranges.
 """
 
 import math
@@ -94,19 +95,64 @@ def test_alpha_is_the_velocity_direction_and_the_printed_law_at_e_1():
         assert math.tan(float(steering.alpha_rad(1.0, nu))) == pytest.approx(-math.tan(printed), rel=1e-9)
 
 
-def test_a_rate_and_acceleration_limited_slew_takes_the_trapezoid_time():
+@pytest.mark.parametrize("disturbance_deg_s2", [0.0, 0.0005, -0.0005])
+def test_a_rate_and_acceleration_limited_slew_takes_the_trapezoid_time(disturbance_deg_s2):
     """Kinematics closed form: a rest-to-rest slew of 30 deg at 0.1 deg/s and 0.001 deg/s^2 takes
-    30/0.1 + 0.1/0.001 = 400 s to rest at the target, never exceeding the rate bound nor overshooting."""
+    30/0.1 + 0.1/0.001 = 400 s to rest at the target, never exceeding the rate bound nor overshooting.  A
+    constant torque / inertia d shifts the wheels' window to [-a + d, a + d]: the ramps become w/(a + d) and
+    w/(a - d) (swapped for -d), so the slew takes 30/0.1 + (0.1/0.0015 + 0.1/0.0005)/2 = 433.3 s either way.
+    "At rest at the target" to the discrete law's resolution: within 1e-5 rad, the rate within a dt of zero
+    (the law can chatter by a dt about the last micro-radian)."""
     rate, accel, step = math.radians(0.1), math.radians(0.001), 1.0
+    disturbance = math.radians(disturbance_deg_s2)
     angle, speed, t = jnp.array(0.0), jnp.array(0.0), 0.0
     target = math.radians(30.0)
     slew = jax.jit(pointing.slew_step)
-    while abs(float(angle) - target) > 1e-9 or abs(float(speed)) > 1e-12:
-        angle, speed = slew(angle, speed, target, rate, accel, step)
-        assert abs(float(speed)) <= rate * (1 + 1e-12) and float(angle) <= target + 1e-12
-        t += step
+    while abs(float(angle) - target) > 1e-5 or abs(float(speed)) > accel * step:
+        new_angle, new_speed = slew(angle, speed, target, rate, accel, step, disturbance)
+        assert abs(float(new_speed)) <= rate * (1 + 1e-12) and float(new_angle) <= target + 1e-12
+        assert disturbance - accel - 1e-15 <= float(new_speed - speed) / step <= disturbance + accel + 1e-15
+        angle, speed, t = new_angle, new_speed, t + step
         assert t < 1000
-    assert t == pytest.approx(400.0, abs=1.0)
+    expected = 300.0 + 0.5 * (0.1 / (0.001 + abs(disturbance_deg_s2)) + 0.1 / (0.001 - abs(disturbance_deg_s2)))
+    assert t == pytest.approx(expected, abs=2.0)
+
+
+@pytest.mark.parametrize("wheels_deg_s2", [0.0, 0.004, 0.02])
+def test_a_constant_torque_drives_a_body_at_rest_as_half_alpha_t_squared(wheels_deg_s2):
+    """Newton for a rigid body (eq. (6) at rest, no rate terms): a torque T on inertia I with the wheels' authority
+    a (holding the attitude, target = the start) turns the body by 0.5 (T/I - a) t^2 when T/I > a (a = 0: the
+    free body's 0.5 (T/I) t^2), and not at all when the wheels can take it (T/I <= a)."""
+    torque_nm, inertia_kg_m2, step = 0.75, 2000.0, 120.0
+    alpha = torque_nm / inertia_kg_m2
+    wheels = math.radians(wheels_deg_s2)
+    slew = jax.jit(pointing.slew_step)
+    angle, speed = jnp.array(0.0), jnp.array(0.0)
+    for _ in range(10):
+        angle, speed = slew(angle, speed, 0.0, math.radians(0.1), wheels, step, alpha)
+    t = 10 * step
+    assert float(angle) == pytest.approx(0.5 * max(alpha - wheels, 0.0) * t**2, rel=1e-12, abs=1e-15)
+    assert float(speed) == pytest.approx(max(alpha - wheels, 0.0) * t, rel=1e-12, abs=1e-15)
+
+
+def test_the_slew_axes_take_the_thrust_turn_of_the_torque():
+    """Rigid-body kinematics, independent of the projection: a body angular acceleration J^-1 tau turns the
+    body-frame thrust d (theta2 = 90 deg, theta3 = 0) by (J^-1 tau) x d; its azimuth and elevation rates
+    (finite differences of atan2 and asin) are what ``slew_disturbance_rad_s2`` gives the two slew axes; a
+    torque about d's in-plane direction does not move the thrust."""
+    inertia = np.array([1800.0, 2500.0, 3100.0])
+    for theta1 in (-1.2, -0.4, 0.0):
+        d = np.asarray(boom.thrust_direction_body(jnp.array([theta1, math.pi / 2, 0.0])))
+        for torque in RNG.normal(size=(3, 3)):
+            eps = 1e-5 / np.linalg.norm(torque / inertia)  # a 1e-5 rad turn: central differences
+            ahead, back = (d + sign * eps * np.cross(torque / inertia, d) for sign in (1, -1))
+            expected = [(math.atan2(ahead[1], ahead[0]) - math.atan2(back[1], back[0])) / (2 * eps),
+                        (math.asin(ahead[2]) - math.asin(back[2])) / (2 * eps)]
+            got = pointing.slew_disturbance_rad_s2(jnp.asarray(torque), theta1, jnp.asarray(inertia))
+            np.testing.assert_allclose(got, expected, rtol=1e-8, atol=1e-15)
+        along = np.asarray(d) * inertia  # J^-1 tau parallel to d
+        np.testing.assert_allclose(pointing.slew_disturbance_rad_s2(jnp.asarray(along), theta1, jnp.asarray(inertia)),
+                                   0.0, atol=1e-15)
 
 
 def test_mpc_tracks_a_ramp_within_its_limits():
@@ -143,14 +189,14 @@ def _run(loop, sc):
 def test_short_transfer_delta_v_is_the_rocket_equation_and_joints_stay_in_table_1(loop):
     """Rocket equation: the delivered Delta-V (integral of F/m) equals Isp g0 ln(m0/m1) of the mass used, and
     both equal F x firing time / mean mass to first order; Table 1's joint ranges and the drive's rate bound
-    hold at every step of two days of the boom transfer."""
+    hold at every step of two days of the boom transfer (its body knocked about by the coupling torque)."""
     sc = transfer.load("ma2023-boom")
     final, records = _run(loop, sc)
     m0, m1 = float(sc.params.initial.mass_kg), float(final.craft.mass_kg)
     rocket = float(sc.params.isp_s) * c.G0_MPS2 * math.log(m0 / m1)
     assert float(final.craft.dv_mps) == pytest.approx(rocket, rel=1e-9)
     assert float(final.craft.dv_mps) == pytest.approx(0.5 * float(final.stats.firing_s) / (0.5 * (m0 + m1)), rel=1e-4)
-    assert rocket > 20.0  # it fired
+    assert rocket > 1.0  # it fired
     theta = np.degrees(records.theta_rad)
     assert theta[:, 0].min() >= -90.0 - 1e-9 and theta[:, 0].max() <= 1e-9
     assert np.all(np.abs(theta[:, 1] - 90.0) < 1e-9) and np.all(np.abs(theta[:, 2]) <= 15.0 + 1e-9)
@@ -160,13 +206,38 @@ def test_short_transfer_delta_v_is_the_rocket_equation_and_joints_stay_in_table_
 
 def test_fixed_layout_keeps_its_joints_and_loses_more_thrust_to_slewing(loop):
     """The fixed layout's thruster never moves (joints frozen at (0, 90, 0) deg), so with a slow body it must
-    wait for slews the boom's joints absorb: more time lost to slewing over the same two days."""
+    wait for slews the boom's joints absorb: more time lost to slewing over the same two days than a boom on
+    a body stiff against its torque (1e8 kg m^2).  On the scenarios' 2000 kg m^2 the boom's eq. (8) torque
+    (up to 1 N m) beats the wheels' 0.035 N m and the boom loses more than either."""
     slow = {"attitude.slew_rate_deg_s": 0.02}
+    stiff_final, _ = _run(loop, transfer.load("ma2023-boom", {**slow, "attitude.inertia_kg_m2": [1e8] * 3}))
     boom_final, _ = _run(loop, transfer.load("ma2023-boom", slow))
     fixed_final, fixed_records = _run(loop, transfer.load("ma2023-fixed", slow))
     np.testing.assert_allclose(np.degrees(fixed_records.theta_rad), np.broadcast_to([0.0, 90.0, 0.0], (1440, 3)),
                                atol=1e-12)
-    assert float(fixed_final.stats.lost_to_slew_s) > float(boom_final.stats.lost_to_slew_s) + 3600.0
+    assert float(fixed_final.stats.lost_to_slew_s) > float(stiff_final.stats.lost_to_slew_s) + 3600.0
+    assert float(boom_final.stats.lost_to_slew_s) > float(fixed_final.stats.lost_to_slew_s) + 3600.0
+    assert float(fixed_final.stats.overpowered_s) == 0.0 and float(boom_final.stats.overpowered_s) > 0.0
+
+
+def test_the_body_accelerates_within_the_wheels_window_shifted_by_the_torque(loop):
+    """Eq. (6) with bounded wheels, |tau_c| <= J a: at every step of two days the body's rate change lies in
+    [(-a + delta) dt, (a + delta) dt], delta = J^-1 tau of the step's recorded eq. (8) torque on each slew axis
+    (numpy, from the records); the boom's torque beats the wheels on some steps (a change beyond a dt), the
+    fixed layout's is zero (no boom arm) and its body never exceeds a."""
+    sc = transfer.load("ma2023-boom")
+    _, records = _run(loop, sc)
+    a, dt = float(sc.params.slew_accel_rad_s2), STATIC.step_s
+    alpha = np.asarray(records.torque_nm) / np.asarray(sc.params.inertia_kg_m2)
+    theta1 = np.asarray(records.theta_rad)[:-1, 0]  # the joint angle the step flew with (the previous record's)
+    alpha = alpha[1:]
+    delta = np.stack([alpha[:, 2], alpha[:, 0] * np.cos(theta1) + alpha[:, 1] * np.sin(theta1)], -1)
+    change = np.diff(np.asarray(records.body_rate_rad_s), axis=0) / dt
+    assert np.all(change >= delta - a - 1e-12) and np.all(change <= delta + a + 1e-12)
+    assert np.abs(change).max() > 10 * a
+    _, fixed = _run(loop, transfer.load("ma2023-fixed"))
+    assert np.all(np.asarray(fixed.torque_nm) == 0.0)
+    assert np.abs(np.diff(np.asarray(fixed.body_rate_rad_s), axis=0)).max() <= a * dt * (1 + 1e-12)
 
 
 def test_a_transfer_that_starts_at_geo_ends_at_once_and_freezes(loop):

@@ -5,9 +5,11 @@ direction that body and joints reached if the firing rule fires, the misalignmen
 spacecraft is in sunlight (electric propulsion stops in the Earth's shadow: the conical shadow fraction
 scales the thrust) and propellant is left.  The orbit is integrated in MEE with RK4 and the full force
 model (``physics.dynamics.mee_rhs``).  Then, for the next step, the body slews towards the part of the end
-state's wish that the boom cannot reach (``pointing``) and the joints' MPC tracks the rest
-(``boom.joint_step``).  When the end conditions hold (GEO radius, e and i below their
-thresholds) the state freezes; termination is data, the status and the time reached, never a Python loop.
+state's wish that the boom cannot reach (``pointing``), with the boom's coupling torque (eq. (8), from the
+joint angles and the thrust of the step) acting on it through eq. (6) (``pointing.slew_step``: it shifts the
+wheels' acceleration window by torque / inertia), and the joints' MPC tracks the rest (``boom.joint_step``).
+When the end conditions hold (GEO radius, e and i below their thresholds) the state freezes; termination
+is data, the status and the time reached, never a Python loop.
 
 Scans are nested: an outer scan over records, an inner one over ``steps_per_record`` steps, so a long
 transfer keeps one record per chosen interval (a day for a Monte Carlo, every step for the joint histories).
@@ -46,7 +48,8 @@ class TransferParams(NamedTuple):
     efficiency: jnp.ndarray
     max_misalignment_rad: jnp.ndarray  # the thruster fires only closer than this to the wished direction
     slew_rate_rad_s: jnp.ndarray  # body slew bounds
-    slew_accel_rad_s2: jnp.ndarray
+    slew_accel_rad_s2: jnp.ndarray  # the wheels' authority: |tau_c| <= J slew_accel on each slew axis
+    inertia_kg_m2: jnp.ndarray  # [3] J_body of eq. (6), principal moments along the body axes
     joints: boom.JointLimits  # [3] each; the fixed layout: lower = upper = (0, 90, 0) deg
     weights: boom.MpcWeights  # [3] each
     d1_m: jnp.ndarray  # boom link lengths, eq. (9)
@@ -83,6 +86,8 @@ class Stats(NamedTuple):
     track_sq_rad2: jnp.ndarray  # [3] sum of squares, for the RMS
     track_steps: jnp.ndarray  # [3] steps counted in the RMS
     torque_max_nm: jnp.ndarray  # largest |eq. (8)|
+    torque_impulse_nms: jnp.ndarray  # integral of |eq. (8)|: the momentum the wheels must store or dump
+    overpowered_s: jnp.ndarray  # time the torque beat the wheels (|torque / inertia| > slew_accel) on a slew axis
 
 
 class Carry(NamedTuple):
@@ -109,6 +114,7 @@ class Record(NamedTuple):
     misalignment_rad: jnp.ndarray
     wished_rad: jnp.ndarray  # [2] azimuth, elevation of eq. (1)
     body_rad: jnp.ndarray  # [2]
+    body_rate_rad_s: jnp.ndarray  # [2]
     theta_rad: jnp.ndarray  # [3]
     target_rad: jnp.ndarray  # [3]
     omega_rad_s: jnp.ndarray  # [3]
@@ -126,7 +132,7 @@ def initial_carry(params: TransferParams) -> Carry:
         params.initial,
         Attitude(body, jnp.zeros(2), theta0, jnp.zeros(3), theta0),
         wish,
-        Stats(zero, zero, zero, jnp.zeros(3), jnp.zeros(3), jnp.zeros(3), zero),
+        Stats(zero, zero, zero, jnp.zeros(3), jnp.zeros(3), jnp.zeros(3), zero, zero, zero),
         jnp.array(False), jnp.array(0), zero, zero,
     )
 
@@ -189,13 +195,14 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     finite = jnp.all(jnp.isfinite(stepped.orbit))
     craft = jax.tree_util.tree_map(lambda new, old: jnp.where(carry.done | ~finite, old, new), stepped, craft)
 
-    # pointing for the next step: the body slews toward the share the joints cannot reach; the joints' MPC
-    # (Sec. 3) tracks the inverse of eq. (9) for the rest
+    # pointing for the next step: the body slews toward the share the joints cannot reach, its wheels fighting
+    # the step's eq. (8) torque (eq. (6)); the joints' MPC (Sec. 3) tracks the inverse of eq. (9) for the rest
     next_wish = _wish(craft.orbit, params)
     wished = jnp.stack([next_wish.azimuth_rad, next_wish.elevation_rad])
+    disturbance = pointing.slew_disturbance_rad_s2(torque, att.theta_rad[0], params.inertia_kg_m2)
     body, body_rate = pointing.slew_step(att.body_rad, att.body_rate_rad_s,
                                          pointing.body_share_rad(wished, *_joint_reach(params)),
-                                         params.slew_rate_rad_s, params.slew_accel_rad_s2, step_s)
+                                         params.slew_rate_rad_s, params.slew_accel_rad_s2, step_s, disturbance)
     target = _joint_targets(next_wish, body, params)
     theta, omega = boom.joint_step(att.theta_rad, att.omega_rad_s, target, (target - att.ref_rad) / step_s,
                                    params.joints, params.weights, step_s, static.mpc_horizon, static.mpc_iterations)
@@ -213,7 +220,9 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     stats = Stats(s.firing_s + on * step_s, s.aligned_s + on * jnp.cos(off_by) * step_s,
                   s.lost_to_slew_s + wants * (~aligned) * step_s,
                   jnp.maximum(s.track_max_rad, count * track_error), s.track_sq_rad2 + count * track_error**2,
-                  s.track_steps + count * trackable, jnp.maximum(s.torque_max_nm, count * jnp.linalg.norm(torque)))
+                  s.track_steps + count * trackable, jnp.maximum(s.torque_max_nm, count * jnp.linalg.norm(torque)),
+                  s.torque_impulse_nms + count * jnp.linalg.norm(torque) * step_s,
+                  s.overpowered_s + count * jnp.any(jnp.abs(disturbance) > params.slew_accel_rad_s2) * step_s)
 
     t_s = carry.t_s + step_s
     after = steering.orbit_geometry(craft.orbit)
@@ -225,5 +234,6 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     done = carry.done | arrived | empty | ~finite
     t_end = jnp.where(carry.done, carry.t_end_s, t_s)
     record = Record(t_s, after.a_m, after.e, after.i_rad, craft.mass_kg, craft.dv_mps, on, off_by, wished,
-                    attitude.body_rad, attitude.theta_rad, target, attitude.omega_rad_s, torque)
+                    attitude.body_rad, attitude.body_rate_rad_s, attitude.theta_rad, target, attitude.omega_rad_s,
+                    torque)
     return Carry(craft, attitude, next_wish, stats, done, status, t_end, t_s), record

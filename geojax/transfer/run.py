@@ -92,6 +92,9 @@ def metrics(final, params) -> dict:
         "cosine_efficiency": np.asarray(stats.aligned_s) / np.maximum(firing, 1e-30),
         "lost_to_slew_days": np.asarray(stats.lost_to_slew_s) / SECONDS_PER_DAY,
         "max_coupling_torque_nm": np.asarray(stats.torque_max_nm),
+        # eq. (8) on the body (pointing): the momentum it hands the wheels, and the time it beat their torque
+        "torque_impulse_nms": np.asarray(stats.torque_impulse_nms),
+        "torque_overpowered_days": np.asarray(stats.overpowered_s) / SECONDS_PER_DAY,
     }
     for j in range(3):
         out[f"j{j + 1}_track_max_deg"] = np.rad2deg(np.asarray(stats.track_max_rad)[..., j])
@@ -105,8 +108,9 @@ def record_table(records) -> dict:
            "e": np.asarray(records.e), "i_deg": deg(records.i_rad), "mass_kg": np.asarray(records.mass_kg),
            "dv_mps": np.asarray(records.dv_mps), "on_fraction": np.asarray(records.on_fraction),
            "misalignment_deg": deg(records.misalignment_rad), "torque_nm": np.asarray(records.torque_nm)}
-    for name, values in (("wished", records.wished_rad), ("body", records.body_rad)):
-        out[f"{name}_azimuth_deg"], out[f"{name}_elevation_deg"] = deg(values[..., 0]), deg(values[..., 1])
+    for name, values in (("wished_{}_deg", records.wished_rad), ("body_{}_deg", records.body_rad),
+                         ("body_rate_{}_deg_s", records.body_rate_rad_s)):
+        out[name.format("azimuth")], out[name.format("elevation")] = deg(values[..., 0]), deg(values[..., 1])
     for j in range(3):
         out[f"theta{j + 1}_deg"] = deg(records.theta_rad[..., j])
         out[f"target{j + 1}_deg"] = deg(records.target_rad[..., j])

@@ -67,6 +67,11 @@ SCHEMA: dict[str, dict[str, Field]] = {
     "attitude": {
         "slew_rate_deg_s": _number(REQUIRED, 0.0, 100.0),
         "slew_accel_deg_s2": _number(REQUIRED, 0.0, 100.0),
+        # J_body of eq. (6), principal moments along the body axes (R, S, W at zero attitude); with the slew
+        # acceleration it sets the wheels' torque, J x slew_accel, that the boom's eq. (8) torque competes with
+        # (transfer.pointing).  Default (a choice): 2000 kg m^2 each, the inertia the shipped scenarios' slew
+        # acceleration is quoted on (0.001 deg/s^2 = 0.035 N m of wheel torque).
+        "inertia_kg_m2": Field(list, [2000.0, 2000.0, 2000.0], length=3),
     },
     "boom": {  # Table 1 joint ranges, the drive limits, link lengths and the MPC of Sec. 3
         "j1_deg": Field(list, [-90.0, 0.0], length=2),
@@ -188,6 +193,9 @@ def _validate(raw: dict) -> dict:
     if craft["dry_mass_kg"] >= craft["mass_kg"]:
         raise ValueError(f"spacecraft.dry_mass_kg: must be less than spacecraft.mass_kg = {craft['mass_kg']:g}, "
                          f"got {craft['dry_mass_kg']:g}")
+    if not all(isinstance(j, (int, float)) and 0.0 < j < 1e9 for j in config["attitude"]["inertia_kg_m2"]):
+        raise ValueError(f"attitude.inertia_kg_m2: must be three numbers in (0, 1e9) kg m^2, "
+                         f"got {config['attitude']['inertia_kg_m2']}")
     for key in ("j1_deg", "j2_deg", "j3_deg"):
         low, high = boom[key]
         if not -180.0 <= low <= high <= 180.0:
@@ -223,6 +231,7 @@ def _params(config: dict) -> TransferParams:
         efficiency=f(end["efficiency"]),
         max_misalignment_rad=rad(end["max_misalignment_deg"]),
         slew_rate_rad_s=rad(att["slew_rate_deg_s"]), slew_accel_rad_s2=rad(att["slew_accel_deg_s2"]),
+        inertia_kg_m2=jnp.asarray(att["inertia_kg_m2"], dtype=float),
         joints=JointLimits(lower, upper, three(np.deg2rad(bm["joint_rate_deg_s"])),
                            three(np.deg2rad(bm["joint_accel_deg_s2"]))),
         weights=MpcWeights(three(bm["mpc_q"]), three(bm["mpc_q_rate"]), three(bm["mpc_r"])),
