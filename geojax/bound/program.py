@@ -53,7 +53,7 @@ class Infeasible(ValueError):
 
 
 def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: float, rounds: int = 8,
-          rtol: float = 1e-4, prox: float = 0.0) -> Solution:
+          rtol: float = 1e-4, prox: float = 0.0, generators: list | None = None) -> Solution:
     """Minimum Delta-V over the slots of ``model`` (``bound.linear.SlotModel``, numpy leaves).
 
     ``cap_mps`` [S] the Delta-V one thruster can give in each slot; ``box_rad`` the half-width of the
@@ -61,11 +61,12 @@ def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: flo
     lower bound agree to ``rtol``.  ``prox`` > 0 adds prox * sum |u_k - ubar_k| to the cost (sequential
     linearisation: of the many plans of (nearly) the least fuel, the program takes one near the nominal, so the
     linear model stays accurate); the lower bound is then not valid: solve again with ``prox = 0`` for it.
+    ``generators``: the columns to start from (a previous solution's), else the geometry's.
     """
     import time
 
     start = time.perf_counter()
-    generators = [np.asarray(g, float) for g in geometry.generators]
+    generators = [np.asarray(g, float) for g in (geometry.generators if generators is None else generators)]
     lower, solution, done = -np.inf, None, 0
     for done in range(1, rounds + 1):
         solution = _solve_once(model, u_nominal, cap_mps, box_rad, generators, geometry.one_at_a_time, scale_p_m,

@@ -112,7 +112,8 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, it
     history, solution, prox = [], None, 0.0
     for i in range(iterations):
         solution = program.solve(model, u, cap, box * (1 - BOX_MARGIN), geometry, float(model.x[0, 0]),
-                                 rounds=rounds, rtol=rtol, prox=prox)
+                                 rounds=rounds, rtol=rtol, prox=prox,
+                                 generators=None if solution is None else solution.generators)
         predicted = _linear_outputs(model, solution, u)
         fuel = sum(w.sum(axis=1) for w in solution.w_mps)
         u, model = solution.u_mps, model_of(solution.u_mps, fuel)
@@ -127,7 +128,8 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, it
             break
         prox = PROX  # sequential linearisation: from now on, the plan of least fuel nearest the nominal
     # The bound: the unrestricted program about the flown trajectory, over the full box.
-    lower = program.solve(model, u, cap, box, geometry, float(model.x[0, 0]), rounds=rounds, rtol=rtol)
+    lower = program.solve(model, u, cap, box, geometry, float(model.x[0, 0]), rounds=rounds, rtol=rtol,
+                          generators=solution.generators)
     say(f"  bound about the flown trajectory: {lower.lower_mps:.4f} m/s ({lower.rounds} pricing rounds, "
         f"{lower.solve_s:.1f} s)", flush=True)
     result = _resimulate(uncontrolled, u, fuel, slot_steps, slot_s, geometry)
