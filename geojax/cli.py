@@ -103,6 +103,8 @@ def _parser() -> argparse.ArgumentParser:
     bnd.add_argument("--thrusters", choices=("arms", "gimbal", "fixed4"),
                      help="thruster geometry: Li's two arms, Katz's gimbal, Gazzino's four fixed NE/NW/SE/SW thrusters "
                           "(default: gimbal for a lyapunov or zone_nssk scenario, else arms)")
+    bnd.add_argument("--acquisition-days", type=float, default=0.0,
+                     help="hold the box from this day on (a start the thrusters cannot hold at once; default 0)")
     bnd.add_argument("--out", help="write /metrics, /rounds and the per-slot /slots to this HDF5 file")
     bnd.set_defaults(func=_bound)
 
@@ -350,22 +352,25 @@ def _bound(args) -> int:
     say = _say(args)
     say(f"{sc.name}: the least Delta-V over {sc.days:g} days within +-{sc.config['station']['box_half_width_deg']:g} deg "
         f"(slots of {args.slot_steps} steps); linearising about the uncontrolled run...", flush=True)
-    r = bound(sc, slot_steps=args.slot_steps, thrusters=args.thrusters, say=say)
+    r = bound(sc, slot_steps=args.slot_steps, thrusters=args.thrusters, acquisition_days=args.acquisition_days,
+              say=say)
     gap = 100 * (r.resim["dv_per_year_mps"] - r.bound_per_year_mps) / r.bound_per_year_mps if r.lower_mps > 0 else 0.0
     say(f"{sc.name} ({r.geometry} thrusters, {r.days:.2f} days, {r.slot_s:.0f} s slots):")
     say(f"  bound                 {r.bound_per_year_mps:10.3f} m/s/yr  (lower bound over every direction the thrusters allow)")
     say(f"  optimal plan          {r.plan_per_year_mps:10.3f} m/s/yr  (the linear program's, {len(r.rounds)} linearisations)")
     say(f"  re-simulated plan     {r.resim['dv_per_year_mps']:10.3f} m/s/yr  ({gap:+.3f} % over the bound), "
         f"status {r.resim_status} ({STATUS_MEANINGS[r.resim_status]})")
+    after = f"; after day {args.acquisition_days:g}: {r.max_abs_box_deg:.5f} deg" if args.acquisition_days else ""
     say(f"  box                   max |dlon| {r.resim['max_abs_dlon_deg']:.5f} deg, max |lat| "
-        f"{r.resim['max_abs_dlat_deg']:.5f} deg; linear model within {r.linear_error_deg:.2e} deg of the flight")
+        f"{r.resim['max_abs_dlat_deg']:.5f} deg{after}; linear model within {r.linear_error_deg:.2e} deg of the flight")
     _detail(args)(f"  devices {store.device_description()}; {r.wall_s:.1f} s in all")
     if args.out:
         metrics = {"bound_per_year_mps": r.bound_per_year_mps, "plan_per_year_mps": r.plan_per_year_mps,
                    "resim_dv_per_year_mps": r.resim["dv_per_year_mps"], "gap_percent": gap,
                    "resim_max_abs_dlon_deg": r.resim["max_abs_dlon_deg"],
                    "resim_max_abs_dlat_deg": r.resim["max_abs_dlat_deg"], "status": r.resim_status,
-                   "linear_error_deg": r.linear_error_deg}
+                   "linear_error_deg": r.linear_error_deg, "max_abs_box_after_acquisition_deg": r.max_abs_box_deg,
+                   "acquisition_days": args.acquisition_days}
         rounds = {k: np.array([row[k] for row in r.rounds]) for k in r.rounds[0]}
         slots = {"t_s": r.t_s, "dv_r_mps": r.u_rsw_mps[:, 0], "dv_s_mps": r.u_rsw_mps[:, 1],
                  "dv_w_mps": r.u_rsw_mps[:, 2], "dv_thruster_mps": r.thruster_mps,

@@ -149,6 +149,12 @@ def test_bound_of_a_gimballed_feedback_scenario_is_below_the_lyapunov_law():
     law = geojax.simulate(sc)
     assert float(law.metrics["dv_per_year_mps"]) >= result.bound_per_year_mps
     assert result.resim_status == 0
+    # A free acquisition relaxes the program: its bound can only be lower (by weak duality both are bounds).
+    relaxed = bound(sc, acquisition_days=3.0)
+    assert relaxed.lower_mps <= result.lower_mps * (1 + 1e-6) + 1e-9
+    assert relaxed.max_abs_box_deg <= 0.05
+    with pytest.raises(ValueError, match="acquisition"):
+        bound(sc, acquisition_days=10.0)
 
 
 def test_cli_bound_writes_results_and_refuses_an_impossible_box(tmp_path):

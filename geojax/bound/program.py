@@ -53,7 +53,7 @@ class Infeasible(ValueError):
 
 
 def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: float, rounds: int = 8,
-          rtol: float = 1e-4, prox: float = 0.0, generators: list | None = None) -> Solution:
+          rtol: float = 1e-4, prox: float = 0.0, generators: list | None = None, first_boxed_slot: int = 0) -> Solution:
     """Minimum Delta-V over the slots of ``model`` (``bound.linear.SlotModel``, numpy leaves).
 
     ``cap_mps`` [S] the Delta-V one thruster can give in each slot; ``box_rad`` the half-width of the
@@ -61,7 +61,8 @@ def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: flo
     lower bound agree to ``rtol``.  ``prox`` > 0 adds prox * sum |u_k - ubar_k| to the cost (sequential
     linearisation: of the many plans of (nearly) the least fuel, the program takes one near the nominal, so the
     linear model stays accurate); the lower bound is then not valid: solve again with ``prox = 0`` for it.
-    ``generators``: the columns to start from (a previous solution's), else the geometry's.
+    ``generators``: the columns to start from (a previous solution's), else the geometry's;
+    ``first_boxed_slot``: the box is held from this slot on (an acquisition before it is free).
     """
     import time
 
@@ -70,7 +71,7 @@ def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: flo
     lower, solution, done = -np.inf, None, 0
     for done in range(1, rounds + 1):
         solution = _solve_once(model, u_nominal, cap_mps, box_rad, generators, geometry.one_at_a_time, scale_p_m,
-                               prox)
+                               prox, first_boxed_slot)
         bound, new = _price(solution, cap_mps, geometry)
         lower = max(lower, bound)
         gap = (solution["fuel"] - lower) / max(solution["fuel"], 1e-12)
@@ -82,7 +83,8 @@ def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: flo
                     solution["w"], generators, done, time.perf_counter() - start)
 
 
-def _solve_once(model, u_nominal, cap_mps, box_rad, generators, one_at_a_time, scale_p_m, prox=0.0) -> dict:
+def _solve_once(model, u_nominal, cap_mps, box_rad, generators, one_at_a_time, scale_p_m, prox=0.0,
+                first_boxed_slot=0) -> dict:
     phi, b, c, e, y = (np.asarray(a) for a in (model.phi, model.b, model.c, model.e, model.y))
     n_slots, n_steps = y.shape[:2]
     scale = np.full(6, STATE_SCALE_REL)
@@ -127,15 +129,17 @@ def _solve_once(model, u_nominal, cap_mps, box_rad, generators, one_at_a_time, s
             ub.put(rows, w_of(ks) + j, 1.0)
         cap_rows.append(rows)
     # Box at every step start: -box <= ybar + C z_k + E (u_k - ubar_k) <= box.
+    kb = np.arange(first_boxed_slot, n_slots)  # the slots whose step starts hold the box
+    has_z = kb > 0  # (the state at slot 0's start is given)
     for s in range(n_steps):
         for o in range(2):
-            offset = y[:, s, o] - np.einsum("kj,kj->k", e[:, s, o, :], u_nominal)
+            offset = y[kb, s, o] - np.einsum("kj,kj->k", e[kb, s, o, :], u_nominal[kb])
             for sign in (1.0, -1.0):  # rows in units of the box, coefficients below 1e-12 of it dropped
-                rows = ub.add(n_slots, 1.0 - sign * offset / box_rad)
+                rows = ub.add(len(kb), 1.0 - sign * offset / box_rad)
                 for j in range(6):
-                    ub.put(rows[1:], z_of(ks[:-1]) + j, _clean(sign * c_s[1:, s, o, j] / box_rad))
+                    ub.put(rows[has_z], z_of(kb[has_z] - 1) + j, _clean(sign * c_s[kb[has_z], s, o, j] / box_rad))
                 for j in range(3):
-                    ub.put(rows, u_of(ks) + j, _clean(sign * e[:, s, o, j] / box_rad))
+                    ub.put(rows, u_of(kb) + j, _clean(sign * e[kb, s, o, j] / box_rad))
     cost = np.zeros(n_var)
     for k in range(n_w):
         cost[w_of(ks) + k] = 1.0

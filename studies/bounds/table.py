@@ -37,7 +37,11 @@ LIMIT_KEYS = ("thrusters.beta_max_deg", "thrusters.beta_min_deg", "thrusters.alp
 CASES = {
     **{f"li2022-{level}": {"scenarios": [f"li2022-{c}" for c in ("qffc", "fompc", "mpc") if c in REGISTRY],
                            "overrides": dict(zip(LIMIT_KEYS, PRESETS_DEG[level]))} for level in ("weak", "normal", "strong")},
-    "katz2025": {"scenarios": ["katz2025-continuous", "katz2025-discrete", "katz2025-constant"], "overrides": {}},
+    # Katz's start (2 km off in each ECEF axis with the station's velocity) cannot be held in the box at once
+    # with 10 mN (the bound is infeasible from day 0; every Lyapunov mode leaves the box in acquisition): the
+    # bound holds it from day 60, where studies/README.md measures Katz's "after acquisition".
+    "katz2025": {"scenarios": ["katz2025-continuous", "katz2025-discrete", "katz2025-constant"], "overrides": {},
+                 "acquisition_days": 60.0},
 }
 # Published Delta-V per year of the same runs (Li 2022 Table 2; Katz 2025 Table 1), beside ours.
 PAPER = {("li2022-normal", "li2022-qffc"): 60.2, ("li2022-normal", "li2022-fompc"): 54.2,
@@ -49,12 +53,14 @@ def run_case(name: str, days: float) -> dict:
     case = CASES[name]
     overrides = {"duration.days": days, **case["overrides"]}
     start = time.perf_counter()
-    b = bound(geojax.load_scenario(case["scenarios"][0], overrides), say=print)
+    acquisition = case.get("acquisition_days", 0.0)
+    b = bound(geojax.load_scenario(case["scenarios"][0], overrides), acquisition_days=acquisition, say=print)
     per_cycle = b.thruster_mps.sum(axis=1).reshape(-1, int(round(SIDEREAL_DAY_S / b.slot_s))).sum(axis=1)
     rows = {"bound": {"dv_per_year_mps": b.bound_per_year_mps, "plan_per_year_mps": b.plan_per_year_mps,
                       "resim_per_year_mps": b.resim["dv_per_year_mps"], "status": b.resim_status,
                       "max_abs_dlon_deg": b.resim["max_abs_dlon_deg"], "max_abs_dlat_deg": b.resim["max_abs_dlat_deg"],
-                      "geometry": b.geometry, "wall_s": time.perf_counter() - start,
+                      "geometry": b.geometry, "wall_s": time.perf_counter() - start, "acquisition_days": acquisition,
+                      "max_abs_box_after_acquisition_deg": b.max_abs_box_deg,
                       "dv_per_cycle_mps": per_cycle.tolist(),
                       "dv_w_per_cycle_mps": np.abs(b.u_rsw_mps[:, 2]).reshape(len(per_cycle), -1).sum(axis=1).tolist()}}
     for scenario in case["scenarios"]:
@@ -75,13 +81,19 @@ def table(results: dict, days: float) -> str:
              f"`python studies/bounds/table.py --days {days:g}`. The bound: `geojax bound` (Delta-V per year that no "
              "thrust history constant over 1 h slots with the same thrusters can beat while holding the box at every "
              "step start, in the model linearised about the flown plan); its plan re-simulated in the closed loop. "
-             "Status 0: the box held at every step start. No navigation or attitude errors.", "",
+             "Status 0: the box held at every step start (2: left in longitude, here in Katz's acquisition). "
+             "No navigation or attitude errors.", "",
              "| case | run | ΔV (m/s/yr) | over the bound | paper | status | max abs dλ (°) | max abs φ (°) |",
              "|---|---|---:|---:|---:|---:|---:|---:|"]
     for name, rows in results.items():
         low = rows["bound"]["dv_per_year_mps"]
         for run, row in rows.items():
-            label = f"bound ({row['geometry']}); plan flown: {row['resim_per_year_mps']:.2f}" if run == "bound" else run
+            label = run
+            if run == "bound":
+                label = f"bound ({row['geometry']}); plan flown: {row['resim_per_year_mps']:.2f}"
+                if row.get("acquisition_days"):
+                    label += (f"; box held from day {row['acquisition_days']:g} "
+                              f"(max {row['max_abs_box_after_acquisition_deg']:.4f}° after)")
             over = "" if run == "bound" else f"{100 * (row['dv_per_year_mps'] / low - 1):+.1f} %"
             paper = PAPER.get((name, run), "")
             lines.append(f"| {name} | {label} | {row['dv_per_year_mps']:.2f} | {over} | {paper} | {row['status']} | "
