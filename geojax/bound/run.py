@@ -29,7 +29,7 @@ import numpy as np
 
 from geojax.bound import program
 from geojax.bound.directions import Geometry, geometry_of
-from geojax.bound.linear import linearize
+from geojax.bound.linear import SlotModel, linearize
 from geojax.control.base import Controller, no_plan, stateless_init
 from geojax.control.burns import sunlit_fraction
 from geojax.loop.metrics import SECONDS_PER_YEAR
@@ -42,6 +42,8 @@ from geojax.scenario import Scenario, from_dict
 BOX_MARGIN = 1e-3
 # Cost per m/s of change from the nominal plan in the rounds after the first (per m/s of fuel: 1).
 PROX = 1e-3
+# Stage length where the uncontrolled run is too far for one linear model (see ``bound``).
+STAGE_DAYS = 90.0
 
 
 class BoundResult(NamedTuple):
@@ -116,24 +118,45 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
     if first == 0 and max(start_lon, start_lat) > np.degrees(box):
         raise program.Infeasible(f"the initial state is outside the box: |dlon| {start_lon:.4f} deg, |lat| "
                                  f"{start_lat:.4f} deg, box +-{np.degrees(box):g} deg (station.box_half_width_deg)")
-    history, solution, prox = [], None, 0.0
-    for i in range(iterations):
-        solution = program.solve(model, u, cap, box * (1 - BOX_MARGIN), geometry, float(model.x[0, 0]),
-                                 rounds=rounds, rtol=rtol, prox=prox, first_boxed_slot=first,
-                                 generators=None if solution is None else solution.generators)
-        predicted = _linear_outputs(model, solution, u)
-        fuel = sum(w.sum(axis=1) for w in solution.w_mps)
-        u, model = solution.u_mps, model_of(solution.u_mps, fuel)
-        worst = float(np.degrees(np.max(np.abs(model.y[first:]))))
-        history.append({"fuel_mps": solution.fuel_mps, "max_abs_box_deg": worst, "prox": prox,
-                        "columns": int(sum(len(g) for g in solution.generators)), "solve_s": solution.solve_s,
-                        "linear_error_deg": float(np.degrees(np.max(np.abs(predicted - model.y))))})
-        say(f"  linearisation {i + 1}: plan {solution.fuel_mps:.4f} m/s; flown, max |box| {worst:.5f} deg of "
-            f"{np.degrees(box):g}, {history[-1]['linear_error_deg']:.1e} deg from the linear model "
-            f"({solution.solve_s:.1f} s)", flush=True)
-        if worst <= np.degrees(box):
-            break
-        prox = PROX  # sequential linearisation: from now on, the plan of least fuel nearest the nominal
+    history, solution = [], None
+
+    def linearisations(horizon, u, model, solution, prox):
+        """Sequential linearisation of the program over the first ``horizon`` slots (the rest coasts)."""
+        for i in range(iterations):
+            head = _head(model, horizon)
+            solution = program.solve(head, u[:horizon], cap[:horizon], box * (1 - BOX_MARGIN), geometry,
+                                     float(model.x[0, 0]), rounds=rounds, rtol=rtol, prox=prox, first_boxed_slot=first,
+                                     generators=None if solution is None else solution.generators)
+            predicted = _linear_outputs(head, solution, u[:horizon])
+            u = np.concatenate([solution.u_mps, u[horizon:] * 0.0])
+            fuel = np.concatenate([sum(w.sum(axis=1) for w in solution.w_mps), np.zeros(n_slots - horizon)])
+            model = model_of(u, fuel)
+            worst = float(np.degrees(np.max(np.abs(model.y[first:horizon]))))
+            history.append({"fuel_mps": solution.fuel_mps, "max_abs_box_deg": worst, "prox": prox, "slots": horizon,
+                            "columns": int(sum(len(g) for g in solution.generators)), "solve_s": solution.solve_s,
+                            "linear_error_deg": float(np.degrees(np.max(np.abs(predicted - model.y[:horizon]))))})
+            say(f"  linearisation {len(history)} ({horizon * slot_s / 86400:.0f} days): plan {solution.fuel_mps:.4f} m/s; "
+                f"flown, max |box| {worst:.5f} deg of {np.degrees(box):g}, {history[-1]['linear_error_deg']:.1e} deg "
+                f"from the linear model ({solution.solve_s:.1f} s)", flush=True)
+            if worst <= np.degrees(box):
+                break
+            prox = PROX  # from now on, of the plans of least fuel the one nearest the nominal
+        return u, fuel, model, solution
+
+    try:
+        u, fuel, model, solution = linearisations(n_slots, u, model, solution, 0.0)
+    except program.Infeasible:
+        # About the uncontrolled run the program may be infeasible where the flown one is not: the run drifts
+        # too far for the linear model (katz2025 at 10 deg E with C22: tens of degrees in a year).  Plan in
+        # stages: each one's model is linearised about the plan so far, coasting only over the new stage.
+        stage = int(np.ceil(max(STAGE_DAYS, acquisition_days + 30.0) * 86400.0 / slot_s))
+        if stage >= n_slots:
+            raise
+        say(f"  infeasible about the uncontrolled run; planning in stages of {stage * slot_s / 86400:.0f} days", flush=True)
+        history.clear()
+        u, model, solution = np.zeros((n_slots, 3)), model_of(np.zeros((n_slots, 3)), np.zeros(n_slots)), None
+        for horizon in [*range(stage, n_slots, stage), n_slots]:
+            u, fuel, model, solution = linearisations(horizon, u, model, solution, PROX if solution else 0.0)
     # The bound: the unrestricted program about the flown trajectory, over the full box.
     lower = program.solve(model, u, cap, box, geometry, float(model.x[0, 0]), rounds=rounds, rtol=rtol,
                           generators=solution.generators, first_boxed_slot=first)
@@ -149,6 +172,10 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
         history[-1]["max_abs_box_deg"],
         history, (np.arange(n_slots) + 0.5) * slot_s, u, per_thruster, np.degrees(model.y[..., 0]),
         np.degrees(model.y[..., 1]), time.perf_counter() - start)
+
+
+def _head(model: SlotModel, horizon: int) -> SlotModel:
+    return SlotModel(model.x[:horizon + 1], *(a[:horizon] for a in model[1:]))
 
 
 def _uncontrolled(sc: Scenario) -> Scenario:
