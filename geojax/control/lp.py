@@ -224,12 +224,47 @@ def _norm(v):
     return jnp.max(jnp.abs(v))
 
 
+# Factorisations in plain XLA operations.  jaxlib's LAPACK kernels (lapack_dpotrf_ffi, lapack_dtrsm_ffi) split
+# a large batch over XLA's intra-op thread pool from inside a running program; with one device per core
+# (``geojax.parallel.per_device``, as sweeps run) both pool threads wait in such a kernel for work that no
+# thread is left to run: the MPC at 64 lanes per device on 2 devices hung in ParallelBatchMap (gdb).  The
+# matrices here are small (2G x 2G per cycle), so a column loop costs little under vmap.
+
+
+def cholesky(a):
+    """The lower Cholesky factor of a symmetric positive definite a [n, n] (NaN where it is not)."""
+    n = a.shape[-1]
+    index = jnp.arange(n)
+
+    def column(k, factor_rest):
+        factor, rest = factor_rest
+        col = jnp.where(index >= k, rest[:, k] / jnp.sqrt(rest[k, k]), 0.0)
+        return factor.at[:, k].set(col), rest - jnp.outer(col, col)
+
+    return jax.lax.fori_loop(0, n, column, (jnp.zeros_like(a), a))[0]
+
+
+def cho_solve(factor, b):
+    """x with (L L') x = b for the lower factor L [n, n] of ``cholesky``; b [n] or [n, k]."""
+    n = factor.shape[-1]
+
+    def forward(i, y):
+        return y.at[i].set((b[i] - factor[i] @ y) / factor[i, i])
+
+    def backward(j, x):
+        i = n - 1 - j
+        return x.at[i].set((y[i] - factor[:, i] @ x) / factor[i, i])
+
+    y = jax.lax.fori_loop(0, n, forward, jnp.zeros_like(b))
+    return jax.lax.fori_loop(0, n, backward, jnp.zeros_like(b))
+
+
 def dense_operator(a) -> Operator:
     """The ``Operator`` of a dense matrix ``a`` [m, n] (Cholesky of the n x n KKT matrix per stage)."""
 
     def factor(rho, sigma):
-        chol = jnp.linalg.cholesky(jnp.diag(sigma) + a.T @ (rho[:, None] * a))
-        return lambda rhs: jax.scipy.linalg.cho_solve((chol, True), rhs)
+        lower = cholesky(jnp.diag(sigma) + a.T @ (rho[:, None] * a))
+        return lambda rhs: cho_solve(lower, rhs)
 
     def norms(d, e):
         scaled_abs = jnp.abs(a) * d[:, None] * e[None, :]

@@ -281,9 +281,9 @@ def riccati(phi, effect, theta, q, n_max: int, g: int):
     def backward(p_next, xs):
         e, th, q_here = xs
         h = th + e.T @ p_next @ e
-        chol = jnp.linalg.cholesky(h)
+        chol = lp.cholesky(h)
         m = e.T @ p_next @ phi  # [2G, 6]
-        gain = jax.scipy.linalg.cho_solve((chol, True), m)
+        gain = lp.cho_solve(chol, m)
         p_here = q_here + phi.T @ p_next @ phi - m.T @ gain
         return p_here, (chol, gain)
 
@@ -294,7 +294,7 @@ def riccati(phi, effect, theta, q, n_max: int, g: int):
         def costate(p_next, xs):  # p of the cost-to-go, backward: p_j = Phi'p_{j+1} - gain_j' g_j
             e, ch, k, b_j = xs
             g_j = e.T @ p_next - b_j
-            return phi.T @ p_next - k.T @ g_j, jax.scipy.linalg.cho_solve((ch, True), g_j)
+            return phi.T @ p_next - k.T @ g_j, lp.cho_solve(ch, g_j)
 
         _, h_inv_g = jax.lax.scan(costate, jnp.zeros(6), (effect, chol, gain, b.reshape(n_max, 2 * g)), reverse=True)
 
