@@ -11,7 +11,8 @@ import scipy.optimize
 from geojax import scenario, sweep
 from geojax.control import lp, mpc, qffc
 from geojax.control.qffc import BurnPair
-from geojax.loop.metrics import STATUS_OK
+from geojax.control.effects import V_SYNC_MPS
+from geojax.loop.metrics import SECONDS_PER_YEAR, STATUS_OK
 from geojax.loop.rollout import simulate
 from geojax.loop.setup import prepare
 from geojax.params import station_target
@@ -103,7 +104,7 @@ def test_planning_program_matches_highs(planning):
     assert np.abs(normal @ solved - rhs).max() < 1e-8 * np.abs(normal).max() * np.abs(solved).max()
     solution = jax.jit(lambda: lp.solve(jnp.asarray(c), operator, jnp.asarray(lower), jnp.asarray(upper),
                                         jnp.asarray(penalty), tolerance=1e-7))()
-    assert bool(solution.converged) and int(solution.iterations) < 30
+    assert bool(solution.converged) and int(solution.iterations) <= mpc.FIELDS["iterations"].default
     assert float(solution.objective) == pytest.approx(highs(c, a, lower, upper, penalty), rel=1e-4)
 
 
@@ -138,19 +139,29 @@ def test_padding_the_horizon_changes_nothing(planning):
     np.testing.assert_allclose(plans[10][1], plans[6][1], atol=1e-6 * np.abs(plans[6][1]).max())
 
 
-def test_twenty_days_hold_the_box_with_less_fuel_than_the_qffc():
-    """Closed loop against the QFFC on the same 20 days: both hold the box (status 0); the MPC certifies every
-    plan, flies within the arms' limits, and spends less (it lets i lag within Delta i_max), but not
-    implausibly less: the inclination's natural drift alone costs 2 V_s |di| / sin(beta_max) ~ 40 m/s/yr."""
-    mpc_run = simulate(scenario.load("li2022-mpc", {"duration.days": DAYS}))
+def test_twenty_days_hold_the_box_between_the_inclination_floor_and_the_qffc():
+    """Closed loop on 20 days: status 0, every plan certified, flown within the arms' pitch limit.  Its Delta-V
+    lies between the QFFC's on the same days (which corrects the full deviation every cycle) and a closed-form
+    floor: a run that ends with |i - i_T| <= Delta i_max must have flown at least 2 V_s (|i_free - i_T| -
+    Delta i_max) north-south (eq. (30); i_free the uncontrolled reference's inclination at the end)."""
+    sc = scenario.load("li2022-mpc", {"duration.days": DAYS})
+    mpc_run = simulate(sc)
     qffc_run = simulate(scenario.load("li2022-qffc", {"duration.days": DAYS}))
     assert int(mpc_run.status) == STATUS_OK and int(qffc_run.status) == STATUS_OK
     rec = mpc_run.records.cycles.controller
     assert np.all(rec["certified"]) and np.all(rec["solved"])
     assert np.max(np.abs(rec["burns"].beta_rad)) <= np.radians(70.0) + 1e-12
-    ratio = mpc_run.metrics["dv_per_year_mps"] / qffc_run.metrics["dv_per_year_mps"]
-    assert 0.4 < ratio < 1.0, ratio
-    assert mpc_run.metrics["max_abs_di"] < 3e-4 * 1.1
+    batch = prepare([sc])
+    n = batch.n_cycles
+    reference = np.asarray(batch.shared.reference.mean)
+    target = np.array([sc.config["station"]["ix"], sc.config["station"]["iy"]])
+    di_max = sc.config["controller"]["di_max"]
+    assert mpc_run.metrics["max_abs_di"] < 1.1 * di_max
+    floor_mps = 2 * V_SYNC_MPS * (np.hypot(*(reference[n, 5:7] - target)) - di_max)
+    to_run = n * batch.step_s * 96 / SECONDS_PER_YEAR
+    dv_mps = mpc_run.metrics["dv_per_year_mps"] * to_run
+    assert floor_mps > 0.1
+    assert floor_mps < dv_mps < qffc_run.metrics["dv_per_year_mps"] * to_run
 
 
 def test_a_sweep_over_the_horizon_compiles_once(tmp_path, monkeypatch):

@@ -66,20 +66,22 @@ SOLVED_VIOLATION = 0.01  # a plan violating a row by more than this fraction of 
 
 FIELDS = {
     # Horizon N (cycles) and the limits of the mean elements about their targets.
-    "horizon": Field(int, 10, lower=1, upper=HORIZON_LIMIT + 1, lower_inclusive=True, si="horizon"),
-    "di_max": Field(NUMBER, 3e-4, lower=0.0, si="di_max", transform=LOG),  # MEE (h, k), as the FOMPC's
-    "e_max": Field(NUMBER, 2.5e-4, lower=0.0, si="e_max", transform=LOG),  # MEE (f, g)
+    "horizon": Field(int, 20, lower=1, upper=HORIZON_LIMIT + 1, lower_inclusive=True, si="horizon"),
+    "di_max": Field(NUMBER, 3.3e-4, lower=0.0, si="di_max", transform=LOG),  # MEE (h, k), as the FOMPC's
+    "e_max": Field(NUMBER, 2e-4, lower=0.0, si="e_max", transform=LOG),  # MEE (f, g)
     "lon_margin_deg": Field(NUMBER, 0.005, lower=0.0, lower_inclusive=True, si="lon_margin_rad", to_si=degrees),
     "terminal_cycles": Field(NUMBER, 3.0, lower=0.0, lower_inclusive=True, upper=1e3, si="terminal_cycles"),
     # Capacity of one burn (hours at full thrust) and the soft rows' penalty (m/s per half-width violated).
     "max_burn_h": Field(NUMBER, 2.0, lower=0.0, upper=6.0 + 1e-9, si="max_burn_s", to_si=3600.0),
     "penalty_mps": Field(NUMBER, 100.0, lower=0.0, si="penalty_mps", transform=LOG),
+    # The relative discount per cycle on later Delta-V (breaks the program's tie in the timing of corrections).
+    "defer": Field(NUMBER, 1e-3, lower=0.0, lower_inclusive=True, upper=0.02, si="defer"),
     # The solver (``control.lp``): the certificate's tolerance, and interior-point iterations at most (static).
     "tolerance": Field(NUMBER, 1e-7, lower=0.0, upper=1.0, si="tolerance"),
     "iterations": Field(int, 40, lower=1, upper=10001, lower_inclusive=True, static=True),
     # The burn directions (yaw x pitch grid per thruster) and the polygons' sides (static: shapes).
-    "yaw_points": Field(int, 4, lower=1, upper=33, lower_inclusive=True, static=True),
-    "pitch_points": Field(int, 3, lower=1, upper=33, lower_inclusive=True, static=True),
+    "yaw_points": Field(int, 3, lower=1, upper=33, lower_inclusive=True, static=True),
+    "pitch_points": Field(int, 2, lower=1, upper=33, lower_inclusive=True, static=True),
     "facets": Field(int, 12, lower=4, upper=129, lower_inclusive=True, static=True),
 }
 
@@ -87,9 +89,9 @@ FIELDS = {
 class Shape(NamedTuple):
     """What sets the compiled plan's shapes (static: hashable Python numbers)."""
 
-    n_max: int = 10  # horizon padding (cycles)
-    yaw_points: int = 4
-    pitch_points: int = 3
+    n_max: int = 20  # horizon padding (cycles)
+    yaw_points: int = 3
+    pitch_points: int = 2
     facets: int = 12  # sides of the e and i polygons (even)
     iterations: int = 40  # interior-point iterations at most
 
@@ -316,7 +318,10 @@ def program(model: Model, leaves: dict, shape: Shape):
     upper = jnp.concatenate([jnp.full(n, jnp.inf), cap_rows, model.upper.reshape(-1)])
     penalty = jnp.concatenate([jnp.full(n + cap_rows.shape[0], jnp.inf),
                                jnp.full(model.lower.size, 1.0) * leaves["penalty_mps"]])
-    return jnp.ones(n), lower, upper, penalty
+    # Later Delta-V is discounted by a hair (``defer`` per cycle): the timing of a correction is otherwise
+    # degenerate, and the interior point would return the centre of the optimal face (every cycle a share).
+    discount = 1.0 - leaves["defer"] * jnp.arange(shape.n_max)
+    return jnp.repeat(discount, 2 * shape.generators), lower, upper, penalty
 
 
 class Plan(NamedTuple):
