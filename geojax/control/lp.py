@@ -17,10 +17,10 @@ dense A.  The problem is first equilibrated (OSQP's modified Ruiz scaling).  The
 dual residual within ``tolerance``); under ``vmap`` a batch runs until its slowest member has converged,
 or for ``Settings.iterations`` at most.
 
-Why not a first-order method (ADMM in the OSQP form, PDHG): measured on the MPC's programs
-(``control.mpc``), whose longitude rows are ~1e4 times more sensitive to tangential Delta-V than the
-inclination rows, OSQP's ADMM with Ruiz scaling, adaptive rho and polishing left half of 16 random plans
-unsolved after 4000 iterations; this method solves them all in 15-30 iterations.
+Why not ADMM in the OSQP form (tried first): on the MPC's programs (``control.mpc``), whose longitude rows
+are ~1e4 times more sensitive to tangential Delta-V than the inclination rows, it left half of 16 random
+plans unsolved after 4000 iterations, with Ruiz scaling, adaptive rho and polishing; this method solves
+them all in 15-30 iterations.  (PDHG, untried, is as sensitive to the conditioning.)
 """
 
 from __future__ import annotations
@@ -145,8 +145,9 @@ def solve(c, operator: Operator, lower, upper, penalty, *, tolerance, settings: 
             return jnp.min(ratio)
 
         def longest(ds, dz, dv, dzeta):
-            return jnp.minimum(1.0, jnp.min(jnp.stack([step_to_boundary(s, ds, present), step_to_boundary(z, dz, present),
-                                                       step_to_boundary(v, dv, soft), step_to_boundary(zeta, dzeta, soft)])))
+            steps = [step_to_boundary(s, ds, present), step_to_boundary(z, dz, present),
+                     step_to_boundary(v, dv, soft), step_to_boundary(zeta, dzeta, soft)]
+            return jnp.minimum(1.0, jnp.min(jnp.stack(steps)))
 
         # Predictor (affine scaling), then the corrector with the centring sigma = (mu_aff / mu)^3.
         _, ds_a, dz_a, dv_a, dzeta_a = direction(s * z, v * zeta)

@@ -1,44 +1,39 @@
 """Minimum-fuel receding-horizon controller (issue 14, item 3): one linear program per cycle, first cycle flown.
 
 Each cycle the controller solves Gazzino 2016's minimum-fuel problem (Problem 3: L1 fuel, linear dynamics,
-box constraints) over the next N cycles on Li 2022's predictor model, and flies the first cycle's burns:
+a box) over the next N cycles on Li 2022's predictor model, and flies the first cycle's burns:
 
 * State: the mean elements x_j = (lambda, lambda_dot, e_x, e_y, i_x, i_y) (MEE f, g, h, k) at the cycle
-  boundaries j = 0..N, from the estimate x_0 (``control.predictor``).  x_{j+1} = x_j + the natural drift of
-  cycle j (the shared uncontrolled reference, Li 2022 eqs. (25)-(27), as the QFFC and the FOMPC predict)
-  + B(l_1) v_1j + B(l_2) v_2j, with B of ``control.effects`` (Li 2022 eq. (22), re-derived: its longitude row
-  already carries the drift a burn leaves until the end of its cycle), and the longitude advancing by
-  the drift times the cycle length in every later cycle.  The state is eliminated (condensed): every row is
-  a linear function of the burns.
-* Burns: two per cycle as in the QFFC, thruster 1 (pushing south) at l_1 and thruster 2 (north) at
-  l_2 = l_1 + pi.  l_2 is the QFFC's rule (eq. (31)) applied to the inclination deviation the natural drift
-  leaves at the end of the horizon, so the north-south burns sit on the line of nodes of the correction the
-  horizon needs; every cycle of the horizon uses the same l_1 (the orbit turns 2 pi per cycle).  A burn's
-  Delta-V is sum_g w_g d_g, w >= 0, over a yaw x pitch grid of unit directions d_g spanning the arm's
-  rectangle (eq. (1), ``yaw_points`` x ``pitch_points``, from the thrusters' limits as traced leaves, so a
-  sweep over beta_max compiles once); the fuel is sum w (L1; a combination of generators is flown as one
-  burn along its resultant, which costs |sum w d| <= sum w).  Each burn's sum w is at most F / m times
-  ``max_burn_h``.
-* Constraints at every boundary j = 1..N (soft, below): the mean longitude within +-L of the station, L the
-  box less the daily libration 2 (|e_T| + e_max) and ``lon_margin_deg``; e within e_max and i within
-  Delta i_max of their targets, each circle as an inscribed regular polygon of ``facets`` sides (so the
-  polygon is inside the circle); and at j = N the longitude ``terminal_cycles`` cycles later at the last
-  drift, so that the horizon does not end on a drift that leaves the box just after it.
-* Soft constraints: every state row carries an exact L1 penalty of ``penalty_mps`` (m/s of Delta-V per
-  width of the row's half-interval), so the program is always feasible inside ``jit``; a cycle whose plan
-  violates a row by more than 1 % of its half-width records ``solved`` = False (status 1).
-* Solver: ``control.lp`` (ADMM in the OSQP form with OSQP's polishing, certified by the duality gap),
-  with ``iterations`` at most and ``tolerance``; warm-started from the last plan shifted by one cycle.  The
-  KKT matrix is never formed: the condensed dynamics make A'RA a diagonal plus a rank-8N term (6 per
-  boundary, 2 per cycle of burn capacities), solved by the Woodbury identity with an 8N x 8N Cholesky
-  (``CondensedOperator``).
-* The horizon N is padded to a static N_max (the largest of a batch, as the FOMPC): cycles beyond N have
-  no capacity and no rows, so a sweep over N compiles once.
+  boundaries j = 0..N from the estimate x_0; x_{j+1} = Phi x_j + (the reference's natural drift of cycle j,
+  Li 2022 eqs. (25)-(27), as the QFFC and the FOMPC predict) + B(l_1) v_1j + B(l_2) v_2j, with B of
+  ``control.effects`` (eq. (22) re-derived; its longitude row carries the drift until the cycle's end) and
+  Phi advancing the longitude by the drift over each later cycle.  The state is condensed away.
+* Burns: two per cycle as the QFFC's, thruster 1 (south) at l_1 and thruster 2 (north) at l_2 = l_1 + pi,
+  l_2 by eq. (31) from the inclination deviation the natural drift leaves at the end of the horizon (the
+  same for every cycle of the horizon).  A burn's Delta-V is sum_g w_g d_g, w >= 0, over a ``yaw_points``
+  x ``pitch_points`` grid d_g of the arm's rectangle (eq. (1), built from the thrusters' traced leaves, so a
+  sweep over beta_max compiles once); the fuel is sum w; each burn's sum w <= F / m x ``max_burn_h``.
+* Rows at every boundary 1..N: the mean longitude within the box less the daily libration
+  2 (|e_T| + e_max) and ``lon_margin_deg``; e and i within e_max and Delta i_max of their targets (inscribed
+  polygons of ``facets`` sides); at N, the longitude ``terminal_cycles`` cycles on at the last drift.  Each
+  row is soft, with an exact L1 penalty (``penalty_mps`` per half-width violated), so the program is always
+  feasible inside ``jit``; a plan violating a row by more than 1 % of its half-width is not ``solved``.
+* Later Delta-V is discounted by ``defer`` per cycle.  The timing of a correction is otherwise degenerate and
+  the interior point returns the centre of the optimal face, a share of it in every cycle, so the loop
+  never lets i reach the edge of its window: li2022, one year, 50.1 m/s/yr without the discount, 48.7
+  with it (N = 20; the same from 1e-4 to 1e-2).
+* Solver: ``control.lp``, a Mehrotra interior point certified by its duality gap (``tolerance``,
+  ``iterations`` at most; 15-30 are used), with the normal matrix factored by a Riccati recursion over the
+  horizon (``operator``); ``control.lp`` says why not ADMM.  N is padded to a static N_max (the largest of
+  a batch): cycles beyond N have no effect and no rows, so a sweep over N compiles once.
 
-The first cycle's two burns are flown by ``control.burns`` exactly as the QFFC's (thrust windows, shadow,
-attitude errors, burn records).  A burn whose resultant direction leaves the arm's rectangle (a
-combination of generators at the pitch limit has a larger pitch than either) is flown at the nearest
-(yaw, pitch) inside it with the planned magnitude.
+Defaults, measured on li2022 (2020, normal limits, one year, the bound 47.65 m/s/yr): N = 20 and Delta
+i_max = 3.3e-4 give 48.7 m/s/yr (N = 10: 49.3; Delta i_max = 3.5e-4: 48.6 with latitudes to 0.045 deg);
+e_max = 2e-4 keeps the longitude within 0.039 deg at the same fuel as 2.5e-4; the 3 x 2 grid of
+directions (yaw limits and middle, pitch 0 and beta_max) flies the same fuel as 4 x 3 or 5 x 4 at a sixth of
+the cost.  The first cycle's burns are flown by ``control.burns`` as the QFFC's (thrust windows, shadow,
+attitude errors, burn records); a resultant outside the arm's rectangle (two directions at the pitch limit
+combine to a steeper one) is flown at its nearest (yaw, pitch) inside, with the planned magnitude.
 """
 
 from __future__ import annotations
@@ -49,7 +44,6 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from geojax.control import burns as burns_mod
 from geojax.control import lp
@@ -136,8 +130,7 @@ class Model(NamedTuple):
     rows: jnp.ndarray  # [n_max, R, 6] state rows of boundaries 1..n_max, scaled to half-width 1
     lower: jnp.ndarray  # [n_max, R] bounds of rows @ (state change by the burns)
     upper: jnp.ndarray  # [n_max, R]
-    cap: jnp.ndarray  # [n_max, 2] capacity of each burn, m/s (0 beyond the horizon)
-    cap_scale: jnp.ndarray  # [] m/s, the scale of the capacity rows
+    cap_scale: jnp.ndarray  # [] m/s, the capacity of each burn (its row is sum w / cap_scale <= 1)
     mask: jnp.ndarray  # [n_max] 1 for the cycles of the horizon, 0 beyond
     cycle_s: jnp.ndarray  # []
 
@@ -181,23 +174,7 @@ def build(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves
     upper = jnp.where(active, 1.0 - value, jnp.inf)
     cap_scale = accel_mps2 * leaves["max_burn_s"]
     mask = (jnp.arange(n_max) < horizon).astype(float)
-    cap = cap_scale * jnp.ones((n_max, 2))
-    return Model(effect, directions, l_rad, rows, lower, upper, cap, cap_scale, mask, jnp.asarray(cycle_s))
-
-
-def lag_matrices(n_max: int):
-    """(L1, L2) [n_max, n_max]: boundary j + 1 sees cycle i's burns once (i <= j) and its drift for j - i
-    whole cycles after (the longitude's lag), so dx_{j+1} = sum_i L1[j, i] e_i + T L2[j, i] e_i,drift."""
-    j, i = np.meshgrid(np.arange(n_max), np.arange(n_max), indexing="ij")
-    return (i <= j).astype(float), np.maximum(j - i, 0).astype(float)
-
-
-def condensed(model: Model, n_max: int):
-    """G [n_max, 6, n_max, 2G]: the state change at boundary j + 1 per m/s along each direction of cycle i."""
-    l1, l2 = lag_matrices(n_max)
-    drift_to_lon = jnp.zeros((6, 6)).at[0, 1].set(model.cycle_s)
-    per_lag = model.effect[None, None] * l1[:, :, None, None] + l2[:, :, None, None] * (drift_to_lon @ model.effect)
-    return jnp.transpose(per_lag * model.mask[None, :, None, None], (0, 2, 1, 3))
+    return Model(effect, directions, l_rad, rows, lower, upper, cap_scale, mask, jnp.asarray(cycle_s))
 
 
 def operator(model: Model, shape: Shape) -> lp.Operator:
@@ -215,8 +192,6 @@ def operator(model: Model, shape: Shape) -> lp.Operator:
     n, r = n_max * 2 * g, shape.rows_per_boundary
     phi = transition(model.cycle_s)
     effect = model.mask[:, None, None] * model.effect  # [n_max, 6, 2G]: no burns beyond the horizon
-    abs_rows = jnp.abs(jnp.einsum("jrs,jsn->jrn", model.rows, condensed(model, n_max).reshape(n_max, 6, n)))
-    abs_rows = abs_rows.reshape(-1, n)
 
     def state_change(w):  # [n] -> [n_max, 6] at boundaries 1..n_max
         def one(x, e_w):
@@ -224,6 +199,10 @@ def operator(model: Model, shape: Shape) -> lp.Operator:
             return x, x
 
         return jax.lax.scan(one, jnp.zeros(6), jnp.einsum("jsv,jv->js", effect, w.reshape(n_max, 2 * g)))[1]
+
+    # |state rows of A| [n_max R, n], for the equilibration's norms: the rows of every unit Delta-V.
+    condensed = jax.vmap(state_change, out_axes=-1)(jnp.eye(n))  # [n_max, 6, n]
+    abs_rows = jnp.abs(jnp.einsum("jrs,jsn->jrn", model.rows, condensed)).reshape(-1, n)
 
     def state_change_t(v):  # [n_max, 6] -> [n]: the adjoint, a backward pass
         def one(lam, v_j):
@@ -298,7 +277,8 @@ def riccati(phi, effect, theta, q, n_max: int, g: int):
             g_j = e.T @ p_next - b_j
             return phi.T @ p_next - k.T @ g_j, lp.cho_solve(ch, g_j)
 
-        _, h_inv_g = jax.lax.scan(costate, jnp.zeros(6), (effect, chol, gain, b.reshape(n_max, 2 * g)), reverse=True)
+        xs = (effect, chol, gain, b.reshape(n_max, 2 * g))
+        _, h_inv_g = jax.lax.scan(costate, jnp.zeros(6), xs, reverse=True)
 
         def forward(x, xs):
             e, k, hg = xs
@@ -312,11 +292,10 @@ def riccati(phi, effect, theta, q, n_max: int, g: int):
 
 def program(model: Model, leaves: dict, shape: Shape):
     """(c [n], lower [m], upper [m], penalty [m]) of the program on ``operator(model, shape)``'s rows."""
-    n = shape.n_max * 2 * shape.generators
-    cap_rows = model.cap.reshape(-1) / model.cap_scale
-    lower = jnp.concatenate([jnp.zeros(n), jnp.full(cap_rows.shape, -jnp.inf), model.lower.reshape(-1)])
-    upper = jnp.concatenate([jnp.full(n, jnp.inf), cap_rows, model.upper.reshape(-1)])
-    penalty = jnp.concatenate([jnp.full(n + cap_rows.shape[0], jnp.inf),
+    n, caps = shape.n_max * 2 * shape.generators, 2 * shape.n_max
+    lower = jnp.concatenate([jnp.zeros(n), jnp.full(caps, -jnp.inf), model.lower.reshape(-1)])
+    upper = jnp.concatenate([jnp.full(n, jnp.inf), jnp.ones(caps), model.upper.reshape(-1)])
+    penalty = jnp.concatenate([jnp.full(n + caps, jnp.inf),
                                jnp.full(model.lower.size, 1.0) * leaves["penalty_mps"]])
     # Later Delta-V is discounted by a hair (``defer`` per cycle): the timing of a correction is otherwise
     # degenerate, and the interior point would return the centre of the optimal face (every cycle a share).
@@ -329,7 +308,7 @@ class Plan(NamedTuple):
 
     flown: burns_mod.BurnPlan
     solved: jnp.ndarray  # [] bool: no row of the plan violated by more than SOLVED_VIOLATION of its half-width
-    fuel_mps: jnp.ndarray  # [] the program's objective (Delta-V over the horizon plus penalties)
+    fuel_mps: jnp.ndarray  # [] the program's objective (Delta-V over the horizon, discounted, plus penalties)
     violation: jnp.ndarray  # [] the largest row violation, in half-widths
     iterations: jnp.ndarray  # [] interior-point iterations run
     certified: jnp.ndarray  # [] bool: the solver certified the optimum (``lp.certify``)
@@ -376,7 +355,8 @@ def validate(config: dict) -> None:
     """Bad input the field bounds cannot see: an odd number of facets, and limits that leave no longitude box."""
     c, station = config["controller"], config["station"]
     if c["facets"] % 2:
-        raise ValueError(f"controller.facets: must be even (the polygons' sides come in opposite pairs), got {c['facets']}")
+        raise ValueError(f"controller.facets: must be even (the polygons' sides come in opposite pairs), "
+                         f"got {c['facets']}")
     libration_deg = math.degrees(2 * (math.hypot(station["ex"], station["ey"]) + c["e_max"]))
     room_deg = station["box_half_width_deg"] - libration_deg - c["lon_margin_deg"]
     if room_deg <= 0:
@@ -404,9 +384,11 @@ def controller(shape: Shape = Shape()) -> Controller:
         ns_fraction = jnp.sum(jnp.abs(burns.dv_rsw_mps[:, 2])) / jnp.maximum(full, 1e-12)
         flown = burns_mod.fly(params, burns, prediction, ns_fraction, estimate, context, key)
         rows = solution.ax[-model.lower.size:]
-        violation = jnp.max(jnp.maximum(model.lower.reshape(-1) - rows, 0.0) + jnp.maximum(rows - model.upper.reshape(-1), 0.0))
+        violation = jnp.max(jnp.maximum(model.lower.reshape(-1) - rows, 0.0)
+                            + jnp.maximum(rows - model.upper.reshape(-1), 0.0))
         solved = (violation <= SOLVED_VIOLATION) & jnp.all(jnp.isfinite(solution.x))
-        return Plan(flown, solved, solution.objective, violation, solution.iterations, solution.converged), controller_state
+        plan_ = Plan(flown, solved, solution.objective, violation, solution.iterations, solution.converged)
+        return plan_, controller_state
 
     def thrust(params, plan_: Plan, t, state, environment):
         return burns_mod.thrust(params, plan_.flown, t, state, environment)
