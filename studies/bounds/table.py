@@ -49,9 +49,13 @@ PAPER = {("li2022-normal", "li2022-qffc"): 60.2, ("li2022-normal", "li2022-fompc
          ("katz2025", "katz2025-constant"): 56.088}
 
 
-def run_case(name: str, days: float) -> dict:
+def run_case(name: str, days: float, rows: dict | None = None, only: list | None = None) -> dict:
+    """The bound and every controller of case ``name``; with ``rows`` (a saved case) and ``only`` (scenario
+    names), just those controllers again, the rest kept."""
     case = CASES[name]
     overrides = {"duration.days": days, **case["overrides"]}
+    if rows is not None:
+        return {**rows, **_controllers([s for s in case["scenarios"] if s in only], overrides)}
     start = time.perf_counter()
     acquisition = case.get("acquisition_days", 0.0)
     b = bound(geojax.load_scenario(case["scenarios"][0], overrides), acquisition_days=acquisition, say=print)
@@ -63,7 +67,12 @@ def run_case(name: str, days: float) -> dict:
                       "max_abs_box_after_acquisition_deg": b.max_abs_box_deg,
                       "dv_per_cycle_mps": per_cycle.tolist(),
                       "dv_w_per_cycle_mps": np.abs(b.u_rsw_mps[:, 2]).reshape(len(per_cycle), -1).sum(axis=1).tolist()}}
-    for scenario in case["scenarios"]:
+    return {**rows, **_controllers(case["scenarios"], overrides)}
+
+
+def _controllers(scenarios: list, overrides: dict) -> dict:
+    rows = {}
+    for scenario in scenarios:
         start = time.perf_counter()
         result = geojax.simulate(geojax.load_scenario(scenario, overrides))
         m = result.metrics
@@ -132,6 +141,8 @@ def main(argv=None) -> int:
     parser.add_argument("--days", type=float, default=365.25)
     parser.add_argument("--only", nargs="+", choices=list(CASES))
     parser.add_argument("--rerun", action="store_true", help="recompute the cases already in table.json")
+    parser.add_argument("--controllers", nargs="+", metavar="SCENARIO",
+                        help="recompute only these controllers' rows of the saved cases (e.g. li2022-mpc)")
     parser.add_argument("--out", type=Path, default=HERE / "results")
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -140,10 +151,14 @@ def main(argv=None) -> int:
     if saved.get("days") != args.days:
         saved = {"days": args.days, "cases": {}}
     for name in args.only or CASES:
-        if name in saved["cases"] and not args.rerun:
+        if args.controllers and name in saved["cases"]:
+            print(f"{name}: {', '.join(args.controllers)}", flush=True)
+            saved["cases"][name] = run_case(name, args.days, saved["cases"][name], args.controllers)
+        elif name not in saved["cases"] or args.rerun:
+            print(f"{name}:", flush=True)
+            saved["cases"][name] = run_case(name, args.days)
+        else:
             continue
-        print(f"{name}:", flush=True)
-        saved["cases"][name] = run_case(name, args.days)
         store.write_text(json.dumps(saved, indent=1))
     results = {n: saved["cases"][n] for n in CASES if n in saved["cases"]}
     (args.out / "table.md").write_text(table(results, args.days))
