@@ -158,7 +158,7 @@ def _solve_once(model, u_nominal, cap_mps, box_rad, generators, one_at_a_time, s
     return {"fuel": float(np.sum(w)), "u": x[:, 6:9], "dx": x[:, :6] * scale,
             "w": np.split(w, np.cumsum(counts)[:-1], axis=1),
             "y_link": result["y_eq"][link_rows].T,  # [S, 3]
-            "y_cap": [result["y_ub"][r] for r in cap_rows], "groups": groups, "counts": counts}
+            "y_cap": [result["y_ub"][r] for r in cap_rows]}
 
 
 def _clarabel(cost, a_eq, b_eq, a_ub, b_ub, nonneg) -> dict:
