@@ -12,6 +12,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from geojax.physics.frames import eci_to_ecef, subsatellite_lon_lat_rad
+from geojax.physics.trig import sincos
 
 P, F, G, H, K, L = range(6)
 
@@ -123,7 +124,7 @@ def mee_to_cartesian(mee, mu):
 
 def mee_to_rv_xyz(p, f, g, h, k, true_lon, mu):
     """``mee_to_cartesian`` on components: ((x, y, z), (vx, vy, vz))."""
-    cos_l, sin_l = jnp.cos(true_lon), jnp.sin(true_lon)
+    cos_l, sin_l = sincos(true_lon)
     w = 1 + f * cos_l + g * sin_l
     rows = mee_rsw_rows(h, k, cos_l, sin_l)
     speed = jnp.sqrt(mu / p)
