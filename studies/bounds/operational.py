@@ -1,0 +1,160 @@
+"""Gazzino 2016's operational thruster constraints (issue 14, item 2): the bound's relaxed plan made flyable by
+the paper's two equivalence schemes (``geojax.bound.operational``), each flown in the nonlinear closed loop.
+
+    python studies/bounds/operational.py [--days 28] [--margin 0.2] [--out studies/bounds/results]
+
+1. The relaxed optimum: ``bound`` of gazzino2016 over the full box (the reference for "% above").
+2. The relaxed plan to start from: ``bound`` in the box shrunk by ``--margin`` (the room the pulses need).
+3. Fuel-based (Problem 6) and effect-based (Problem 7) pulses under (i)-(iv), flown by ``bound.replay``.
+Writes ``operational.md`` (the table) and ``operational.png`` (longitude, latitude and the pulses).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+import geojax  # noqa: E402
+from geojax.bound import bound, replay  # noqa: E402
+from geojax.bound import operational as op  # noqa: E402
+from geojax.bound.directions import geometry_of  # noqa: E402
+from geojax.bound.run import BOX_MARGIN, _uncontrolled  # noqa: E402
+from geojax.loop.rollout import simulate  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
+SCENARIO = "gazzino2016"
+OUTER = 0.8  # "near the edge": beyond this fraction of the box half-width
+ROUNDS = 3  # effect-based: re-linearisations about its own flight at most
+
+
+def fly(sc, u_rsw_mps, fuel_mps, step_s, concurrent=1):
+    """The per-step plan in the closed loop: metrics, status, (lon - station, lat) at every step start (deg)."""
+    result = simulate(_uncontrolled(sc), 0, controller=replay(u_rsw_mps, fuel_mps, 1, step_s, concurrent),
+                      keep_steps=True)
+    steps = result.records.steps
+    lon = np.degrees(np.angle(np.exp(1j * (np.asarray(steps.lon_rad).ravel() - np.radians(sc.config["station"]["lon_deg"])))))
+    return {k: float(v) for k, v in result.metrics.items()}, int(result.status), lon, np.degrees(np.asarray(steps.lat_rad).ravel())
+
+
+def centre_measures(lon_deg, lat_deg, box_deg) -> dict:
+    """How far from the box centre a history lives: RMS of |dlon| / box and |lat| / box, and the fraction of
+    step starts with max(|dlon|, |lat|) beyond ``OUTER`` of the box."""
+    edge = np.maximum(np.abs(lon_deg), np.abs(lat_deg)) / box_deg
+    return {"rms_lon_box": float(np.sqrt(np.mean((lon_deg / box_deg) ** 2))),
+            "rms_lat_box": float(np.sqrt(np.mean((lat_deg / box_deg) ** 2))),
+            "outer_fraction": float(np.mean(edge > OUTER))}
+
+
+def run(days: float, margin: float, constraints=op.Constraints(), say=print) -> dict:
+    sc = geojax.load_scenario(SCENARIO, {"duration.days": days})
+    box_deg = float(sc.config["station"]["box_half_width_deg"])
+    shrunk = geojax.load_scenario(SCENARIO, {"duration.days": days, "station.box_half_width_deg": box_deg * (1 - margin)})
+    geometry = geometry_of(sc.config)
+    directions = np.concatenate(geometry.generators)
+    accel_mps2 = float(sc.config["thrusters"]["thrust_n"]) / float(sc.config["spacecraft"]["mass_kg"])
+    optimum = bound(sc, slot_steps=1)
+    relaxed = bound(shrunk, slot_steps=1)
+    step_s = relaxed.slot_s
+    n_steps = len(relaxed.u_rsw_mps)
+    horizon_s = n_steps * step_s
+    say(f"relaxed optimum {optimum.fuel_mps:.4f} m/s; in the box less {margin:.0%}: {relaxed.fuel_mps:.4f} m/s")
+
+    start = time.perf_counter()
+    fuel_pulses = op.fuel_based(relaxed.thruster_mps / accel_mps2, step_s, horizon_s, constraints)
+    say(f"fuel-based: {len(fuel_pulses.centre_s)} pulses ({time.perf_counter() - start:.2f} s)")
+    box_rad = np.radians(box_deg) * (1 - BOX_MARGIN)
+    effect_pulses = op.effect_based(sc, relaxed.u_rsw_mps, fuel_pulses, directions, accel_mps2, box_rad, constraints, say=say)
+
+    rows = {}
+    cases = {"relaxed optimum": (optimum.u_rsw_mps, optimum.thruster_mps.sum(axis=1), len(directions), None),
+             f"relaxed, box less {margin:.0%}": (relaxed.u_rsw_mps, relaxed.thruster_mps.sum(axis=1), len(directions), None),
+             "fuel-based": (*op.step_plan(fuel_pulses, directions, accel_mps2, step_s, n_steps), 1, fuel_pulses),
+             "effect-based": (*op.step_plan(effect_pulses, directions, accel_mps2, step_s, n_steps), 1, effect_pulses)}
+    for name, (u, fuel, concurrent, pulses) in cases.items():
+        metrics, status, lon, lat = fly(sc, u, fuel, step_s, concurrent)
+        rows[name] = {"plan_mps": float(np.sum(fuel)), "dv_per_year_mps": metrics["dv_per_year_mps"], "status": status,
+                      "max_abs_dlon_deg": float(np.max(np.abs(lon))), "max_abs_dlat_deg": float(np.max(np.abs(lat))),
+                      **centre_measures(lon, lat, box_deg), "lon_deg": lon, "lat_deg": lat, "pulses": pulses,
+                      "violations": None if pulses is None else op.violations(pulses, horizon_s, constraints)}
+        say(f"{name}: {rows[name]['dv_per_year_mps']:.3f} m/s/yr, status {status}")
+    return {"days": days, "margin": margin, "box_deg": box_deg, "step_s": step_s, "constraints": constraints,
+            "rows": rows, "directions": directions}
+
+
+def write(out: dict, wall_s: float, folder: Path) -> None:
+    """``operational.md`` (the table and its reading) and ``operational.png``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    rows, box = out["rows"], out["box_deg"]
+    optimum = rows["relaxed optimum"]["dv_per_year_mps"]
+    c = out["constraints"]
+    lines = [f"# Gazzino 2016's operational constraints, {SCENARIO}, {out['days']:g} days", "",
+             f"`python studies/bounds/operational.py --days {out['days']:g} --margin {out['margin']:g}` ({wall_s:.0f} s on 2 CPU cores). "
+             f"Constraints (choices, the paper gives no values): T_l = {c.t_min_firing_s:g} s, T_s = {c.t_same_gap_s:g} s, "
+             f"T_d = {c.t_other_gap_s:g} s. Every plan flown in the nonlinear closed loop (`bound.replay`, one step per slot); "
+             f"status 0: the +-{box:g} deg box held at every step start. Centre vs edge: RMS of |dlon|/box and |lat|/box, and "
+             f"the fraction of step starts with max(|dlon|, |lat|) beyond {OUTER:.0%} of the box.", "",
+             "| plan | pulses | constraint violations | ΔV (m/s/yr) | above the relaxed optimum | status | max abs dλ (°) | max abs φ (°) "
+             "| RMS dλ/box | RMS φ/box | outer 20 % |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for name, r in rows.items():
+        pulses = "" if r["pulses"] is None else str(len(r["pulses"].centre_s))
+        broken = "" if r["violations"] is None else str(sum(r["violations"].values()))
+        lines.append(f"| {name} | {pulses} | {broken} | {r['dv_per_year_mps']:.2f} | {100 * (r['dv_per_year_mps'] / optimum - 1):+.1f} % "
+                     f"| {r['status']} | {r['max_abs_dlon_deg']:.4f} | {r['max_abs_dlat_deg']:.4f} | {r['rms_lon_box']:.2f} "
+                     f"| {r['rms_lat_box']:.2f} | {100 * r['outer_fraction']:.1f} % |")
+    fuel, effect = rows["fuel-based"]["dv_per_year_mps"], rows["effect-based"]["dv_per_year_mps"]
+    lines += ["", f"Fuel-based over effect-based: {100 * (fuel / effect - 1):+.1f} % (Gazzino: +81.6 %).", ""]
+    (folder / "operational.md").write_text("\n".join(lines))
+    _figure(out, folder / "operational.png")
+
+
+def _figure(out: dict, path: Path) -> None:
+    rows, box, step_s = out["rows"], out["box_deg"], out["step_s"]
+    fig, axes = plt.subplots(3, 1, figsize=(10, 9), sharex=True)
+    styles = {"relaxed optimum": ("0.6", "-"), "fuel-based": ("C0", "-"), "effect-based": ("C3", "--")}
+    for name, (color, line) in styles.items():
+        r = rows[name]
+        days = np.arange(len(r["lon_deg"])) * step_s / 86400.0
+        axes[0].plot(days, r["lon_deg"], color=color, ls=line, lw=0.9, label=name)
+        axes[1].plot(days, r["lat_deg"], color=color, ls=line, lw=0.9, label=name)
+    for ax, label in zip(axes[:2], ("λ - station (°)", "φ (°)")):
+        for edge in (-box, box):
+            ax.axhline(edge, color="k", lw=0.8)
+        ax.set_ylabel(label)
+    axes[0].legend(loc="lower left", fontsize=8)
+    names = ("NE", "NW", "SE", "SW")
+    for offset, (name, color) in ((0.2, ("fuel-based", "C0")), (-0.2, ("effect-based", "C3"))):
+        p = rows[name]["pulses"]
+        axes[2].barh(p.thruster + offset, p.duration_s / 86400.0, left=(p.centre_s - p.duration_s / 2) / 86400.0,
+                     height=0.35, color=color, label=name)
+    axes[2].set_yticks(range(4), names)
+    axes[2].set_ylabel("thruster")
+    axes[2].set_xlabel("days")
+    axes[2].legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--days", type=float, default=28.0)
+    parser.add_argument("--margin", type=float, default=0.2, help="the relaxed plan's box shrunk by this fraction")
+    parser.add_argument("--out", type=Path, default=HERE / "results")
+    args = parser.parse_args(argv)
+    start = time.perf_counter()
+    out = run(args.days, args.margin)
+    write(out, time.perf_counter() - start, args.out)
+    print((args.out / "operational.md").read_text())
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
