@@ -48,10 +48,10 @@ DYNAMICS = {"mee": MEE, "cartesian": CARTESIAN}
 # With fusion boundaries in the right-hand side (``physics.fusion``): from BOUNDARY_LANES vmapped lanes per
 # device the step runs 2.5-4x faster (benchmarks/core.py); a batch of one runs 2x slower (each boundary is a
 # conditional of a few microseconds).  From RATES_BOUNDARY_LANES the MEE rates get their own boundary too
-# (measured at batch 32/64/128/256/1024: 0.92/0.89/1.0/1.12/1.50x the speed without it).  The numbers are the
-# same to rounding.
+# (with cos L and sin L in plain arithmetic, ``physics.trig``; measured at batch 16/32/64/128/256/1024, one
+# core: 0.91/0.97/1.01/1.35/1.49/1.62x the speed without it).  The numbers are the same to rounding.
 BOUNDARY_LANES = 8
-RATES_BOUNDARY_LANES = 256
+RATES_BOUNDARY_LANES = 64
 _WITH_BOUNDARIES = {
     (id(d), tier): d._replace(rhs=partial(d.rhs, boundaries=True, **({"rates_boundary": True} if tier == 2 else {})))
     for d in (MEE, CARTESIAN) for tier in (1, 2)
