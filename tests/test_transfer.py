@@ -204,28 +204,53 @@ def test_short_transfer_delta_v_is_the_rocket_equation_and_joints_stay_in_table_
     assert np.ptp(np.degrees(records.theta_rad[:, 2])) > 5.0  # joint 3 worked its range
 
 
+OFF_COM = {"boom.d2_m": 1.5, "boom.a1_m": 0.3, "boom.base_offset_m": [0.0, 0.0, -1.0]}  # thrust line 1.5 m off
+
+
 def test_fixed_layout_keeps_its_joints_and_loses_more_thrust_to_slewing(loop):
     """The fixed layout's thruster never moves (joints frozen at (0, 90, 0) deg), so with a slow body it must
     wait for slews the boom's joints absorb: more time lost to slewing over the same two days than a boom on
-    a body stiff against its torque (1e8 kg m^2).  On the scenarios' 2000 kg m^2 the boom's eq. (8) torque
-    (up to 1 N m) beats the wheels' 0.035 N m and the boom loses more than either."""
+    a body stiff against its torque (1e8 kg m^2).  A boom mounted with its thrust line 1.5 m off the centre of
+    mass (eq. (8) up to 1 N m against the wheels' 0.035 N m) loses more than either; the shipped mounting
+    (the line through the centre of mass at the nominal pose) less than that one."""
     slow = {"attitude.slew_rate_deg_s": 0.02}
     stiff_final, _ = _run(loop, transfer.load("ma2023-boom", {**slow, "attitude.inertia_kg_m2": [1e8] * 3}))
     boom_final, _ = _run(loop, transfer.load("ma2023-boom", slow))
+    off_final, _ = _run(loop, transfer.load("ma2023-boom", {**slow, **OFF_COM}))
     fixed_final, fixed_records = _run(loop, transfer.load("ma2023-fixed", slow))
     np.testing.assert_allclose(np.degrees(fixed_records.theta_rad), np.broadcast_to([0.0, 90.0, 0.0], (1440, 3)),
                                atol=1e-12)
     assert float(fixed_final.stats.lost_to_slew_s) > float(stiff_final.stats.lost_to_slew_s) + 3600.0
-    assert float(boom_final.stats.lost_to_slew_s) > float(fixed_final.stats.lost_to_slew_s) + 3600.0
-    assert float(fixed_final.stats.overpowered_s) == 0.0 and float(boom_final.stats.overpowered_s) > 0.0
+    assert float(off_final.stats.lost_to_slew_s) > float(fixed_final.stats.lost_to_slew_s) + 3600.0
+    assert float(off_final.stats.lost_to_slew_s) > float(boom_final.stats.lost_to_slew_s) + 3600.0
+    assert float(fixed_final.stats.overpowered_s) == 0.0 and float(off_final.stats.overpowered_s) > 0.0
+
+
+def test_the_shipped_mounting_leaves_only_joint_3s_lever(loop):
+    """Closed form of eq. (8) for the shipped mounting (d2 = 0, l_0 = (0, 0, a1): the thrust line through the
+    centre of mass at theta3 = 0 for every theta1): |tau| = F |(d1 + a1 s3) s3 - a1 c3 (1 - c3)|, zero at
+    theta3 = 0; the two-day transfer's largest torque is that at joint 3's +-15 deg stop, never above it."""
+    sc = transfer.load("ma2023-boom")
+    p = sc.params
+    f, d1, a1 = float(p.thrust_n), float(p.d1_m), float(p.a1_m)
+    for theta1, theta3 in ((-0.3, 0.0), (-1.2, 0.0), (-0.7, 0.2), (-0.1, -0.26)):
+        theta = jnp.asarray([theta1, np.pi / 2, theta3])
+        s3, c3 = np.sin(theta3), np.cos(theta3)
+        got = np.linalg.norm(boom.coupling_torque_nm(theta, f, p.d1_m, p.d2_m, p.a1_m, p.base_offset_m))
+        assert got == pytest.approx(f * abs((d1 + a1 * s3) * s3 - a1 * c3 * (1 - c3)), abs=1e-12)
+    final, _ = _run(loop, sc)
+    s3, c3 = np.sin(np.radians(15.0)), np.cos(np.radians(15.0))
+    stop = f * ((d1 + a1 * s3) * s3 - a1 * c3 * (1 - c3))
+    assert float(final.stats.torque_max_nm) <= stop * (1 + 1e-9)
+    assert float(final.stats.torque_max_nm) >= 0.9 * stop  # joint 3 reached its stop while firing
 
 
 def test_the_body_accelerates_within_the_wheels_window_shifted_by_the_torque(loop):
     """Eq. (6) with bounded wheels, |tau_c| <= J a: at every step of two days the body's rate change lies in
     [(-a + delta) dt, (a + delta) dt], delta = J^-1 tau of the step's recorded eq. (8) torque on each slew axis
-    (numpy, from the records); the boom's torque beats the wheels on some steps (a change beyond a dt), the
-    fixed layout's is zero (no boom arm) and its body never exceeds a."""
-    sc = transfer.load("ma2023-boom")
+    (numpy, from the records); on the mounting 1.5 m off the centre of mass the torque beats the wheels on some
+    steps (a change beyond a dt), the fixed layout's is zero (no boom arm) and its body never exceeds a."""
+    sc = transfer.load("ma2023-boom", OFF_COM)
     _, records = _run(loop, sc)
     a, dt = float(sc.params.slew_accel_rad_s2), STATIC.step_s
     alpha = np.asarray(records.torque_nm) / np.asarray(sc.params.inertia_kg_m2)
