@@ -161,3 +161,35 @@ def test_real_plan_both_schemes_keep_the_constraints_and_cost_at_least_the_bound
     assert np.degrees(np.max(np.abs(flown.y))) <= BOX_DEG
     assert effect.duration_s.sum() * accel >= optimum.lower_mps * (1 - 1e-6)
     assert fuel.duration_s.sum() * accel >= optimum.lower_mps * (1 - 1e-6)
+
+
+def test_terminal_condition_and_literal_problem_7_in_a_model_propagated_by_hand():
+    # The latitude state drifts north by 8e-7 rad per step over 96 steps in a 1e-5 rad box.  (a) The bound's
+    # program with Gazzino's x(T) = 0, here "the deviation at the end cancels the drift" (terminal_dx = -96 drift on the latitude state): the end state is that to solver
+    # tolerance and the fuel is V 96 drift (each m/s south moves it by 1 / V), where without the condition it
+    # is V (95 drift - box).  (b) Problem 7 as written: the scheduled pulses' durations match that plan's effect on
+    # the end state (phi = I: its total south Delta-V, 14 316 s of firing: the four pulses' 7200 s and their room
+    # allow it) to tolerance, with no box rows.
+    from geojax.bound import program
+
+    n_steps, drift, box = 96, 8e-7, 1e-5
+    model = drift_model(n_steps, drift)
+    geometry = fixed4(0.0)
+    cap = np.full(n_steps, 0.08 / 4850.0 * STEP_S)
+    free = program.solve(model, np.zeros((n_steps, 3)), cap, box, geometry, 4.2e7)
+    want = np.zeros(6)
+    want[3] = -drift * n_steps
+    held = program.solve(model, np.zeros((n_steps, 3)), cap, box, geometry, 4.2e7, terminal_dx=want)
+    assert free.fuel_mps == pytest.approx(V_MPS * (drift * (n_steps - 1) - box), rel=1e-6)
+    assert held.fuel_mps == pytest.approx(V_MPS * drift * n_steps, rel=1e-6)
+    assert np.allclose(held.dx[-1], want, rtol=0, atol=1e-6 * drift * n_steps)
+    assert np.abs(held.dx[-1, 3] - want[3]) <= 1e-6 * drift * n_steps
+    directions = np.concatenate(geometry.generators)
+    accel = 0.08 / 4850.0
+    pulses = op.Pulses(np.array([2, 3, 2, 3]), np.array([20000.0, 40000.0, 55000.0, 75000.0]), np.full(4, 1800.0))
+    for tie in ("fuel", "near"):
+        duration, report = op.end_effect_durations(model, held.u_mps, pulses, directions, accel, STEP_S, C, tie,
+                                                   scale_p_m=4.2e7)
+        assert duration.sum() * accel == pytest.approx(-held.u_mps[:, 2].sum(), rel=1e-6), tie
+        assert np.max(np.abs(report["mismatch"])) <= 1e-6 * np.max(np.abs(report["relaxed"])), tie
+        assert np.all((duration == 0) | (duration >= C.t_min_firing_s - 1e-9)), tie

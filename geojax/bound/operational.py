@@ -24,6 +24,10 @@ thrust into pulses by one of two equivalences (Sec. 4):
   least fuel that holds the box at every step start in the linear model (``bound.linear``), i.e. the bound's
   program with the scheduled pulses as its only columns, each duration in {0} u [T_l, the room the schedule
   leaves it].
+* ``effect_matched`` (Problem 7 as the paper writes it): the pulses at the schedule's positions, their durations
+  the L1-nearest match of the relaxed plan's effect on the state at the horizon's end, Phi(T, tau) B F of eq.
+  (33), in the linear model about the relaxed plan's flight; no box rows.  With the relaxed plan's terminal
+  condition (``bound(..., terminal=True)``) that end state is x(T) = x(0).
 
 Times are seconds since the start of the run; ``step_s`` is the integration step, and a pulse flies in the
 closed loop as the overlap of each step with it (``step_plan``, flown by ``bound.replay`` with one step per
@@ -245,6 +249,83 @@ def effect_durations(model: SlotModel, u_nominal_rsw, pulses: Pulses, directions
     lower = np.where(duration >= t_min / 2, t_min, 0.0)
     duration = _least_firing(rows, offset, box_rad, lower, np.where(lower > 0, upper, 0.0), near_s)
     return np.where(lower > 0, np.maximum(duration, t_min), 0.0)  # (the solver's tolerance)
+
+
+# Problem 7, tie-break among the best matches: per second of firing (``tie="fuel"``) or of change from the
+# scheduled durations (``tie="near"``), against 1 per 1e-4 of scaled end state (``program.STATE_SCALE_REL``); a
+# second of firing moves the end state by ~5e-5 of that unit, so the match comes first.
+TIE = 1e-8
+
+
+def effect_matched(scenario, u_relaxed_rsw, pulses: Pulses, directions_rsw, accel_mps2: float,
+                   constraints: Constraints = Constraints(), tie: str = "fuel") -> tuple[Pulses, dict]:
+    """Gazzino's Problem 7 as written (module docstring): new durations for the scheduled ``pulses`` (their
+    centres kept) whose effect on the state at the horizon's end matches the relaxed per-step plan
+    ``u_relaxed_rsw`` [N, 3]'s, in the linear model about the relaxed plan's flight (one linearisation, as the
+    paper's Phi(T, tau)); no box.  Returns the kept pulses and ``end_effect_durations``'s report."""
+    model, step_s = linear_model(scenario, u_relaxed_rsw)
+    duration, report = end_effect_durations(model, u_relaxed_rsw, pulses, directions_rsw, accel_mps2, step_s,
+                                            constraints, tie)
+    keep = duration > 0
+    return Pulses(pulses.thruster[keep], pulses.centre_s[keep], duration[keep]), report
+
+
+def end_effect_durations(model: SlotModel, u_relaxed_rsw, pulses: Pulses, directions_rsw, accel_mps2: float,
+                         step_s: float, constraints: Constraints = Constraints(), tie: str = "fuel",
+                         scale_p_m: float | None = None):
+    """Problem 7's durations [P] (s, 0 for a dropped pulse): min || W (G d - e) ||_1 (+ ``TIE`` x the
+    tie-break) over d in {0} u [T_l, scheduled + its room] (``_room_s``), where e = sum_k Phi(T, k + 1) B_k
+    u_relaxed_k is the relaxed plan's effect on the end state, G [6, P] the pulses' per second of firing (each
+    as its overlap with the steps at its scheduled duration, as ``effect_durations``), and W the program's
+    state scale (1e-4 of p (``scale_p_m``, default the model's initial p), of e, of i, rad of L).  A linear
+    program with slacks s >= |W (G d - e)|; the {0} u [T_l, ...] choice as in ``effect_durations`` (two
+    programs).  ``tie``: ``"fuel"`` the least firing
+    among the best matches, ``"near"`` the nearest to the scheduled durations.  Returns the durations and
+    {"mismatch": W (G d - e) [6] (units of 1e-4), "relaxed": W e [6]}.
+    """
+    from geojax.bound.program import STATE_SCALE_REL
+
+    phi, b = np.asarray(model.phi), np.asarray(model.b)
+    n_steps = len(u_relaxed_rsw)
+    to_end = np.zeros((n_steps, 6, 3))  # Phi(T, k + 1) B_k, by the backward recursion
+    carry = np.eye(6)
+    for k in range(n_steps - 1, -1, -1):
+        to_end[k] = carry @ b[k]
+        carry = carry @ phi[k]
+    scale_p_m = float(model.x[0, 0]) if scale_p_m is None else scale_p_m
+    weight = 1.0 / np.r_[STATE_SCALE_REL * scale_p_m, np.full(5, STATE_SCALE_REL)]
+    per_s = overlap_s(pulses, step_s, n_steps) / pulses.duration_s  # [N, P]
+    columns = np.asarray(directions_rsw)[pulses.thruster] * accel_mps2  # [P, 3] Delta-V per s of firing
+    gain = weight[:, None] * np.einsum("kij,kp,pj->ip", to_end, per_s, columns)  # [6, P]
+    relaxed = weight * np.einsum("kij,kj->i", to_end, np.asarray(u_relaxed_rsw))  # [6]
+    upper = pulses.duration_s + _room_s(pulses, n_steps * step_s, constraints)
+    near = pulses.duration_s if tie == "near" else None
+    duration = _matched(gain, relaxed, np.zeros_like(upper), upper, near)
+    t_min = constraints.t_min_firing_s
+    lower = np.where(duration >= t_min / 2, t_min, 0.0)
+    duration = _matched(gain, relaxed, lower, np.where(lower > 0, upper, 0.0), near)
+    duration = np.where(lower > 0, np.maximum(duration, t_min), 0.0)
+    return duration, {"mismatch": gain @ duration - relaxed, "relaxed": relaxed}
+
+
+def _matched(gain, target, lower_s, upper_s, near_s=None):
+    """min sum s + TIE (sum d or sum |d - near|) over lower <= d <= upper, s >= |gain d - target|;
+    variables [d, s, t >= |d - near|]."""
+    m, p = gain.shape
+    eye_m = np.eye(m)
+    a_ub = np.block([[gain, -eye_m], [-gain, -eye_m]])
+    b_ub = np.r_[target, -target]
+    cost = np.r_[np.full(p, 0.0 if near_s is not None else TIE), np.ones(m)]
+    bounds = list(zip(lower_s, upper_s)) + [(0, None)] * m
+    if near_s is not None:
+        eye = np.eye(p)
+        a_ub = np.block([[a_ub, np.zeros((2 * m, p))], [eye, np.zeros((p, m)), -eye], [-eye, np.zeros((p, m)), -eye]])
+        b_ub = np.r_[b_ub, near_s, -near_s]
+        cost, bounds = np.r_[cost, np.full(p, TIE)], bounds + [(0, None)] * p
+    result = scipy.optimize.linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
+    if result.status != 0:
+        raise ValueError(f"operational: Problem 7's program failed ({result.message})")
+    return result.x[:p]
 
 
 def _least_firing(rows, offset, box_rad, lower_s, upper_s, near_s=None):

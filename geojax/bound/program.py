@@ -11,6 +11,7 @@ and the Delta-V w_kj >= 0 (m/s) flown along each generator direction d_j of each
                 sum_{j of thruster i} w_kj <= cap_ki             (F/m times the slot's firing time; one shared
                                                                   budget when only one thruster fires at a time)
                 |ybar + C z_k + E (u_k - ubar_k)| <= box         (longitude and latitude at every step start)
+                z_S = D^-1 dx_T                                  (optional: ``terminal_dx``, the state at the end)
 
 The generators are an inner approximation of each thruster's direction set; after each solve the duals of
 the u-rows price every direction of the set (``directions.Geometry.best``): a direction with negative
@@ -53,7 +54,8 @@ class Infeasible(ValueError):
 
 
 def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: float, rounds: int = 8,
-          rtol: float = 1e-4, prox: float = 0.0, generators: list | None = None, first_boxed_slot: int = 0) -> Solution:
+          rtol: float = 1e-4, prox: float = 0.0, generators: list | None = None, first_boxed_slot: int = 0,
+          terminal_dx=None) -> Solution:
     """Minimum Delta-V over the slots of ``model`` (``bound.linear.SlotModel``, numpy leaves).
 
     ``cap_mps`` [S] the Delta-V one thruster can give in each slot; ``box_rad`` the half-width of the
@@ -62,7 +64,9 @@ def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: flo
     linearisation: of the many plans of (nearly) the least fuel, the program takes one near the nominal, so the
     linear model stays accurate); the lower bound is then not valid: solve again with ``prox = 0`` for it.
     ``generators``: the columns to start from (a previous solution's), else the geometry's;
-    ``first_boxed_slot``: the box is held from this slot on (an acquisition before it is free).
+    ``first_boxed_slot``: the box is held from this slot on (an acquisition before it is free);
+    ``terminal_dx`` [6] (SI, optional): the state deviation from the nominal at the last slot's end is this
+    (Gazzino's terminal condition x(T) = 0 when it is the target less the nominal's end state; default none).
     """
     import time
 
@@ -71,7 +75,7 @@ def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: flo
     lower, solution, done = -np.inf, None, 0
     for done in range(1, rounds + 1):
         solution = _solve_once(model, u_nominal, cap_mps, box_rad, generators, geometry.one_at_a_time, scale_p_m,
-                               prox, first_boxed_slot)
+                               prox, first_boxed_slot, terminal_dx)
         bound, new = _price(solution, cap_mps, geometry)
         lower = max(lower, bound)
         gap = (solution["fuel"] - lower) / max(solution["fuel"], 1e-12)
@@ -84,7 +88,7 @@ def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: flo
 
 
 def _solve_once(model, u_nominal, cap_mps, box_rad, generators, one_at_a_time, scale_p_m, prox=0.0,
-                first_boxed_slot=0) -> dict:
+                first_boxed_slot=0, terminal_dx=None) -> dict:
     phi, b, c, e, y = (np.asarray(a) for a in (model.phi, model.b, model.c, model.e, model.y))
     n_slots, n_steps = y.shape[:2]
     scale = np.full(6, STATE_SCALE_REL)
@@ -120,6 +124,9 @@ def _solve_once(model, u_nominal, cap_mps, box_rad, generators, one_at_a_time, s
         for j in range(n_w):
             eq.put(rows, w_of(ks) + j, -dirs[j, i])
     link_rows = np.arange(eq.count - 3 * n_slots, eq.count).reshape(3, n_slots)
+    if terminal_dx is not None:  # z_S = D^-1 dx_T (a free variable's rows: the pricing's duality holds as it is)
+        rows = eq.add(6, np.asarray(terminal_dx, float) / scale)
+        eq.put(rows, z_of(n_slots - 1) + np.arange(6), 1.0)
     # Capacity per thruster, or one shared budget.
     groups = [np.arange(n_w)] if one_at_a_time else np.split(np.arange(n_w), np.cumsum(counts)[:-1])
     cap_rows = []

@@ -14,8 +14,10 @@
 The bound is the least fuel of any thrust history that is constant in RSW over each slot (``slot_steps``
 integration steps; 1 h by default) with the same thrusters (directions, F, one at a time, not in shadow where
 the geometry says so), the same box at every step start, from the same initial state, with no terminal
-condition.  ``lower_mps`` is rigorous for that problem's linear model (weak duality, ``bound.program``); how
-it moves with the slot length is measured (``studies/bounds``), not assumed.
+condition (``terminal=True``: Gazzino's x(T) = x(0), the orbit state at the horizon's end equal to the initial
+one, its true longitude one turn per sidereal cycle on; a periodic plan).  ``lower_mps`` is rigorous for that
+problem's linear model (weak duality, ``bound.program``); how it moves with the slot length is measured
+(``studies/bounds``), not assumed.
 """
 
 from __future__ import annotations
@@ -69,7 +71,7 @@ class BoundResult(NamedTuple):
 
 
 def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, acquisition_days: float = 0.0,
-          iterations: int = 4, rounds: int = 8, rtol: float = 1e-3,
+          iterations: int = 4, rounds: int = 8, rtol: float = 1e-3, terminal: bool = False,
           say: Callable = lambda *a, **k: None) -> BoundResult:
     """The fuel bound of scenario ``sc`` over its duration (see the module docstring).
 
@@ -78,7 +80,10 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
     ``acquisition_days``: the box is held from then on (a start the thrusters cannot keep in the box at once,
     as Katz 2025's 2 km offset; the closed loop's status still counts the acquisition);
     ``iterations`` linearisation rounds at most; ``rounds`` column-generation rounds per program;
-    ``rtol`` the relative gap between the plan and the lower bound at which column generation stops.
+    ``rtol`` the relative gap between the plan and the lower bound at which column generation stops;
+    ``terminal``: the plan ends where it started (Gazzino's x(T) = 0: the MEE p, f, g, h, k at the end equal
+    the initial ones and L the initial one plus the Earth's rotation over the horizon; each round's
+    ``terminal_miss`` is the flown end state less that target, SI); off by default.
     Raises ``ValueError`` (``program.Infeasible``) when the box cannot be held.
     """
     start = time.perf_counter()
@@ -119,6 +124,12 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
         raise program.Infeasible(f"the initial state is outside the box: |dlon| {start_lon:.4f} deg, |lat| "
                                  f"{start_lat:.4f} deg, box +-{np.degrees(box):g} deg (station.box_half_width_deg)")
     history, solution = [], None
+    target = np.asarray(params.initial.orbit, float).copy()  # x(T) = x(0), the Earth turned n_cycles times since
+    angle = np.asarray(env.earth_angle_rad)
+    target[5] += 2 * np.pi * n_cycles + float(np.angle(np.exp(1j * (angle[-1, -1, -1] - angle[0, 0, 0]))))
+
+    def terminal_dx(model, horizon):
+        return target - model.x[horizon] if terminal and horizon == n_slots else None
 
     def linearisations(horizon, u, model, solution, prox):
         """Sequential linearisation of the program over the first ``horizon`` slots (the rest coasts)."""
@@ -126,7 +137,8 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
             head = _head(model, horizon)
             solution = program.solve(head, u[:horizon], cap[:horizon], box * (1 - BOX_MARGIN), geometry,
                                      float(model.x[0, 0]), rounds=rounds, rtol=rtol, prox=prox, first_boxed_slot=first,
-                                     generators=None if solution is None else solution.generators)
+                                     generators=None if solution is None else solution.generators,
+                                     terminal_dx=terminal_dx(model, horizon))
             predicted = _linear_outputs(head, solution, u[:horizon])
             u = np.concatenate([solution.u_mps, u[horizon:] * 0.0])
             fuel = np.concatenate([sum(w.sum(axis=1) for w in solution.w_mps), np.zeros(n_slots - horizon)])
@@ -134,7 +146,8 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
             worst = float(np.degrees(np.max(np.abs(model.y[first:horizon]))))
             history.append({"fuel_mps": solution.fuel_mps, "max_abs_box_deg": worst, "prox": prox, "slots": horizon,
                             "columns": int(sum(len(g) for g in solution.generators)), "solve_s": solution.solve_s,
-                            "linear_error_deg": float(np.degrees(np.max(np.abs(predicted - model.y[:horizon]))))})
+                            "linear_error_deg": float(np.degrees(np.max(np.abs(predicted - model.y[:horizon])))),
+                            **({"terminal_miss": model.x[n_slots] - target} if terminal else {})})
             say(f"  linearisation {len(history)} ({horizon * slot_s / 86400:.0f} days): plan {solution.fuel_mps:.4f} m/s; "
                 f"flown, max |box| {worst:.5f} deg of {np.degrees(box):g}, {history[-1]['linear_error_deg']:.1e} deg "
                 f"from the linear model ({solution.solve_s:.1f} s)", flush=True)
@@ -159,7 +172,7 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
             u, fuel, model, solution = linearisations(horizon, u, model, solution, PROX if solution else 0.0)
     # The bound: the unrestricted program about the flown trajectory, over the full box.
     lower = program.solve(model, u, cap, box, geometry, float(model.x[0, 0]), rounds=rounds, rtol=rtol,
-                          generators=solution.generators, first_boxed_slot=first)
+                          generators=solution.generators, first_boxed_slot=first, terminal_dx=terminal_dx(model, n_slots))
     say(f"  bound about the flown trajectory: {lower.lower_mps:.4f} m/s ({lower.rounds} pricing rounds, "
         f"{lower.solve_s:.1f} s)", flush=True)
     result = _resimulate(uncontrolled, u, fuel, slot_steps, slot_s, geometry)
