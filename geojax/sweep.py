@@ -78,10 +78,11 @@ DISPERSION_FIELDS = {
 # Samples per device in one compiled call, per controller (measured on 2 CPU cores, one year of li2022):
 # the QFFC's per-step work is small, so wide batches amortise the loop (s per orbit per sample: 3.2e-4
 # at 8 lanes, 1.2e-4 at 64); the FOMPC's annealing is already a wide vmap, so 8 lanes reach its
-# throughput (2.4e-3 at 8 and at 32) and a small sweep pads less.  Fixed per controller, whatever the
+# throughput (2.4e-3 at 8 and at 32) and a small sweep pads less; the MPC's interior point likewise (10 days,
+# 2 loaded cores: 7.5-8.9e-3 at 8 lanes, 1.0e-2 at 32 and 64; 14 MB of temporaries at 8, 108 MB at 64).  Fixed per controller, whatever the
 # sweep or the chunk, because XLA's vectorisation (and so the last bit of every result) depends on
 # the batch shape; memory is bounded by this width, not by the sweep.
-LANES_PER_DEVICE = {"fompc": 8}
+LANES_PER_DEVICE = {"fompc": 8, "mpc": 8}
 DEFAULT_LANES_PER_DEVICE = 64
 
 
