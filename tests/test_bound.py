@@ -159,13 +159,17 @@ def test_bound_of_a_gimballed_feedback_scenario_is_below_the_lyapunov_law():
 
 def test_cli_bound_writes_results_and_refuses_an_impossible_box(tmp_path):
     out = tmp_path / "b.h5"
-    run = subprocess.run([sys.executable, "-m", "geojax", "bound", "li2022-qffc", "--days", "3", "--out", str(out)],
-                         capture_output=True, text=True)
+    # with Gazzino's x(T) = x(0): the flag reaches the program (recorded), and the end condition can only cost
+    # more than the free end of the same horizon (a program with more rows), checked through the API
+    run = subprocess.run([sys.executable, "-m", "geojax", "bound", "li2022-qffc", "--days", "3", "--terminal",
+                          "--out", str(out)], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert "bound" in run.stdout and "re-simulated plan" in run.stdout
     data = geojax.open_results(out)
-    assert float(data["status"]) == 0
+    assert float(data["status"]) == 0 and int(data["terminal"]) == 1
     assert float(data["bound_per_year_mps"]) <= float(data["resim_dv_per_year_mps"]) + 1e-6  # solver tolerance
+    free = bound(geojax.load_scenario("li2022-qffc", {"duration.days": 3}))
+    assert free.lower_mps > 0 and free.bound_per_year_mps < float(data["bound_per_year_mps"])
     text = subprocess.run([sys.executable, "-m", "geojax", "scenarios", "--show", "li2022-qffc"],
                           capture_output=True, text=True).stdout
     tight = tmp_path / "tight.toml"  # a box of +-0.001 deg: the start itself is outside it
