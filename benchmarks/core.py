@@ -1,7 +1,7 @@
 """The integration step: geojax's step against the smallest kernel that does the same work, and against an
 earlier revision of geojax, in one run.
 
-    python benchmarks/core.py [--baseline REV] [--batches 1 64 1024 4096] [--cycles 4] [--loop-days 20]
+    python benchmarks/core.py [--baseline REV ...] [--batches 1 64 1024 4096] [--cycles 4] [--loop-days 20]
 
 Per implementation and batch: nanoseconds per right-hand-side evaluation per sample (4 per RK4 step),
 orbit-years per second, and the fusions of the compiled step (the loop body's ``fusion`` instructions and
@@ -10,8 +10,9 @@ closed loop (li2022-qffc and li2022-fompc, H = 1 errors, batch 256): simulated y
 
 * ``geojax``: this working tree, ``jit(vmap(loop.simulate.propagate))`` with the li2022 force model with
   C22/S22 and the conical shadow on, MEE, 897.5 s step (96 per sidereal day);
-* ``geojax@REV``: the same measurement of revision REV (default: the commit before the fused step), run in
-  a subprocess from a temporary ``git worktree``, one after the other on the same machine;
+* ``geojax@REV``: the same measurement of each pinned revision REV, run in a subprocess from a temporary
+  ``git worktree``, one after the other on the same machine.  Default: the issue's baseline (the commit
+  before the fused step) and the step before its plain-arithmetic cos and sin (``physics.trig``);
 * ``minimal``: Cartesian RK4 written straight in jax.numpy on component arrays: point mass, J2, Sun and
   Moon (from the same environment grid), SRP without shadow; no C22, no records, no cycle means.
 
@@ -33,7 +34,8 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
-DEFAULT_BASELINE = "1c1acb7"  # main before the fused step (issue 13)
+DEFAULT_BASELINES = ("1c1acb7",  # main before the fused step: issue 13's baseline
+                     "1ea0b52")  # main before cos L, sin L in plain arithmetic (physics.trig)
 
 
 def measure_engine(batches, n_cycles: int, loop_days: float) -> dict:
@@ -65,7 +67,7 @@ def measure_engine(batches, n_cycles: int, loop_days: float) -> dict:
         run = jax.jit(jax.vmap(lambda m, kg, d=dynamics: propagate(d, SpacecraftState(m, kg, jnp.asarray(0.0)), env,
                                                                   fm, step_s)[0].orbit))
         rows[batch] = _timed_step(run, (mee, mass), batch, n_cycles * n_steps, step_s)
-    return {"step": rows, "loop": _closed_loop(loop_days)}
+    return {"step": rows, "loop": _closed_loop(loop_days) if loop_days else {}}
 
 
 def _timed_step(fn, args, batch: int, n_steps_total: int, step_s: float) -> dict:
@@ -190,14 +192,21 @@ def measure_minimal(batches, n_cycles: int) -> dict:
     return {"step": rows}
 
 
-def _in_subprocess(tree: Path, what: str, args) -> dict:
+def _keep_fastest(rows: dict, measured: dict) -> None:
+    for batch, row in measured.items():
+        if batch not in rows or row["ns_per_rhs_per_sample"] < rows[batch]["ns_per_rhs_per_sample"]:
+            rows[batch] = row
+
+
+def _in_subprocess(tree: Path, what: str, args, loop: bool = True) -> dict:
     """Run one measurement in a fresh Python on ``tree``'s geojax (one device, nothing else loaded)."""
     env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
     env["PYTHONPATH"] = str(tree)
     with tempfile.NamedTemporaryFile(suffix=".json") as out:
         code = (f"import json, sys; sys.path.insert(0, {str(HERE)!r}); import core; "
                 f"json.dump(core.{what}({args.batches!r}, {args.cycles}"
-                f"{', ' + repr(args.loop_days) if what == 'measure_engine' else ''}), open({out.name!r}, 'w'))")
+                f"{', ' + repr(args.loop_days if loop else 0.0) if what == 'measure_engine' else ''}), "
+                f"open({out.name!r}, 'w'))")
         subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=tree)
         return json.load(open(out.name))
 
@@ -207,8 +216,9 @@ def markdown(results: dict) -> str:
     lines = ["# The integration step", "", f"`{results['command']}` on {results['machine']}, one device per "
              "implementation, li2022 force model (C22/S22 and conical shadow on; the minimal kernel without "
              "C22 and shadow), 96 steps per sidereal day, "
-             f"{results['cycles']} cycles. ns per right-hand side per sample (4 per RK4 step), orbit-years/s, "
-             "fusions (and conditionals) of the compiled step.", "",
+             f"{results['cycles']} cycles, the fastest of {results.get('rounds', 1)} alternating rounds. ns per "
+             "right-hand side per sample (4 per RK4 step), orbit-years/s, fusions (and conditionals) of the "
+             "compiled step.", "",
              "| batch | " + " | ".join(impls) + " |", "|---:|" + "---:|" * len(impls)]
     for batch in results["batches"]:
         cells = []
@@ -217,6 +227,9 @@ def markdown(results: dict) -> str:
             cells.append(f"{row['ns_per_rhs_per_sample']:.1f} ns, {row['orbit_years_per_s']:.0f} /s, "
                          f"{row['fusions_per_step']} ({row['conditionals_per_step']})")
         lines.append(f"| {batch} | " + " | ".join(cells) + " |")
+    lines += ["", "Cost per right-hand side relative to the minimal kernel: " + "; ".join(
+        f"batch {batch}: " + ", ".join(f"{impl} {_relative(results, impl, batch):.2f}x" for impl in impls[:-1])
+        for batch in results["batches"]) + "."]
     lines += ["", "Closed loop, batch 256, H = 1 errors: simulated years per second (mean ΔV, m/s/yr).", "",
               "| controller | " + " | ".join(k for k in impls if k in results["loop"]) + " |",
               "|---|" + "---:|" * sum(k in results["loop"] for k in impls)]
@@ -227,34 +240,50 @@ def markdown(results: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _relative(results: dict, impl: str, batch: int) -> float:
+    ns = lambda name: results["step"][name][str(batch)]["ns_per_rhs_per_sample"]  # noqa: E731
+    return ns(impl) / ns("minimal")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--baseline", default=DEFAULT_BASELINE, help="git revision to compare with ('' for none)")
+    parser.add_argument("--baseline", nargs="*", default=list(DEFAULT_BASELINES),
+                        help="git revisions to compare with (none: --baseline with no value)")
     parser.add_argument("--batches", type=int, nargs="+", default=[1, 64, 1024, 4096])
     parser.add_argument("--cycles", type=int, default=4, help="sidereal days per step measurement")
     parser.add_argument("--loop-days", type=float, default=20.0, help="days of the closed-loop measurement")
+    parser.add_argument("--rounds", type=int, default=2, help="alternating rounds of the step measurement")
     parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args()
     repo = HERE.parent
     results = {"command": "python benchmarks/core.py " + " ".join(sys.argv[1:]), "batches": args.batches,
-               "cycles": args.cycles, "machine": f"{os.cpu_count()} cores", "step": {}, "loop": {}}
+               "rounds": args.rounds,
+               "cycles": args.cycles, "step": {}, "loop": {},
+               "machine": f"{os.cpu_count()} cores (load average {os.getloadavg()[0]:.1f} at the start"}
     runs = [("geojax", repo)]
     with tempfile.TemporaryDirectory() as tmp:
-        if args.baseline:
-            old = Path(tmp) / "baseline"
-            subprocess.run(["git", "-C", str(repo), "worktree", "add", "--detach", str(old), args.baseline],
+        for rev in args.baseline:
+            old = Path(tmp) / rev
+            subprocess.run(["git", "-C", str(repo), "worktree", "add", "--detach", str(old), rev],
                            check=True, capture_output=True)
-            runs.append((f"geojax@{args.baseline}", old))
+            runs.append((f"geojax@{rev}", old))
         try:
-            for name, tree in runs:
-                print(f"{name} ...", flush=True)
-                measured = _in_subprocess(tree, "measure_engine", args)
-                results["step"][name], results["loop"][name] = measured["step"], measured["loop"]
+            # Rounds alternate the implementations (the machine may be shared); each batch keeps its fastest
+            # round.  The closed loop is measured in the first round.
+            for round_ in range(args.rounds):
+                for name, tree in runs:
+                    print(f"{name} (round {round_ + 1}) ...", flush=True)
+                    measured = _in_subprocess(tree, "measure_engine", args, loop=round_ == 0)
+                    _keep_fastest(results["step"].setdefault(name, {}), measured["step"])
+                    if round_ == 0:
+                        results["loop"][name] = measured["loop"]
         finally:
-            if args.baseline:
-                subprocess.run(["git", "-C", str(repo), "worktree", "remove", "--force", str(old)], check=False)
-    print("minimal ...", flush=True)
-    results["step"]["minimal"] = _in_subprocess(repo, "measure_minimal", args)["step"]
+            for _, tree in runs[1:]:
+                subprocess.run(["git", "-C", str(repo), "worktree", "remove", "--force", str(tree)], check=False)
+    for round_ in range(args.rounds):
+        print(f"minimal (round {round_ + 1}) ...", flush=True)
+        _keep_fastest(results["step"].setdefault("minimal", {}), _in_subprocess(repo, "measure_minimal", args)["step"])
+    results["machine"] += f", {os.getloadavg()[0]:.1f} at the end)"
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "core.json").write_text(json.dumps(results, indent=1))
     (args.out / "core.md").write_text(markdown(results))
