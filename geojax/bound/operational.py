@@ -318,10 +318,7 @@ def _matched(gain, target, lower_s, upper_s, near_s=None):
     cost = np.r_[np.full(p, 0.0 if near_s is not None else TIE), np.ones(m)]
     bounds = list(zip(lower_s, upper_s)) + [(0, None)] * m
     if near_s is not None:
-        eye = np.eye(p)
-        a_ub = np.block([[a_ub, np.zeros((2 * m, p))], [eye, np.zeros((p, m)), -eye], [-eye, np.zeros((p, m)), -eye]])
-        b_ub = np.r_[b_ub, near_s, -near_s]
-        cost, bounds = np.r_[cost, np.full(p, TIE)], bounds + [(0, None)] * p
+        a_ub, b_ub, cost, bounds = _plus_nearness(a_ub, b_ub, cost, bounds, near_s, TIE)
     result = scipy.optimize.linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
     if result.status != 0:
         raise ValueError(f"operational: Problem 7's program failed ({result.message})")
@@ -339,14 +336,21 @@ def _least_firing(rows, offset, box_rad, lower_s, upper_s, near_s=None):
     b_ub = np.r_[(box_rad - offset[keep]) / scale[keep], (box_rad + offset[keep]) / scale[keep]]
     cost, bounds = np.ones(p), list(zip(lower_s, upper_s))
     if near_s is not None:
-        eye = np.eye(p)
-        a_ub = np.block([[a_ub, np.zeros((len(a_ub), p))], [eye, -eye], [-eye, -eye]])
-        b_ub = np.r_[b_ub, near_s, -near_s]
-        cost, bounds = np.r_[cost, np.full(p, PROX)], bounds + [(0, None)] * p
+        a_ub, b_ub, cost, bounds = _plus_nearness(a_ub, b_ub, cost, bounds, near_s, PROX)
     result = scipy.optimize.linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
     if result.status != 0:
         raise ValueError(f"operational: the scheduled pulses cannot hold the box ({result.message})")
     return result.x[:p]
+
+
+def _plus_nearness(a_ub, b_ub, cost, bounds, near_s, weight):
+    """An LP over [d, ...] (d the first len(near_s) variables) extended by t >= |d - near| at ``weight`` per
+    unit of t: the rows d - t <= near and -d - t <= -near, and the columns t >= 0."""
+    p, n = len(near_s), a_ub.shape[1]
+    pick = np.eye(p, n)  # d out of the variables
+    eye = np.eye(p)
+    a_ub = np.block([[a_ub, np.zeros((len(a_ub), p))], [pick, -eye], [-pick, -eye]])
+    return a_ub, np.r_[b_ub, near_s, -near_s], np.r_[cost, np.full(p, weight)], bounds + [(0, None)] * p
 
 
 def _room_s(pulses: Pulses, horizon_s: float, constraints: Constraints) -> np.ndarray:
