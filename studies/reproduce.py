@@ -32,7 +32,7 @@ STUDIES = {
     "ablation": [("ablation/fompc_annealing.py", []), ("ablation/li_predictor_error.py", []),
                  ("ablation/fig13_budget.py", []), ("ablation/katz_longitude.py", [])],
     "ma2023": [("ma2023/transfer.py", [])],
-    "bounds": [("bounds/table.py", [])],
+    "bounds": [("bounds/table.py", []), ("bounds/operational.py", ["--days", "28", "--margin", "0.2"])],
 }
 
 

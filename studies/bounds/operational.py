@@ -246,7 +246,11 @@ def write(out: dict, wall_s: float, folder: Path) -> None:
                      f"| {r['status']} | {r['max_abs_dlon_deg']:.4f} | {r['max_abs_dlat_deg']:.4f} | {r['rms_lon_box']:.2f} "
                      f"| {r['rms_lat_box']:.2f} | {100 * r['outer_fraction']:.1f} % |")
     fuel, effect = rows["fuel-based"]["dv_per_year_mps"], rows["effect-based"]["dv_per_year_mps"]
-    lines += ["", f"Fuel-based over effect-based: {100 * (fuel / effect - 1):+.1f} % (Gazzino: +81.6 %).", ""]
+    lines += ["", f"Fuel-based over effect-based: {100 * (fuel / effect - 1):+.1f} % (Gazzino: +81.6 %).", "",
+              "The same with a smaller margin: `--margin 0.05 --out studies/bounds/results/operational-margin0.05`; "
+              "with Gazzino's terminal condition x(T) = x(0) and Problem 7 as printed: `--terminal --days 7 14 28` "
+              "(`operational-terminal.md`). What the three say about Gazzino's findings (the fuel factor, Fig. 6's "
+              "centre and edge): `studies/README.md`, Gazzino 2016.", ""]
     (folder / "operational.md").write_text("\n".join(lines))
     _figure(out, folder / "operational.png")
 
