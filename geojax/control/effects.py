@@ -37,6 +37,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from geojax.physics.constants import MU_EARTH_M3_S2, OMEGA_EARTH_RAD_S, SIDEREAL_DAY_S
+from geojax.physics.trig import sincos
 
 R_SYNC_M = (MU_EARTH_M3_S2 / OMEGA_EARTH_RAD_S**2) ** (1 / 3)  # Keplerian synchronous radius R_s
 V_SYNC_MPS = (MU_EARTH_M3_S2 / R_SYNC_M) ** 0.5  # V_s
@@ -44,18 +45,18 @@ V_SYNC_MPS = (MU_EARTH_M3_S2 / R_SYNC_M) ** 0.5  # V_s
 
 def effect_matrix(l_rad, coast_s, r_s=R_SYNC_M, v_s=V_SYNC_MPS):
     """B [..., 6, 3]: change of (lambda, lambda_dot, e_x, e_y, i_x, i_y) per unit (v_r, v_t, v_n)."""
-    cos_l, sin_l = jnp.cos(l_rad), jnp.sin(l_rad)
-    zero = jnp.zeros_like(cos_l)
+    cos_l, sin_l = sincos(l_rad)
     coast = jnp.broadcast_to(coast_s, cos_l.shape)
-    rows = [
-        [jnp.full_like(cos_l, -2 / v_s), -3 * coast / r_s, zero],
-        [zero, jnp.full_like(cos_l, -3 / r_s), zero],
-        [sin_l / v_s, 2 * cos_l / v_s, zero],
-        [-cos_l / v_s, 2 * sin_l / v_s, zero],
-        [zero, zero, cos_l / (2 * v_s)],
-        [zero, zero, sin_l / (2 * v_s)],
-    ]
-    return jnp.stack([jnp.stack(row, -1) for row in rows], -2)
+    columns = effect_columns(cos_l, sin_l, coast, r_s, v_s)
+    return jnp.stack([jnp.stack([jnp.broadcast_to(b, cos_l.shape) for b in column], -1) for column in columns], -1)
+
+
+def effect_columns(cos_l, sin_l, coast_s, r_s=R_SYNC_M, v_s=V_SYNC_MPS):
+    """The three columns of B (per unit v_r, v_t, v_n), each a tuple of six rows; a row that is zero is the
+    Python 0.0, so that a caller summing B v term by term (``control.qffc.effect``) skips it."""
+    return ((-2 / v_s, 0.0, sin_l / v_s, -cos_l / v_s, 0.0, 0.0),
+            (-3 * coast_s / r_s, -3 / r_s, 2 * cos_l / v_s, 2 * sin_l / v_s, 0.0, 0.0),
+            (0.0, 0.0, 0.0, 0.0, cos_l / (2 * v_s), sin_l / (2 * v_s)))
 
 
 def remaining_fraction(l_rad, l_start_rad):

@@ -86,7 +86,8 @@ def horizon_cost(fractions, x0, ref_windows, target, l_start_rad, limits, cycle_
 
     def one(x, k):
         window = jax.lax.dynamic_slice_in_dim(ref_windows, k, 3)
-        _, burns, after = model_cycle(x, window, target, l_start_rad, limits, cycle_s, vdt_estimate, fractions[k])
+        _, burns, after = model_cycle(x, window, target, l_start_rad, limits, cycle_s, vdt_estimate, fractions[k],
+                                        anchor=k.astype(float))
         di = jnp.hypot(target[4] - after[4], target[5] - after[5])
         zeta = jnp.where(di > mpc.di_max, mpc.penalty, 0.0)
         cost = jnp.sum(burns.v_mps**mpc.dv_exponent) + zeta * di**2 + jnp.where(burns.feasible, 0.0, mpc.penalty * mpc.di_max**2)

@@ -47,17 +47,20 @@ eq. (40)): the inclination is then corrected along the same direction by
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import jax.numpy as jnp
 
 from geojax.control import burns as burns_mod
 from geojax.control.base import Controller, stateless_init
-from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_matrix, remaining_fraction
+from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_columns, remaining_fraction
 from geojax.control.predictor import predict_next
 from geojax.physics.elements import wrap_angle
+from geojax.physics.fusion import materialized
 from geojax.params import LOG, NUMBER, Field, station_target
 from geojax.physics.propulsion import ArmLimits, arm_limits
+from geojax.physics.trig import atan2, sincos
 
 # The [controller] keys of Li 2022's planners.  The QFFC reads vdt_estimate only; it accepts the FOMPC's keys
 # (and ignores them) so that one scenario and one sweep file run both controllers on the same grid.
@@ -111,7 +114,7 @@ def full_correction_mps(delta_x):
 
 
 def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None, coast_offset_s=0.0,
-          v_n_mps=None, search: str = "structured") -> BurnPair:
+          v_n_mps=None, search: str = "structured", anchor=None) -> BurnPair:
     """Two burns that cancel the predictive deviation ``delta_x`` [6] (see module docstring).
 
     ``coast_offset_s`` is added to the coast T_i of eq. (20) when the deviation
@@ -120,22 +123,47 @@ def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None
     ``search`` (static) finds the smallest feasible raise of V_DT: ``"all"`` tests every candidate,
     ``"structured"`` (the default) the few that ``first_feasible_window`` brackets; both return the same
     candidate (``tests/test_qffc.py`` checks them against each other on random deviations).
+    ``anchor`` (a traced scalar shared by the batch, e.g. a loop counter; optional) puts each stage of the
+    solve in a kernel of its own (``physics.fusion.materialized``): XLA's CPU fusion otherwise recomputes
+    the node angles and the in-plane parts in every kernel that reads them (measured on the FOMPC's
+    annealing, see ``control.fompc``).
     """
     vdt_raises_mps = default_vdt_raises() if vdt_raises_mps is None else vdt_raises_mps
     trig = arm_trig(limits)
+    stage = functools.partial(_stage, anchor=anchor)
+    plane, l_rad, v_n_total = stage(_in_plane, delta_x, l_start_rad, coast_offset_s, v_n_mps)
+    if search != "all":
+        vdt_raises_mps = vdt_raises_mps[stage(first_feasible_window, plane, vdt_raises_mps, v_n_total, trig)]
+    dv, v, raise_mps, feasible = stage(_burns, plane, vdt_raises_mps, v_n_total, trig)
+    # Eq. (14): dv = -V (cos b cos a, cos b sin a, sin b).
+    alpha = atan2(-dv[:, 1], -dv[:, 0])
+    beta = atan2(-dv[:, 2], jnp.hypot(dv[:, 0], dv[:, 1]))
+    return BurnPair(dv, v, alpha, beta, l_rad, raise_mps, feasible)
+
+
+def _stage(fn, *args, anchor):
+    return fn(*args) if anchor is None else materialized(fn, *args, anchor=anchor)
+
+
+def _in_plane(delta_x, l_start_rad, coast_offset_s, v_n_mps):
+    """The ``InPlane`` terms of ``delta_x``, the burn nodes (l_1, l_2) [2] and |V_N| (eqs. (30)-(33))."""
     d_lon, d_drift, dex, dey, dix, diy = (delta_x[j] for j in range(6))
     v_s = V_SYNC_MPS
-
-    l2 = jnp.arctan2(diy, dix)  # eq. (31)
+    l2 = atan2(diy, dix)  # eq. (31)
     l1 = l2 - jnp.pi
     coast = jnp.stack([cycle_coast_s(l1, l_start_rad), cycle_coast_s(l2, l_start_rad)]) + coast_offset_s
-    plane = InPlane(-R_SYNC_M / 3 * d_drift, v_s * (dex * jnp.sin(l1) - dey * jnp.cos(l1)),
-                    0.5 * v_s * (dex * jnp.cos(l1) + dey * jnp.sin(l1)), d_lon, coast)
+    cos_l2, sin_l2 = sincos(l2)
+    cos_l1, sin_l1 = -cos_l2, -sin_l2
+    plane = InPlane(-R_SYNC_M / 3 * d_drift, v_s * (dex * sin_l1 - dey * cos_l1),
+                    0.5 * v_s * (dex * cos_l1 + dey * sin_l1), d_lon, coast)
     v_n_total = full_correction_mps(delta_x) if v_n_mps is None else jnp.maximum(v_n_mps, 0.0)
+    return plane, jnp.stack([l1, l2]), v_n_total
 
-    tried = vdt_raises_mps if search == "all" else vdt_raises_mps[first_feasible_window(plane, vdt_raises_mps,
-                                                                                      v_n_total, trig)]
-    c = candidates(plane, tried, v_n_total, trig)
+
+def _burns(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig):
+    """The burns [2, 3] and V [2] of the smallest feasible raise of ``raises_mps``, that raise, and whether
+    any was feasible."""
+    c = candidates(plane, raises_mps, v_n_total, trig)
     i = jnp.argmax(c.feasible)  # the smallest raise that works (the first tried if none does)
     v_r, v_t, (p1, p2), v_n, lo, hi = c.v_r[i], c.v_t[i], c.in_plane[i], c.v_n[i], c.lo[i], c.hi[i]
     equal_pitch = jnp.where(p1 + p2 > 0, v_n * p1 / jnp.where(p1 + p2 > 0, p1 + p2, 1.0), 0.5 * v_n)
@@ -144,11 +172,7 @@ def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None
         jnp.stack([v_r[0], v_t[0], -n1]),
         jnp.stack([v_r[1], v_t[1], v_n - n1]),
     ])
-    v = jnp.linalg.norm(dv, axis=-1)
-    # Eq. (14): dv = -V (cos b cos a, cos b sin a, sin b).
-    alpha = jnp.arctan2(-dv[:, 1], -dv[:, 0])
-    beta = jnp.arcsin(jnp.clip(-dv[:, 2] / jnp.where(v > 0, v, 1.0), -1.0, 1.0))
-    return BurnPair(dv, v, alpha, beta, jnp.stack([l1, l2]), tried[i], jnp.any(c.feasible))
+    return dv, jnp.linalg.norm(dv, axis=-1), raises_mps[i], jnp.any(c.feasible)
 
 
 class InPlane(NamedTuple):
@@ -310,9 +334,12 @@ def estimated_drift_rad_s(next_deviation, l_start_rad):
     """
     dex, dey, dix, diy = (next_deviation[j] for j in range(2, 6))
     v_s = V_SYNC_MPS
-    l1 = jnp.arctan2(diy, dix) - jnp.pi
-    v_r = v_s * (dex * jnp.sin(l1) - dey * jnp.cos(l1))
-    v_et = 0.5 * v_s * (dex * jnp.cos(l1) + dey * jnp.sin(l1))
+    l2 = atan2(diy, dix)
+    l1 = l2 - jnp.pi
+    cos_l2, sin_l2 = sincos(l2)
+    cos_l1, sin_l1 = -cos_l2, -sin_l2
+    v_r = v_s * (dex * sin_l1 - dey * cos_l1)
+    v_et = 0.5 * v_s * (dex * cos_l1 + dey * sin_l1)
     c1, c2 = remaining_fraction(l1, l_start_rad), remaining_fraction(l1 + jnp.pi, l_start_rad)
     v_l = 1.5 * jnp.pi * (c1 - c2) * v_et - jnp.abs(v_r)
     return v_l / (jnp.pi * R_SYNC_M)
@@ -321,12 +348,20 @@ def estimated_drift_rad_s(next_deviation, l_start_rad):
 def effect(burns: BurnPair, l_start_rad, coast_offset_s=0.0):
     """B_1 v_1 + B_2 v_2 (eq. (29)) of a solution, for checking it."""
     coast = cycle_coast_s(burns.l_rad, l_start_rad) + coast_offset_s
-    matrices = effect_matrix(burns.l_rad, coast)  # [2, 6, 3]
-    # written out (no dot): inside a vmapped planner a dot_general adds transposes around it
-    return sum(matrices[n, :, j] * burns.dv_rsw_mps[n, j] for n in range(2) for j in range(3))
+    cos_l, sin_l = sincos(burns.l_rad)
+    # term by term (no matrix, no dot): inside a vmapped planner a [2, 6, 3] B is a kernel of its own that
+    # evaluates the trigonometry per entry, and a dot_general adds transposes around it
+    total = [0.0] * 6
+    for n in range(2):
+        columns = effect_columns(cos_l[n], sin_l[n], coast[n])
+        for j in range(3):
+            total = [t if isinstance(b, float) and b == 0 else t + b * burns.dv_rsw_mps[n, j]
+                     for t, b in zip(total, columns[j])]
+    return jnp.stack(total)
 
 
-def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_estimate=0.0, v_n_fraction=None):
+def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_estimate=0.0, v_n_fraction=None,
+                anchor=None):
     """Plan one cycle on the predictor model: eq. (25) with the QFFC's solution (eqs. (25)-(40)).
 
     Both planners use it: the QFFC once per cycle with the full inclination
@@ -339,7 +374,7 @@ def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_es
     sets the drift goal: 0 cancels the drift (target drift), 1 leaves the drift
     of eqs. (37)-(38).  ``v_n_fraction`` scales the north-south correction (the
     FOMPC's action, eq. (40)): |V_N| = fraction * 2 V_s |di|; ``None`` is the
-    QFFC's full correction.
+    QFFC's full correction.  ``anchor``: see ``solve``.
 
     Returns (prediction without burns [6], BurnPair, predicted state after the burns [6]).
     An infeasible cycle flies nothing (eq. (40): S = 0).
@@ -351,8 +386,8 @@ def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_es
     drift_goal = target[1] + vdt_estimate * (estimated_drift_rad_s(next_deviation, l_start_rad) - target[1])
     deviation = deviation.at[0].set(wrap_angle(deviation[0])).at[1].set(drift_goal - prediction[1])
     v_n = None if v_n_fraction is None else v_n_fraction * full_correction_mps(deviation)
-    burns = solve(deviation, l_start_rad, limits, v_n_mps=v_n)
-    after = prediction + jnp.where(burns.feasible, effect(burns, l_start_rad), 0.0)
+    burns = solve(deviation, l_start_rad, limits, v_n_mps=v_n, anchor=anchor)
+    after = prediction + jnp.where(burns.feasible, _stage(effect, burns, l_start_rad, anchor=anchor), 0.0)
     return prediction, burns, after.at[0].set(wrap_angle(after[0]))
 
 
