@@ -23,8 +23,10 @@ import jax.numpy as jnp
 
 from geojax.control.effects import R_SYNC_M
 from geojax.physics.dynamics import Thrust
-from geojax.physics.forces import shadow_fraction
+from geojax.physics.forces import near_shadow_cone, shadow_fraction_xyz
+from geojax.physics.fusion import skipped_where_idle
 from geojax.physics.propulsion import delta_v_direction_rsw, firing_fraction, sunlit_clock
+from geojax.physics.trig import sincos
 
 NOMINAL_3SIGMA_ATT_DEG = 0.05  # Li 2022, eq. (48)
 
@@ -76,7 +78,11 @@ def record(plan: BurnPlan) -> dict:
 
 def sunlit_fraction(env_steps, station_lon_rad, fm):
     """Sunlit fraction [n_steps] at the mid-step of each step, at the station's nominal position."""
-    angle = env_steps.earth_angle_rad[:, 1] + station_lon_rad
-    r_station = R_SYNC_M * jnp.stack([jnp.cos(angle), jnp.sin(angle), jnp.zeros_like(angle)], -1)
-    lit = shadow_fraction(r_station, env_steps.r_sun_eci_m[:, 1], fm.r_earth_m)
+    cos_angle, sin_angle = sincos(env_steps.earth_angle_rad[:, 1] + station_lon_rad)
+    x, y, z = R_SYNC_M * cos_angle, R_SYNC_M * sin_angle, jnp.zeros_like(cos_angle)
+    # A batch evaluates the shadow function (an arcsine and three arccosines per step) only in cycles where
+    # some sample's station meets the shadow cone (``physics.fusion.skipped_where_idle``): a few weeks
+    # around each equinox; elsewhere it is exactly 1.
+    lit = skipped_where_idle(shadow_fraction_xyz, near_shadow_cone, lambda x, *_: jnp.ones_like(x), x, y, z,
+                             env_steps.r_sun_eci_m[:, 1], fm.r_earth_m)
     return 1.0 - fm.shadow_on * (1.0 - lit)
