@@ -168,3 +168,20 @@ def test_structured_search_finds_the_raise_the_exhaustive_search_finds():
         assert 0.3 < float(jnp.mean(every.feasible)) and float(jnp.mean(every.vdt_raise_mps > 0)) > 0.1, name
         for field in ("feasible", "vdt_raise_mps", "dv_rsw_mps", "alpha_rad", "beta_rad"):
             np.testing.assert_array_equal(getattr(fast, field), getattr(every, field), err_msg=f"{name}: {field}")
+
+
+def test_default_raise_index_is_searchsorted():
+    """The closed-form index into the default raises of V_DT (``qffc.default_raise_index``) against
+    ``jnp.searchsorted`` on both sides: every grid value and its float neighbours, random raises across
+    both parts of the grid and around their joint, signed zeros, infinities and NaN."""
+    grid = qffc.default_vdt_raises()
+    g = np.asarray(grid)
+    rng = np.random.default_rng(3)
+    x = jnp.asarray(np.concatenate([
+        g, np.nextafter(g, np.inf), np.nextafter(g, -np.inf), rng.uniform(-0.5, 2.5, 20000),
+        np.exp(rng.uniform(-30.0, 3.0, 20000)), rng.uniform(0.099, 0.101, 20000),
+        [0.0, -0.0, 5e-324, -1e-300, 1e300, -1e300, np.inf, -np.inf, np.nan]]))
+    for side in ("left", "right"):
+        expected = jax.jit(jax.vmap(lambda v: jnp.searchsorted(grid, v, side=side, method="compare_all")))(x)
+        closed = jax.jit(jax.vmap(lambda v: qffc.default_raise_index(grid, v, side)))(x)
+        np.testing.assert_array_equal(closed, expected, err_msg=side)

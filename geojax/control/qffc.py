@@ -108,6 +108,31 @@ def default_vdt_raises(fine_up_to_mps: float = 0.1, fine_count: int = 51, max_ra
     return jnp.concatenate([fine, jnp.geomspace(fine_up_to_mps, max_raise_mps, coarse_count + 1)[1:]])
 
 
+def default_raise_index(raises_mps, x, side: str = "left"):
+    """``jnp.searchsorted(raises_mps, x, side)`` for ``raises_mps = default_vdt_raises()``, in closed form.
+
+    The grid is linear to 0.1 m/s and geometric above, so the index is the ceiling of an affine or
+    logarithmic map of x, off by at most one where rounding puts x next to a grid value; one comparison
+    with the grid value on each side of the estimate corrects it, with searchsorted's semantics (ties,
+    -inf -> 0, +inf and NaN -> the length).  Three searches over the 101 raises were a third of the FOMPC's
+    annealing (each compares x with every raise); ``tests/test_qffc.py`` checks it against searchsorted.
+    """
+    n = raises_mps.shape[0]
+    fine_step = raises_mps[50] / 50  # the default grid only: 51 linear raises, then 50 geometric ones
+    ratio = jnp.log(raises_mps[n - 1] / raises_mps[50]) / 50
+    linear = x / fine_step
+    geometric = 50 + jnp.log(jnp.maximum(x, raises_mps[50]) / raises_mps[50]) / ratio
+    estimate = jnp.ceil(jnp.clip(jnp.where(x <= raises_mps[50], linear, geometric), 0.0, n))
+    i = jnp.where(jnp.isnan(estimate), n, estimate).astype(jnp.int32)
+    above = raises_mps[jnp.minimum(i, n - 1)]  # the raise at the estimate, +inf past the end
+    below = raises_mps[jnp.maximum(i - 1, 0)]  # the one before it, -inf before the start
+    if side == "left":
+        up, down = (i < n) & (above < x), (i > 0) & (below >= x)
+    else:
+        up, down = (i < n) & (above <= x), (i > 0) & (below > x)
+    return jnp.where(jnp.isnan(x), n, i + up.astype(i.dtype) - down.astype(i.dtype))
+
+
 def full_correction_mps(delta_x):
     """|V_N| = 2 V_s |di| that cancels the inclination deviation in one cycle (eq. (30))."""
     return 2 * V_SYNC_MPS * jnp.hypot(delta_x[4], delta_x[5])
@@ -128,12 +153,14 @@ def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None
     the node angles and the in-plane parts in every kernel that reads them (measured on the FOMPC's
     annealing, see ``control.fompc``).
     """
+    search_raises = default_raise_index if vdt_raises_mps is None else None
     vdt_raises_mps = default_vdt_raises() if vdt_raises_mps is None else vdt_raises_mps
     trig = arm_trig(limits)
     stage = functools.partial(_stage, anchor=anchor)
     plane, l_rad, v_n_total = stage(_in_plane, delta_x, l_start_rad, coast_offset_s, v_n_mps)
     if search != "all":
-        vdt_raises_mps = vdt_raises_mps[stage(first_feasible_window, plane, vdt_raises_mps, v_n_total, trig)]
+        window = functools.partial(first_feasible_window, search=search_raises)
+        vdt_raises_mps = vdt_raises_mps[stage(window, plane, vdt_raises_mps, v_n_total, trig)]
     dv, v, raise_mps, feasible = stage(_burns, plane, vdt_raises_mps, v_n_total, trig)
     # Eq. (14): dv = -V (cos b cos a, cos b sin a, sin b).
     alpha = atan2(-dv[:, 1], -dv[:, 0])
@@ -227,7 +254,8 @@ def in_plane_coefficients(plane: InPlane):
     return 0.5 * jnp.stack([s0 + plane.v_r_diff_mps, s0 - plane.v_r_diff_mps]), 0.5 * s1, t0
 
 
-def first_feasible_window(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, width: int = 4):
+def first_feasible_window(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, width: int = 4,
+                          search=None):
     """Indices [width] into the sorted ``raises_mps`` that hold its first feasible candidate, found without
     testing them all.
 
@@ -239,8 +267,11 @@ def first_feasible_window(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, 
     else P is below the bound from there up to its right root, beyond which it stays above: that root in
     closed form, and the first candidate past it.  The window starts one candidate before it, so that
     ``candidates`` (with its tolerances) makes the final choice; with no feasible candidate it starts at
-    the first one, as the exhaustive search returns.
+    the first one, as the exhaustive search returns.  ``search(raises_mps, x, side)`` is searchsorted
+    (``default_raise_index`` for the default raises).
     """
+    if search is None:
+        search = functools.partial(jnp.searchsorted, method="compare_all")
     q0, q1, t0 = in_plane_coefficients(plane)
     n = raises_mps.shape[0]
     # g0 + g1 r <= 0 for each burn: v_r <= 0, alpha <= its upper limit, alpha >= its lower limit.
@@ -251,8 +282,8 @@ def first_feasible_window(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, 
     r_lo = jnp.max(jnp.where(g1 < 0, bound, -jnp.inf))
     r_hi = jnp.min(jnp.where(g1 > 0, bound, jnp.inf))
     constant_ok = jnp.all((g1 != 0) | (g0 <= 0))
-    j_lo = jnp.searchsorted(raises_mps, r_lo, side="left", method="compare_all")
-    j_hi = jnp.searchsorted(raises_mps, r_hi, side="right", method="compare_all") - 1
+    j_lo = search(raises_mps, r_lo, side="left")
+    j_hi = search(raises_mps, r_hi, side="right") - 1
 
     need = jnp.where(trig.vertical, 0.0, v_n_total / trig.tan_pitch_max)  # beta_max = 90 deg: no bound
     j_start = jnp.clip(j_lo, 0, n - 1)
@@ -274,7 +305,7 @@ def first_feasible_window(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, 
     # quad <= 0 (|d1| <= 2 |A_1 - A_2| |B| <= 2 c |B|): the larger root takes -root
     safe = jnp.where(quad < 0, quad, -1.0)
     r_right = jnp.where(quad < 0, (-lin - root) / (2 * safe), -const / jnp.where(lin == 0, 1.0, lin))
-    j_pitch = jnp.searchsorted(raises_mps, r_right, side="left", method="compare_all")
+    j_pitch = search(raises_mps, r_right, side="left")
     j = jnp.where(ok_start, j_start, jnp.maximum(j_pitch, j_start))
     found = constant_ok & (j_lo <= j_hi) & (j <= j_hi) & (j_lo < n)
     first = jnp.where(found, j - 1, 0)
