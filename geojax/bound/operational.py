@@ -317,12 +317,7 @@ def _matched(gain, target, lower_s, upper_s, near_s=None):
     b_ub = np.r_[target, -target]
     cost = np.r_[np.full(p, 0.0 if near_s is not None else TIE), np.ones(m)]
     bounds = list(zip(lower_s, upper_s)) + [(0, None)] * m
-    if near_s is not None:
-        a_ub, b_ub, cost, bounds = _plus_nearness(a_ub, b_ub, cost, bounds, near_s, TIE)
-    result = scipy.optimize.linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
-    if result.status != 0:
-        raise ValueError(f"operational: Problem 7's program failed ({result.message})")
-    return result.x[:p]
+    return _durations_lp(cost, a_ub, b_ub, bounds, near_s, TIE, "Problem 7's program failed")[:p]
 
 
 def _least_firing(rows, offset, box_rad, lower_s, upper_s, near_s=None):
@@ -335,12 +330,18 @@ def _least_firing(rows, offset, box_rad, lower_s, upper_s, near_s=None):
     a_ub = np.vstack([a, -a])
     b_ub = np.r_[(box_rad - offset[keep]) / scale[keep], (box_rad + offset[keep]) / scale[keep]]
     cost, bounds = np.ones(p), list(zip(lower_s, upper_s))
+    return _durations_lp(cost, a_ub, b_ub, bounds, near_s, PROX, "the scheduled pulses cannot hold the box")[:p]
+
+
+def _durations_lp(cost, a_ub, b_ub, bounds, near_s, weight, failure: str):
+    """The solution x of min cost x, a_ub x <= b_ub within ``bounds`` (HiGHS), with ``weight`` per unit of
+    |d - near| added where ``near_s`` is given (d: x's first len(near_s) entries); ``failure`` names a refusal."""
     if near_s is not None:
-        a_ub, b_ub, cost, bounds = _plus_nearness(a_ub, b_ub, cost, bounds, near_s, PROX)
+        a_ub, b_ub, cost, bounds = _plus_nearness(a_ub, b_ub, cost, bounds, near_s, weight)
     result = scipy.optimize.linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
     if result.status != 0:
-        raise ValueError(f"operational: the scheduled pulses cannot hold the box ({result.message})")
-    return result.x[:p]
+        raise ValueError(f"operational: {failure} ({result.message})")
+    return result.x
 
 
 def _plus_nearness(a_ub, b_ub, cost, bounds, near_s, weight):
