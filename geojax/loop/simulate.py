@@ -40,8 +40,10 @@ from geojax.control.predictor import Reference, boundary_elements, estimate_mean
 from geojax.physics.dynamics import SpacecraftState
 from geojax.physics.elements import cartesian_to_mee, wrap_angle
 from geojax.physics.forces import Environment, ForceModel
-from geojax.physics.frames import rsw_to_eci_xyz
+from geojax.physics.frames import rsw_to_eci_xyz, subsatellite_lon_lat_xyz_rad
+from geojax.physics.fusion import materialized
 from geojax.physics.integrate import rk4_step
+from geojax.physics.trig import sincos
 from geojax.params import Params
 from geojax.physics.propagate import MEE, CycleMeans, Dynamics, cycle_means
 
@@ -158,10 +160,8 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
                                        StepEnvironment(env3, step_s, j, jnp.stack(r), jnp.stack(v)))
             has_propellant = state.mass_kg > params.spacecraft["dry_mass_kg"]  # else the thrusters stop
             thrust = thrust._replace(on_fraction=jnp.where(has_propellant, thrust.on_fraction, 0.0))
-            cos_angle, sin_angle = jnp.cos(env3.earth_angle_rad[0]), jnp.sin(env3.earth_angle_rad[0])
-            east = lambda u: (cos_angle * u[0] + sin_angle * u[1], -sin_angle * u[0] + cos_angle * u[1], u[2])  # noqa: E731
-            x_ecef, y_ecef, z_ecef = east(r)
-            lon, lat = jnp.arctan2(y_ecef, x_ecef), jnp.arctan2(z_ecef, jnp.hypot(x_ecef, y_ecef))
+            east = _to_ecef(env3.earth_angle_rad[0])
+            lon, lat = subsatellite_lon_lat_xyz_rad(*east(r))
             accel = thrust.on_fraction * thrust.thrust_n / state.mass_kg
             d = thrust.direction_rsw
             accel_ecef = jnp.stack(east(rsw_to_eci_xyz((accel * d[0], accel * d[1], accel * d[2]), r, v)))
@@ -170,9 +170,16 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
         # (A carry of six separate scalars instead of the orbit array [6] was measured slower: 3.2-5.2 against
         # 1.6-1.8 us per RHS unbatched, 146-153 against 124-128 ns at batch 1024.)
         final, (orbits, lon, lat, accel) = jax.lax.scan(jax.checkpoint(step), state, (jnp.arange(n_steps), env_steps))
+        # the cycle's mean elements from the step starts' records and the end state, whose longitude and
+        # latitude are stored once (``materialized``: else XLA's CPU fusion evaluates them again for each of the
+        # n samples of every kernel that appends them)
+        angle_end = env_steps.earth_angle_rad[-1, 2]
+        lon_end, lat_end = materialized(
+            lambda orbit: subsatellite_lon_lat_xyz_rad(*_to_ecef(angle_end)(dynamics.rv_xyz(orbit, mu)[0])),
+            final.orbit, anchor=angle_end)
         orbits = jnp.concatenate([orbits, final.orbit[None]], axis=0)
-        angles = jnp.concatenate([env_steps.earth_angle_rad[:, 0], env_steps.earth_angle_rad[-1:, 2]])
-        means = cycle_means(dynamics.to_mee(orbits, mu), angles, mu, cycle_s, ctx.t_s + cycle_s / 2)
+        means = cycle_means(dynamics.to_mee(orbits, mu), jnp.append(lon, lon_end), jnp.append(lat, lat_end),
+                            cycle_s, ctx.t_s + cycle_s / 2)
         dlon = wrap_angle(lon - station_lon)
         norm = jnp.linalg.norm(accel, axis=-1, keepdims=True)
         firing = jnp.sum(jnp.abs(accel) > FIRING_COMPONENT_RTOL * norm, axis=0)
@@ -188,6 +195,12 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
     xs = (jnp.arange(n_cycles), env, osc_ref, windows)
     (final, _), (cycles, steps) = jax.lax.scan(jax.checkpoint(one_cycle), (params.initial, initial_state), xs)
     return final, Records(cycles, steps)
+
+
+def _to_ecef(earth_angle_rad):
+    """ECI components (x, y, z) -> ECEF components, for an Earth angle shared by the batch."""
+    cos_angle, sin_angle = sincos(earth_angle_rad)  # XLA evaluates it per lane: in plain arithmetic (``physics.trig``)
+    return lambda u: (cos_angle * u[0] + sin_angle * u[1], -sin_angle * u[0] + cos_angle * u[1], u[2])
 
 
 def position_velocity(dynamics: Dynamics, orbit, mu):

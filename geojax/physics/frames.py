@@ -13,6 +13,7 @@ import jax.numpy as jnp
 
 from geojax.physics.ephemeris import general_precession_rad, mean_obliquity_rad
 from geojax.physics.time import gmst_rad, julian_centuries_tt
+from geojax.physics.trig import atan2
 
 
 def earth_rotation_angle_rad(t_tt_s, frame_epoch_tt_s, tt_minus_ut1_s):
@@ -77,6 +78,11 @@ def rsw_to_eci_xyz(vector_rsw, r_eci, v_eci):
 
 def subsatellite_lon_lat_rad(r_ecef):
     """Geocentric longitude and latitude (radians) of an ECEF position."""
-    lon = jnp.arctan2(r_ecef[..., 1], r_ecef[..., 0])
-    lat = jnp.arctan2(r_ecef[..., 2], jnp.hypot(r_ecef[..., 0], r_ecef[..., 1]))
-    return lon, lat
+    return subsatellite_lon_lat_xyz_rad(r_ecef[..., 0], r_ecef[..., 1], r_ecef[..., 2])
+
+
+def subsatellite_lon_lat_xyz_rad(x, y, z):
+    """``subsatellite_lon_lat_rad`` on components, with ``physics.trig.atan2`` (fdlibm in plain arithmetic,
+    within 1 ulp of libm; XLA's CPU arctan2 runs one element at a time, and the loop evaluates this at every
+    step and every cycle-mean sample of every lane)."""
+    return atan2(y, x), atan2(z, jnp.sqrt(x * x + y * y))

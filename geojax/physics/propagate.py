@@ -15,7 +15,7 @@ import jax.numpy as jnp
 
 from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.physics.dynamics import cartesian_rhs, mee_rhs
-from geojax.physics.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian, mee_to_rv_xyz, semi_major_axis_m, subsatellite_point_rad, wrap_angle
+from geojax.physics.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian, mee_to_rv_xyz, semi_major_axis_m, wrap_angle
 from geojax.physics.ephemeris import moon_position_eci_m, sun_position_eci_m
 from geojax.physics.forces import Environment
 from geojax.physics.frames import earth_rotation_angle_rad
@@ -107,21 +107,27 @@ def environment_grid(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cyc
     return jax.tree_util.tree_map(lambda x: x[index].reshape((n_cycles, n_steps, 3) + x.shape[1:]), env)
 
 
-def cycle_means(mee_samples, earth_angle_rad, mu, cycle_s, t_mid_s) -> CycleMeans:
-    """Mean elements from [n + 1] MEE samples equally spaced over one cycle, both ends included."""
-    lon, lat = subsatellite_point_rad(mee_samples, earth_angle_rad, mu)
-    dlon = wrap_angle(lon - lon[0])
-    # Unwrap relative to the first sample; the longitude moves < pi per cycle.
-    dlon = jnp.concatenate([jnp.zeros(1), jnp.cumsum(wrap_angle(jnp.diff(dlon)))])
+def cycle_means(mee_samples, lon_rad, lat_rad, cycle_s, t_mid_s) -> CycleMeans:
+    """Mean elements from [n + 1] MEE samples equally spaced over one cycle, both ends included, and the
+    sub-satellite longitude and latitude at the same samples (``frames.subsatellite_lon_lat_xyz_rad``: the
+    loop has them from its step records).
+
+    The longitude is unwrapped relative to the first sample (it moves < pi between samples); the trapezoid
+    mean of that unwrapped longitude is a fixed weighting of the per-interval changes (each counts at every
+    later sample, half at the last), so no cumulative sum is formed.
+    """
+    turns = wrap_angle(jnp.diff(lon_rad))  # [n], each |.| < pi
+    n = turns.shape[0]
+    dlon_mean = jnp.sum(turns * ((n - 0.5 - jnp.arange(n)) / n))
     mean = cycle_mean(mee_samples)
     return CycleMeans(
         t_s=t_mid_s,
-        lon_rad=wrap_angle(lon[0] + cycle_mean(dlon)),
-        drift_rad_s=dlon[-1] / cycle_s,
+        lon_rad=wrap_angle(lon_rad[0] + dlon_mean),
+        drift_rad_s=jnp.sum(turns) / cycle_s,
         ex=mean[1],
         ey=mean[2],
         ix=mean[3],
         iy=mean[4],
         a_m=cycle_mean(semi_major_axis_m(mee_samples)),
-        max_abs_lat_rad=jnp.max(jnp.abs(lat)),
+        max_abs_lat_rad=jnp.max(jnp.abs(lat_rad)),
     )

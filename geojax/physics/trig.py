@@ -101,20 +101,22 @@ PI_LO = 1.2246467991473531772e-16
 
 
 def _atan_nonnegative(t):
-    """atan(t) for t >= 0 (or NaN), s_atan.c's reduction and polynomial, branch-free."""
+    """atan(t) for t >= 0 (or NaN), s_atan.c's reduction and polynomial, branch-free.
+
+    The interval picks its constants with ``lax.select_n`` on the interval index, elementwise (``jnp.select``
+    finds the first true condition with a reduction, which XLA compiles as a kernel of its own).
+    """
     interval = ((t >= 0.4375).astype(jnp.int32) + (t >= 0.6875) + (t >= 1.1875) + (t >= 2.4375))
+    pick = lambda *cases: jax.lax.select_n(interval, *jnp.broadcast_arrays(*cases))  # noqa: E731
     # the reduced argument (t - c) / (1 + c t) as s_atan.c writes it per interval (interval 0: t itself)
-    num = jnp.select([interval == 1, interval == 2, interval == 3, interval == 4],
-                     [2.0 * t - 1.0, t - 1.0, t - 1.5, -1.0], t)
-    den = jnp.select([interval == 1, interval == 2, interval == 3, interval == 4],
-                     [2.0 + t, t + 1.0, 1.0 + 1.5 * t, t], 1.0)
-    r = num / den
+    one = jnp.ones_like(t)
+    r = pick(t, 2.0 * t - 1.0, t - 1.0, t - 1.5, -one) / pick(one, 2.0 + t, t + 1.0, 1.0 + 1.5 * t, t)
     z = r * r
     w = z * z
     odd, even = ATAN_COEFFICIENTS[0::2], ATAN_COEFFICIENTS[1::2]
     s = z * _horner(odd, w) + w * _horner(even, w)
-    hi = jnp.select([interval == j + 1 for j in range(4)], list(ATAN_HI), 0.0)
-    lo = jnp.select([interval == j + 1 for j in range(4)], list(ATAN_LO), 0.0)
+    hi = pick(*(jnp.full_like(t, c) for c in (0.0, *ATAN_HI)))
+    lo = pick(*(jnp.full_like(t, c) for c in (0.0, *ATAN_LO)))
     return jnp.where(interval == 0, r - r * s, hi - ((r * s - lo) - r))
 
 
