@@ -47,8 +47,8 @@ from __future__ import annotations
 
 import os
 
-# geojax runs one XLA CPU device per core and shards the batch over them
-# (geojax.parallel), as heyoka runs one thread per core; the flag must be set
+# geojax runs one XLA CPU device per core, each running the one-device program on its share of the batch
+# (geojax.parallel.per_device, as geojax sweep does), as heyoka runs one thread per core; the flag must be set
 # before JAX is imported.
 os.environ.setdefault("XLA_FLAGS", f"--xla_force_host_platform_device_count={os.cpu_count() or 1}")
 
@@ -78,7 +78,7 @@ from geojax.physics.elements import cartesian_to_mee, cycle_mean, mee_to_cartesi
 from geojax.physics.forces import ForceModel, perturbing_acceleration, point_mass
 from geojax.loop.simulate import propagate as propagate_cycles
 from geojax.physics.propagate import MEE, environment_at, environment_grid, for_lanes, steps_per_cycle
-from geojax.parallel import replicate, shard_batch
+from geojax.parallel import per_device
 from geojax.uncontrolled import propagated_cycles, inclination_vector_deg
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -333,42 +333,42 @@ class GeojaxRunner:
             step_s = SIDEREAL_DAY_S / n_steps
             s = self.problem.scenario
             env, timing = timed(
-                lambda: jax.block_until_ready(replicate(
+                lambda: jax.block_until_ready(
                     environment_grid(s.epoch_tt_s, s.epoch_tt_s, s.tt_minus_ut1_s, step_s, self.problem.n_cycles, n_steps)
-                ))
+                )
             )
             self._env[n_steps] = (n_steps, step_s, env, timing.wall_s)
         return self._env[n_steps]
 
     def states(self, batch: int) -> SpacecraftState:
-        """Initial states, sharded over the devices when the batch splits evenly."""
         p = self.problem
-        states = SpacecraftState(jnp.asarray(p.mee[:batch]), jnp.full(batch, p.scenario.mass_kg), jnp.zeros(batch))
-        return shard_batch(states) if batch % jax.device_count() == 0 else states
+        return SpacecraftState(p.mee[:batch], np.full(batch, p.scenario.mass_kg), np.zeros(batch))
 
     def compiled(self, step_request_s: float, batch: int):
-        """(compiled propagator, compile seconds): jit(vmap(propagate_cycles)) over the initial states."""
+        """(propagator, compile seconds): ``vmap(propagate_cycles)`` over the initial states, compiled as one
+        single-device program per device when the batch splits evenly (``geojax.parallel.per_device``, as
+        ``geojax sweep`` runs), else on one device; the environment grid and the force model are arguments
+        shared by the batch."""
         n_steps, step_s, env, _ = self.environment(step_request_s)
         key = (n_steps, batch)
         if key not in self._compiled:
-            # the step compiled for the lanes each device runs (fusion boundaries from 8 lanes on), as in
-            # ``geojax sweep`` and ``simulate_batch``
-            lanes = batch // jax.device_count() if batch % jax.device_count() == 0 else batch
-            dynamics = for_lanes(MEE, lanes)
+            devices = jax.device_count() if batch % jax.device_count() == 0 else 1
+            # the step compiled for the lanes each device runs (fusion boundaries from 8 lanes on)
+            dynamics = for_lanes(MEE, batch // devices)
             batched = jax.vmap(
                 lambda state, env, fm: propagate_cycles(dynamics, state, env, fm, step_s), in_axes=(0, None, None)
             )
-            lowered = jax.jit(batched).lower(self.states(batch), env, self.problem.force_model)
-            compiled, timing = timed(lowered.compile)
-            self._compiled[key] = (compiled, timing.wall_s)
+            run, compile_s = per_device(batched, (self.states(batch),), jax.local_devices()[:devices],
+                                        shared=(env, self.problem.force_model))
+            self._compiled[key] = (run, compile_s)
         return self._compiled[key]
 
     def run(self, step_request_s: float, batch: int, force_model: ForceModel | None = None):
-        """(final states, CycleMeans [batch, n_cycles]) of one call of the compiled propagator."""
-        compiled, _ = self.compiled(step_request_s, batch)
-        _, _, env, _ = self.environment(step_request_s)
-        fm = self.problem.force_model if force_model is None else force_model
-        return jax.block_until_ready(compiled(self.states(batch), env, fm))
+        """(final states, CycleMeans [batch, n_cycles]) of one call of the compiled propagator (numpy)."""
+        run, _ = self.compiled(step_request_s, batch)
+        if force_model is None:
+            return run(self.states(batch))  # the grid and force model placed at compile time
+        return run(self.states(batch), shared=(self.environment(step_request_s)[2], force_model))
 
     def final_positions(self, final: SpacecraftState) -> np.ndarray:
         return np.asarray(mee_to_cartesian(final.orbit, self.problem.force_model.mu_m3_s2)[0])
@@ -794,8 +794,10 @@ def notes_markdown(results: dict) -> list[str]:
         "wall time (both from /proc/stat, near 0 = undisturbed). When their sum exceeds "
         f"{DISTURBED_CORES} the measurement is repeated (up to 2 extra attempts, 1 for calls over "
         f"{LONG_CALL_S:.0f} s) and the fastest undisturbed call is kept, else the fastest. geojax splits the CPU into one XLA device per core "
-        "(`XLA_FLAGS=--xla_force_host_platform_device_count`, set by this script) and shards batches that split "
-        "evenly over them (`geojax.parallel`); batch 1 runs on one device; heyoka runs the SIMD batch integrator on one thread per core; SciPy is "
+        "(`XLA_FLAGS=--xla_force_host_platform_device_count`, set by this script) and runs batches that split "
+        "evenly over them as one single-device program per device on its share (`geojax.parallel.per_device`, "
+        "as `geojax sweep` does; a jit sharded over the devices ran 2.8x slower: 87 against 242 orbit-years/s, "
+        "120 days at batch 1024); batch 1 runs on one device; heyoka runs the SIMD batch integrator on one thread per core; SciPy is "
         "serial (one orbit per core; two processes could at most double its figure, which does not depend on "
         "the batch).",
         "- heyoka batch 1 uses the scalar integrator, larger batches the SIMD batch integrator; compile = cold "

@@ -56,15 +56,21 @@ def replicate(tree, mesh: Mesh | None = None):
     return jax.device_put(tree, NamedSharding(mesh, PartitionSpec()))
 
 
-def per_device(fn, example_args, devices=None):
+def per_device(fn, example_args, devices=None, shared=()):
     """``fn`` (every argument and result with a leading batch axis) compiled once for each device as the
     same single-device program, and a function that splits a batch evenly over the devices, runs the shares
     concurrently and joins the results (numpy).  Returns ``(run, compile_s)``.
 
     Each device runs exactly the program one device would run on its share, so results are bit for bit
     those of one device, whatever the device count.  (A ``jit`` sharded over a mesh, even through
-    ``shard_map``, goes through XLA's SPMD pipeline, whose fusion choices can move the last bit.)
-    ``example_args`` fix the shapes: their batch is the whole batch, a multiple of the device count.
+    ``shard_map``, goes through XLA's SPMD pipeline, whose fusion choices can move the last bit; on a CPU it
+    is also slower: propagation at batch 1024 on two devices ran 87 orbit-years/s sharded against 242 this
+    way, ``benchmarks/propagate.py``.)  ``example_args`` fix the shapes: their batch is the whole batch, a
+    multiple of the device count.
+
+    ``shared``: arguments every device reads whole (an environment grid, a force model), passed after the
+    batched ones, ``fn(*args, *shared)``; they are placed on each device once, and ``run(*args,
+    shared=...)`` may replace them by values of the same shapes.
     """
     import concurrent.futures
     import time
@@ -80,13 +86,19 @@ def per_device(fn, example_args, devices=None):
         return [jax.device_put(jax.tree_util.tree_map(lambda x: x[i * n:(i + 1) * n], args), d)
                 for i, d in enumerate(devices)]
 
+    def placed(values):
+        return [jax.device_put(tuple(values), d) for d in devices]
+
     start = time.perf_counter()
+    on_devices = placed(shared)
     with concurrent.futures.ThreadPoolExecutor(len(devices)) as pool:  # XLA compiles outside the GIL
-        compiled = list(pool.map(lambda share: jitted.lower(*share).compile(), shares(example_args)))
+        compiled = list(pool.map(lambda pair: jitted.lower(*pair[0], *pair[1]).compile(),
+                                 zip(shares(example_args), on_devices)))
     compile_s = time.perf_counter() - start
 
-    def run(*args):
-        outs = [c(*share) for c, share in zip(compiled, shares(args), strict=True)]  # dispatched asynchronously
+    def run(*args, shared=None):
+        common = on_devices if shared is None else placed(shared)
+        outs = [c(*share, *rest) for c, share, rest in zip(compiled, shares(args), common, strict=True)]  # async
         return jax.tree_util.tree_map(lambda *xs: np.concatenate([np.asarray(x) for x in xs]), *outs)
 
     return run, compile_s

@@ -40,7 +40,7 @@ from geojax.control.predictor import Reference, boundary_elements, estimate_mean
 from geojax.physics.dynamics import SpacecraftState
 from geojax.physics.elements import cartesian_to_mee, wrap_angle
 from geojax.physics.forces import Environment, ForceModel
-from geojax.physics.frames import rsw_to_eci_xyz, subsatellite_lon_lat_xyz_rad
+from geojax.physics.frames import latitude_rad, rsw_to_eci_xyz, subsatellite_lon_tan_lat_xyz
 from geojax.physics.fusion import materialized
 from geojax.physics.integrate import rk4_step
 from geojax.physics.trig import sincos
@@ -161,33 +161,34 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
             has_propellant = state.mass_kg > params.spacecraft["dry_mass_kg"]  # else the thrusters stop
             thrust = thrust._replace(on_fraction=jnp.where(has_propellant, thrust.on_fraction, 0.0))
             east = _to_ecef(env3.earth_angle_rad[0])
-            lon, lat = subsatellite_lon_lat_xyz_rad(*east(r))
+            lon, tan_lat = subsatellite_lon_tan_lat_xyz(*east(r))  # latitudes once per cycle, from extremes
             accel = thrust.on_fraction * thrust.thrust_n / state.mass_kg
             d = thrust.direction_rsw
             accel_ecef = jnp.stack(east(rsw_to_eci_xyz((accel * d[0], accel * d[1], accel * d[2]), r, v)))
-            return rk4_step(dynamics.rhs, state, env3, fm, thrust, step_s), (state.orbit, lon, lat, accel_ecef)
+            return rk4_step(dynamics.rhs, state, env3, fm, thrust, step_s), (state.orbit, lon, tan_lat, accel_ecef)
 
         # (A carry of six separate scalars instead of the orbit array [6] was measured slower: 3.2-5.2 against
         # 1.6-1.8 us per RHS unbatched, 146-153 against 124-128 ns at batch 1024.)
-        final, (orbits, lon, lat, accel) = jax.lax.scan(jax.checkpoint(step), state, (jnp.arange(n_steps), env_steps))
+        final, (orbits, lon, tan_lat, accel) = jax.lax.scan(jax.checkpoint(step), state, (jnp.arange(n_steps), env_steps))
         # the cycle's mean elements from the step starts' records and the end state, whose longitude and
         # latitude are stored once (``materialized``: else XLA's CPU fusion evaluates them again for each of the
         # n samples of every kernel that appends them)
         angle_end = env_steps.earth_angle_rad[-1, 2]
-        lon_end, lat_end = materialized(
-            lambda orbit: subsatellite_lon_lat_xyz_rad(*_to_ecef(angle_end)(dynamics.rv_xyz(orbit, mu)[0])),
+        lon_end, tan_lat_end = materialized(
+            lambda orbit: subsatellite_lon_tan_lat_xyz(*_to_ecef(angle_end)(dynamics.rv_xyz(orbit, mu)[0])),
             final.orbit, anchor=angle_end)
         orbits = jnp.concatenate([orbits, final.orbit[None]], axis=0)
-        means = cycle_means(dynamics.to_mee(orbits, mu), jnp.append(lon, lon_end), jnp.append(lat, lat_end),
+        means = cycle_means(dynamics.to_mee(orbits, mu), jnp.append(lon, lon_end), jnp.append(tan_lat, tan_lat_end),
                             cycle_s, ctx.t_s + cycle_s / 2)
         dlon = wrap_angle(lon - station_lon)
         norm = jnp.linalg.norm(accel, axis=-1, keepdims=True)
         firing = jnp.sum(jnp.abs(accel) > FIRING_COMPONENT_RTOL * norm, axis=0)
         record = CycleRecord(
             means, boundary_elements(dynamics.to_mee(state.orbit, mu), env_steps.earth_angle_rad[0, 0]),
-            final.dv_mps - state.dv_mps, jnp.min(dlon), jnp.max(dlon), jnp.sum(dlon), jnp.min(lat), jnp.max(lat),
+            final.dv_mps - state.dv_mps, jnp.min(dlon), jnp.max(dlon), jnp.sum(dlon), latitude_rad(jnp.min(tan_lat)),
+            latitude_rad(jnp.max(tan_lat)),
             firing, {} if controller.record is None else controller.record(plan))
-        steps = StepRecord(lon, lat, accel) if keep_steps else None
+        steps = StepRecord(lon, latitude_rad(tan_lat), accel) if keep_steps else None
         return (final, controller_state), (record, steps)
 
     initial_state = controller.init(params, context(jnp.asarray(0), jax.tree_util.tree_map(lambda x: x[0], env),

@@ -21,6 +21,7 @@ import jax.numpy as jnp
 
 from geojax.physics import constants as c
 from geojax.physics.fusion import skipped_where_idle
+from geojax.physics.trig import sincos
 
 
 class ForceModel(NamedTuple):
@@ -196,7 +197,7 @@ def perturbing_xyz(x, y, z, mass_kg, env: Environment, fm: ForceModel, boundarie
     it again in every kernel that reads it.
     """
     angle = env.earth_angle_rad
-    cos_angle, sin_angle = jnp.cos(angle), jnp.sin(angle)  # batch-invariant
+    cos_angle, sin_angle = sincos(angle)  # batch-invariant, but XLA evaluates it per lane: plain arithmetic
     ax, ay, az = (fm.j2_on * a for a in j2_xyz(x, y, z, fm.mu_m3_s2, fm.j2, fm.r_earth_m))
     for switch, term in (
         (fm.c22_on, c22_s22_xyz(x, y, z, cos_angle, sin_angle, fm.mu_m3_s2, fm.c22, fm.s22, fm.r_earth_m)),

@@ -83,6 +83,21 @@ def subsatellite_lon_lat_rad(r_ecef):
 
 def subsatellite_lon_lat_xyz_rad(x, y, z):
     """``subsatellite_lon_lat_rad`` on components, with ``physics.trig.atan2`` (fdlibm in plain arithmetic,
-    within 1 ulp of libm; XLA's CPU arctan2 runs one element at a time, and the loop evaluates this at every
-    step and every cycle-mean sample of every lane)."""
-    return atan2(y, x), atan2(z, jnp.sqrt(x * x + y * y))
+    within 1 ulp of libm; XLA's CPU arctan2 runs one element at a time)."""
+    lon, tan_lat = subsatellite_lon_tan_lat_xyz(x, y, z)
+    return lon, latitude_rad(tan_lat)
+
+
+def subsatellite_lon_tan_lat_xyz(x, y, z):
+    """Geocentric longitude (radians) and the tangent of the latitude, z / sqrt(x^2 + y^2), of ECEF components.
+
+    The loop records these at every step: the latitude is monotone in its tangent, so a cycle's extremes of
+    latitude are ``latitude_rad`` of the extremes of the tangent, one arc tangent per cycle instead of one per
+    step, and the same numbers (``atan2(z, rho)`` reduces to atan(|z| / rho) exactly as ``latitude_rad`` does).
+    """
+    return atan2(y, x), z / jnp.sqrt(x * x + y * y)
+
+
+def latitude_rad(tan_lat):
+    """The latitude of its tangent (``subsatellite_lon_tan_lat_xyz``), in [-pi/2, pi/2]."""
+    return atan2(tan_lat, jnp.ones_like(tan_lat))

@@ -18,7 +18,7 @@ from geojax.physics.dynamics import cartesian_rhs, mee_rhs
 from geojax.physics.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian, mee_to_rv_xyz, semi_major_axis_m, wrap_angle
 from geojax.physics.ephemeris import moon_position_eci_m, sun_position_eci_m
 from geojax.physics.forces import Environment
-from geojax.physics.frames import earth_rotation_angle_rad
+from geojax.physics.frames import earth_rotation_angle_rad, latitude_rad
 
 
 class Dynamics(NamedTuple):
@@ -107,10 +107,10 @@ def environment_grid(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cyc
     return jax.tree_util.tree_map(lambda x: x[index].reshape((n_cycles, n_steps, 3) + x.shape[1:]), env)
 
 
-def cycle_means(mee_samples, lon_rad, lat_rad, cycle_s, t_mid_s) -> CycleMeans:
+def cycle_means(mee_samples, lon_rad, tan_lat, cycle_s, t_mid_s) -> CycleMeans:
     """Mean elements from [n + 1] MEE samples equally spaced over one cycle, both ends included, and the
-    sub-satellite longitude and latitude at the same samples (``frames.subsatellite_lon_lat_xyz_rad``: the
-    loop has them from its step records).
+    sub-satellite longitude and the tangent of the latitude at the same samples
+    (``frames.subsatellite_lon_tan_lat_xyz``: the loop has them from its step records).
 
     The longitude is unwrapped relative to the first sample (it moves < pi between samples); the trapezoid
     mean of that unwrapped longitude is a fixed weighting of the per-interval changes (each counts at every
@@ -129,5 +129,5 @@ def cycle_means(mee_samples, lon_rad, lat_rad, cycle_s, t_mid_s) -> CycleMeans:
         ix=mean[3],
         iy=mean[4],
         a_m=cycle_mean(semi_major_axis_m(mee_samples)),
-        max_abs_lat_rad=jnp.max(jnp.abs(lat_rad)),
+        max_abs_lat_rad=latitude_rad(jnp.max(jnp.abs(tan_lat))),
     )
