@@ -90,7 +90,7 @@ def horizon_cost(fractions, x0, ref_windows, target, l_start_rad, limits, cycle_
                                         anchor=k.astype(float))
         di = jnp.hypot(target[4] - after[4], target[5] - after[5])
         zeta = jnp.where(di > mpc.di_max, mpc.penalty, 0.0)
-        cost = jnp.sum(burns.v_mps**mpc.dv_exponent) + zeta * di**2 + jnp.where(burns.feasible, 0.0, mpc.penalty * mpc.di_max**2)
+        cost = burns.v_mps[0]**mpc.dv_exponent + burns.v_mps[1]**mpc.dv_exponent + zeta * di**2 + jnp.where(burns.feasible, 0.0, mpc.penalty * mpc.di_max**2)
         return after, 0.5 * jnp.where(k < mpc.horizon, cost, 0.0)
 
     _, costs = jax.lax.scan(one, x0, jnp.arange(n_max))

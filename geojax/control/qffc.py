@@ -157,49 +157,63 @@ def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None
     vdt_raises_mps = default_vdt_raises() if vdt_raises_mps is None else vdt_raises_mps
     trig = arm_trig(limits)
     stage = functools.partial(_stage, anchor=anchor)
-    plane, l_rad, v_n_total = stage(_in_plane, delta_x, l_start_rad, coast_offset_s, v_n_mps)
+    l2 = stage(_node, delta_x)
+    l_rad = (l2 - jnp.pi, l2)
+    plane, v_n_total = stage(_in_plane, delta_x, l_rad, l_start_rad, coast_offset_s, v_n_mps)
     if search != "all":
-        window = functools.partial(first_feasible_window, search=search_raises)
-        vdt_raises_mps = vdt_raises_mps[stage(window, plane, vdt_raises_mps, v_n_total, trig)]
-    dv, v, raise_mps, feasible = stage(_burns, plane, vdt_raises_mps, v_n_total, trig)
+        n = vdt_raises_mps.shape[0]
+        first = stage(functools.partial(first_feasible_index, search=search_raises), plane, vdt_raises_mps,
+                      v_n_total, trig)
+        vdt_raises_mps = vdt_raises_mps[jnp.clip(first + jnp.arange(WINDOW), 0, n - 1)]
+    dv_rows, v, raise_mps, feasible = stage(_burns, plane, vdt_raises_mps, v_n_total, trig)
+    dv = jnp.stack([jnp.stack(row) for row in dv_rows])
     # Eq. (14): dv = -V (cos b cos a, cos b sin a, sin b).
     alpha = atan2(-dv[:, 1], -dv[:, 0])
     beta = atan2(-dv[:, 2], jnp.hypot(dv[:, 0], dv[:, 1]))
-    return BurnPair(dv, v, alpha, beta, l_rad, raise_mps, feasible)
+    return BurnPair(dv, jnp.stack(v), alpha, beta, jnp.stack(l_rad), raise_mps, feasible)
+
+
+# A stage (``_stage`` with an anchor) returns a tuple of per-sample scalars, never a stacked vector: XLA's
+# CPU fusion writes a stacked output in one kernel that picks the component per element (no vector
+# instructions) and evaluates every component's inputs again for each (the FOMPC's effect stage spent 57 ns
+# per candidate cycle there, the node and window stages as much again).
+WINDOW = 4  # candidates ``first_feasible_window`` brackets
 
 
 def _stage(fn, *args, anchor):
     return fn(*args) if anchor is None else materialized(fn, *args, anchor=anchor)
 
 
-def _in_plane(delta_x, l_start_rad, coast_offset_s, v_n_mps):
-    """The ``InPlane`` terms of ``delta_x``, the burn nodes (l_1, l_2) [2] and |V_N| (eqs. (30)-(33))."""
-    d_lon, d_drift, dex, dey, dix, diy = (delta_x[j] for j in range(6))
+def _node(delta_x):
+    """l_2 = atan2(di_y, di_x), eq. (31) (a stage of its own: everything after reads it)."""
+    return atan2(delta_x[5], delta_x[4])
+
+
+def _in_plane(delta_x, l_rad, l_start_rad, coast_offset_s, v_n_mps):
+    """The ``InPlane`` terms of ``delta_x`` for the burn nodes (l_1, l_2), and |V_N| (eqs. (30)-(33))."""
+    d_lon, d_drift, dex, dey = (delta_x[j] for j in range(4))
     v_s = V_SYNC_MPS
-    l2 = atan2(diy, dix)  # eq. (31)
-    l1 = l2 - jnp.pi
-    coast = jnp.stack([cycle_coast_s(l1, l_start_rad), cycle_coast_s(l2, l_start_rad)]) + coast_offset_s
+    l1, l2 = l_rad
+    coast = (cycle_coast_s(l1, l_start_rad) + coast_offset_s, cycle_coast_s(l2, l_start_rad) + coast_offset_s)
     cos_l2, sin_l2 = sincos(l2)
     cos_l1, sin_l1 = -cos_l2, -sin_l2
     plane = InPlane(-R_SYNC_M / 3 * d_drift, v_s * (dex * sin_l1 - dey * cos_l1),
                     0.5 * v_s * (dex * cos_l1 + dey * sin_l1), d_lon, coast)
     v_n_total = full_correction_mps(delta_x) if v_n_mps is None else jnp.maximum(v_n_mps, 0.0)
-    return plane, jnp.stack([l1, l2]), v_n_total
+    return plane, v_n_total
 
 
 def _burns(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig):
-    """The burns [2, 3] and V [2] of the smallest feasible raise of ``raises_mps``, that raise, and whether
-    any was feasible."""
+    """The burns ((v_r, v_t, v_n) of thruster 1, then of thruster 2) and (V_1, V_2) of the smallest feasible
+    raise of ``raises_mps``, that raise, and whether any was feasible."""
     c = candidates(plane, raises_mps, v_n_total, trig)
     i = jnp.argmax(c.feasible)  # the smallest raise that works (the first tried if none does)
     v_r, v_t, (p1, p2), v_n, lo, hi = c.v_r[i], c.v_t[i], c.in_plane[i], c.v_n[i], c.lo[i], c.hi[i]
     equal_pitch = jnp.where(p1 + p2 > 0, v_n * p1 / jnp.where(p1 + p2 > 0, p1 + p2, 1.0), 0.5 * v_n)
     n1 = jnp.clip(equal_pitch, lo, jnp.maximum(lo, hi))
-    dv = jnp.stack([
-        jnp.stack([v_r[0], v_t[0], -n1]),
-        jnp.stack([v_r[1], v_t[1], v_n - n1]),
-    ])
-    return dv, jnp.linalg.norm(dv, axis=-1), raises_mps[i], jnp.any(c.feasible)
+    rows = ((v_r[0], v_t[0], -n1), (v_r[1], v_t[1], v_n - n1))
+    norms = tuple(jnp.sqrt(x * x + y * y + z * z) for x, y, z in rows)
+    return rows, norms, raises_mps[i], jnp.any(c.feasible)
 
 
 class InPlane(NamedTuple):
@@ -209,7 +223,7 @@ class InPlane(NamedTuple):
     v_r_diff_mps: jnp.ndarray  # [] V_R
     v_t_diff_mps: jnp.ndarray  # [] V_ET
     d_lon_rad: jnp.ndarray  # []
-    coast_s: jnp.ndarray  # [2] T_1, T_2
+    coast_s: tuple  # (T_1, T_2)
 
 
 class Candidates(NamedTuple):
@@ -254,10 +268,17 @@ def in_plane_coefficients(plane: InPlane):
     return 0.5 * jnp.stack([s0 + plane.v_r_diff_mps, s0 - plane.v_r_diff_mps]), 0.5 * s1, t0
 
 
-def first_feasible_window(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, width: int = 4,
+def first_feasible_window(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, width: int = WINDOW,
                           search=None):
-    """Indices [width] into the sorted ``raises_mps`` that hold its first feasible candidate, found without
-    testing them all.
+    """Indices [width] into the sorted ``raises_mps`` that hold its first feasible candidate
+    (``first_feasible_index`` and the ``width - 1`` after it, within the grid)."""
+    first = first_feasible_index(plane, raises_mps, v_n_total, trig, search)
+    return jnp.clip(first + jnp.arange(width), 0, raises_mps.shape[0] - 1)
+
+
+def first_feasible_index(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, search=None):
+    """The index into the sorted ``raises_mps`` of a window that holds its first feasible candidate, found
+    without testing them all.
 
     The in-plane parts are affine in the raise r, so the sign and yaw constraints (v_r <= 0, eq. (1)) each
     bound r on one side: together an interval [r_lo, r_hi].  The pitch limits hold where the north-south
@@ -308,8 +329,7 @@ def first_feasible_window(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, 
     j_pitch = search(raises_mps, r_right, side="left")
     j = jnp.where(ok_start, j_start, jnp.maximum(j_pitch, j_start))
     found = constant_ok & (j_lo <= j_hi) & (j <= j_hi) & (j_lo < n)
-    first = jnp.where(found, j - 1, 0)
-    return jnp.clip(first + jnp.arange(width), 0, n - 1)
+    return jnp.where(found, j - 1, 0)
 
 
 class ArmTrig(NamedTuple):
@@ -378,17 +398,28 @@ def estimated_drift_rad_s(next_deviation, l_start_rad):
 
 def effect(burns: BurnPair, l_start_rad, coast_offset_s=0.0):
     """B_1 v_1 + B_2 v_2 (eq. (29)) of a solution, for checking it."""
+    return jnp.stack(_effect_terms(*_effect_inputs(burns, l_start_rad, coast_offset_s)))
+
+
+def _effect_inputs(burns: BurnPair, l_start_rad, coast_offset_s=0.0):
+    """``_effect_terms``'s arguments for a solution."""
     coast = cycle_coast_s(burns.l_rad, l_start_rad) + coast_offset_s
-    cos_l, sin_l = sincos(burns.l_rad)
-    # term by term (no matrix, no dot): inside a vmapped planner a [2, 6, 3] B is a kernel of its own that
-    # evaluates the trigonometry per entry, and a dot_general adds transposes around it
+    dv = tuple(tuple(burns.dv_rsw_mps[n, j] for j in range(3)) for n in range(2))
+    return dv, (burns.l_rad[0], burns.l_rad[1]), (coast[0], coast[1])
+
+
+def _effect_terms(dv_rows, l_rad, coast_s):
+    """B_1 v_1 + B_2 v_2 as a tuple of six, from the burns' components ``dv_rows`` ((v_r, v_t, v_n) per
+    thruster), nodes and coasts (pairs).  Term by term (no matrix, no dot): inside a vmapped planner a
+    [2, 6, 3] B is a kernel of its own that evaluates the trigonometry per entry, and a dot_general adds
+    transposes around it."""
     total = [0.0] * 6
     for n in range(2):
-        columns = effect_columns(cos_l[n], sin_l[n], coast[n])
+        columns = effect_columns(*sincos(l_rad[n]), coast_s[n])
         for j in range(3):
-            total = [t if isinstance(b, float) and b == 0 else t + b * burns.dv_rsw_mps[n, j]
+            total = [t if isinstance(b, float) and b == 0 else t + b * dv_rows[n][j]
                      for t, b in zip(total, columns[j])]
-    return jnp.stack(total)
+    return tuple(total)
 
 
 def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_estimate=0.0, v_n_fraction=None,
@@ -418,7 +449,8 @@ def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_es
     deviation = deviation.at[0].set(wrap_angle(deviation[0])).at[1].set(drift_goal - prediction[1])
     v_n = None if v_n_fraction is None else v_n_fraction * full_correction_mps(deviation)
     burns = solve(deviation, l_start_rad, limits, v_n_mps=v_n, anchor=anchor)
-    after = prediction + jnp.where(burns.feasible, _stage(effect, burns, l_start_rad, anchor=anchor), 0.0)
+    effect_terms = _stage(lambda b: _effect_terms(*_effect_inputs(b, l_start_rad)), burns, anchor=anchor)
+    after = prediction + jnp.where(burns.feasible, jnp.stack(effect_terms), 0.0)
     return prediction, burns, after.at[0].set(wrap_angle(after[0]))
 
 
