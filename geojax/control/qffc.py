@@ -208,10 +208,11 @@ def _burns(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig):
     raise of ``raises_mps``, that raise, and whether any was feasible."""
     c = candidates(plane, raises_mps, v_n_total, trig)
     i = jnp.argmax(c.feasible)  # the smallest raise that works (the first tried if none does)
-    v_r, v_t, (p1, p2), v_n, lo, hi = c.v_r[i], c.v_t[i], c.in_plane[i], c.v_n[i], c.lo[i], c.hi[i]
+    (v_r1, v_r2), (v_t1, v_t2), (p1, p2) = ((a[i], b[i]) for a, b in (c.v_r, c.v_t, c.in_plane))
+    v_n, lo, hi = c.v_n[i], c.lo[i], c.hi[i]
     equal_pitch = jnp.where(p1 + p2 > 0, v_n * p1 / jnp.where(p1 + p2 > 0, p1 + p2, 1.0), 0.5 * v_n)
     n1 = jnp.clip(equal_pitch, lo, jnp.maximum(lo, hi))
-    rows = ((v_r[0], v_t[0], -n1), (v_r[1], v_t[1], v_n - n1))
+    rows = ((v_r1, v_t1, -n1), (v_r2, v_t2, v_n - n1))
     norms = tuple(jnp.sqrt(x * x + y * y + z * z) for x, y, z in rows)
     return rows, norms, raises_mps[i], jnp.any(c.feasible)
 
@@ -227,11 +228,12 @@ class InPlane(NamedTuple):
 
 
 class Candidates(NamedTuple):
-    """Burns for raises r [m] of V_DT (leading axis: candidate; last: thruster)."""
+    """Burns for raises r [m] of V_DT (axis: candidate); a pair (thruster 1, thruster 2) where per thruster
+    (two arrays, not a last axis of two: on the CPU each reduction or stack over it is a kernel of its own)."""
 
-    v_r: jnp.ndarray  # [m, 2]
-    v_t: jnp.ndarray  # [m, 2]
-    in_plane: jnp.ndarray  # [m, 2] p = |(v_r, v_t)|
+    v_r: tuple  # ([m], [m])
+    v_t: tuple  # ([m], [m])
+    in_plane: tuple  # ([m], [m]) p = |(v_r, v_t)|
     v_n: jnp.ndarray  # [m] |V_N| flown (raised to the pitch floor where needed)
     lo: jnp.ndarray  # [m] bounds on n_1 = |v_n1|
     hi: jnp.ndarray  # [m]
@@ -241,22 +243,29 @@ class Candidates(NamedTuple):
 def candidates(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig) -> Candidates:
     """The burns of each raise of V_DT [m] and whether every constraint holds (eqs. (1), (34))."""
     v_dt = plane.v_dt_mps + raises_mps
-    v_t = 0.5 * jnp.stack([v_dt + plane.v_t_diff_mps, v_dt - plane.v_t_diff_mps], -1)
-    v_r_sum = -0.5 * V_SYNC_MPS * plane.d_lon_rad - 1.5 * V_SYNC_MPS / R_SYNC_M * (v_t[..., 0] * plane.coast_s[0] + v_t[..., 1] * plane.coast_s[1])
-    v_r = 0.5 * jnp.stack([v_r_sum + plane.v_r_diff_mps, v_r_sum - plane.v_r_diff_mps], -1)
-    in_plane = jnp.hypot(v_r, v_t)
-    scale = jnp.maximum(in_plane, 1e-9)
-    ok_in_plane = (v_r <= 1e-12 * scale) & _yaw_ok(-v_r, -v_t, trig, 1e-12 * scale)
-    n_lo, n_hi = _pitch_interval(in_plane, trig)
+    v_t = (0.5 * (v_dt + plane.v_t_diff_mps), 0.5 * (v_dt - plane.v_t_diff_mps))
+    v_r_sum = -0.5 * V_SYNC_MPS * plane.d_lon_rad - 1.5 * V_SYNC_MPS / R_SYNC_M * (v_t[0] * plane.coast_s[0] + v_t[1] * plane.coast_s[1])
+    v_r = (0.5 * (v_r_sum + plane.v_r_diff_mps), 0.5 * (v_r_sum - plane.v_r_diff_mps))
+    in_plane = tuple(jnp.hypot(r, t) for r, t in zip(v_r, v_t))
+    scale = tuple(jnp.maximum(p, 1e-9) for p in in_plane)
+    ok_in_plane = [(v_r[b] <= 1e-12 * scale[b]) & _yaw_ok(-v_r[b], -v_t[b], _thruster(trig, b), 1e-12 * scale[b])
+                   for b in range(2)]
+    (lo1, hi1), (lo2, hi2) = (_pitch_interval(p, trig) for p in in_plane)
     # The pitch floor: both burns at beta >= beta_min need |V_N| >= tan(beta_min) (p_1 + p_2).  A smaller
     # correction is raised to it (the inclination overshoots by the excess and the next cycle takes it
     # back) rather than flying nothing; with beta_min = 0 this never acts.
-    v_n = jnp.maximum(v_n_total, n_lo[..., 0] + n_lo[..., 1])
+    v_n = jnp.maximum(v_n_total, lo1 + lo2)
     # n_1 within its own interval and V_N - n_1 within thruster 2's.
-    lo = jnp.maximum(n_lo[..., 0], v_n - n_hi[..., 1])
-    hi = jnp.minimum(n_hi[..., 0], v_n - n_lo[..., 1])
-    ok_pitch = lo <= hi + 1e-12 * (v_n + scale[..., 0] + scale[..., 1])
-    return Candidates(v_r, v_t, in_plane, v_n, lo, hi, jnp.all(ok_in_plane, axis=-1) & ok_pitch)
+    lo = jnp.maximum(lo1, v_n - hi2)
+    hi = jnp.minimum(hi1, v_n - lo2)
+    ok_pitch = lo <= hi + 1e-12 * (v_n + scale[0] + scale[1])
+    return Candidates(v_r, v_t, in_plane, v_n, lo, hi, ok_in_plane[0] & ok_in_plane[1] & ok_pitch)
+
+
+def _thruster(trig: ArmTrig, b: int) -> ArmTrig:
+    """The yaw limits of thruster ``b`` alone."""
+    return trig._replace(cos_yaw_hi=trig.cos_yaw_hi[b], sin_yaw_hi=trig.sin_yaw_hi[b],
+                         cos_yaw_lo=trig.cos_yaw_lo[b], sin_yaw_lo=trig.sin_yaw_lo[b])
 
 
 def in_plane_coefficients(plane: InPlane):
