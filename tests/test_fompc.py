@@ -130,3 +130,22 @@ def test_dv_exponent_one_scores_the_fuel_of_each_cycle(windows):
     np.testing.assert_allclose(float(cost_of(windows, w, x0, mpc)), 0.5 * fuel, rtol=1e-12)
     squares = float(cost_of(windows, w, x0, mpc._replace(dv_exponent=jnp.asarray(2.0))))
     assert squares < 0.5 * fuel  # every V < 1 m/s: the squares are smaller
+
+
+def test_burn_power_is_the_power_whether_the_batch_gate_is_open_or_shut():
+    """``burn_power`` skips the general power for a batch whose exponents are all 2; checked against numpy's
+    power (a second method) unbatched, under one vmap and under nested vmaps (chains sharing a sample's
+    exponent, as in the annealing), with all-2 batches (the gate shut) and mixed ones (open)."""
+    v = jnp.array([[0.0, 0.3, 1.7], [2.5, 1e-3, 0.9]])  # [samples, chains]
+    for exponents in ([2.0, 2.0], [2.0, 1.0], [1.5, 2.0], [1.0, 1.0]):
+        e = jnp.array(exponents)
+        want = np.power(np.asarray(v), np.asarray(e)[:, None])
+        nested = jax.jit(jax.vmap(jax.vmap(fompc.burn_power, in_axes=(0, None))))(v, e)
+        np.testing.assert_allclose(nested, want, rtol=1e-15, atol=0)
+        flat = jax.vmap(fompc.burn_power)(v[:, 1], e)
+        np.testing.assert_allclose(flat, want[:, 1], rtol=1e-15, atol=0)
+    assert float(fompc.burn_power(jnp.asarray(3.0), jnp.asarray(2.0))) == 9.0
+    # derivatives are the power's: e v^(e - 1) in v, v^e log v in the exponent
+    dv, de = jax.vmap(jax.grad(fompc.burn_power, argnums=(0, 1)))(jnp.array([3.0, 3.0]), jnp.array([2.0, 1.5]))
+    np.testing.assert_allclose(dv, [6.0, 1.5 * 3.0**0.5], rtol=1e-14)
+    np.testing.assert_allclose(de, [9.0 * np.log(3.0), 3.0**1.5 * np.log(3.0)], rtol=1e-14)
