@@ -16,8 +16,12 @@ closed loop (li2022-qffc and li2022-fompc, H = 1 errors, batch 256): simulated y
 * ``minimal``: Cartesian RK4 written straight in jax.numpy on component arrays: point mass, J2, Sun and
   Moon (from the same environment grid), SRP without shadow; no C22, no records, no cycle means.
 
-Every implementation runs on one device (``XLA_FLAGS`` unset: the comparison is per core, not how well
-each shards).  Results: ``benchmarks/results/core.json`` and ``.md``.
+Every implementation runs on one device pinned to one core (``XLA_FLAGS`` unset, ``sched_setaffinity``):
+the comparison is per core, not how well each shards or how far XLA spreads one kernel over idle cores (on
+one unpinned device the issue's baseline, whose kernels are few and large, drew a second core that the
+fused step's many small kernels do not; and a second core shared with other work made every number move).
+A sweep runs one such device per core (``geojax.parallel.per_device``).  Results:
+``benchmarks/results/core.json`` and ``.md``.
 """
 
 from __future__ import annotations
@@ -205,22 +209,25 @@ def _keep_fastest(rows: dict, measured: dict) -> None:
 
 
 def _in_subprocess(tree: Path, what: str, args, loop: bool = True) -> dict:
-    """Run one measurement in a fresh Python on ``tree``'s geojax (one device, nothing else loaded)."""
+    """Run one measurement in a fresh Python on ``tree``'s geojax (one device pinned to one core, nothing
+    else loaded)."""
     env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
     env["PYTHONPATH"] = str(tree)
+    core = min(os.sched_getaffinity(0))
     with tempfile.NamedTemporaryFile(suffix=".json") as out:
         code = (f"import json, sys; sys.path.insert(0, {str(HERE)!r}); import core; "
                 f"json.dump(core.{what}({args.batches!r}, {args.cycles}"
                 f"{', ' + repr(args.loop_days if loop else 0.0) if what == 'measure_engine' else ''}), "
                 f"open({out.name!r}, 'w'))")
-        subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=tree)
+        subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=tree,
+                       preexec_fn=lambda: os.sched_setaffinity(0, {core}))
         return json.load(open(out.name))
 
 
 def markdown(results: dict) -> str:
     impls = list(results["step"])
-    lines = ["# The integration step", "", f"`{results['command']}` on {results['machine']}, one device per "
-             "implementation, li2022 force model (C22/S22 and conical shadow on; the minimal kernel without "
+    lines = ["# The integration step", "", f"`{results['command']}` on {results['machine']}, one device pinned "
+             "to one core per implementation, li2022 force model (C22/S22 and conical shadow on; the minimal kernel without "
              "C22 and shadow), 96 steps per sidereal day, "
              f"{results['cycles']} cycles, the fastest of {results.get('rounds', 1)} alternating rounds. ns per "
              "right-hand side per sample (4 per RK4 step), orbit-years/s, fusions (and conditionals) of the "
