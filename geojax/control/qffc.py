@@ -150,7 +150,7 @@ def full_correction_mps(delta_x):
 
 
 def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None, coast_offset_s=0.0,
-          v_n_mps=None, search: str = "structured", anchor=None) -> BurnPair:
+          v_n_mps=None, search: str = "structured", anchor=None, with_coast: bool = False) -> BurnPair:
     """Two burns that cancel the predictive deviation ``delta_x`` [6] (see module docstring).
 
     ``coast_offset_s`` is added to the coast T_i of eq. (20) when the deviation
@@ -162,7 +162,8 @@ def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None
     ``anchor`` (a traced scalar shared by the batch, e.g. a loop counter; optional) puts each stage of the
     solve in a kernel of its own (``physics.fusion.materialized``): XLA's CPU fusion otherwise recomputes
     the node angles and the in-plane parts in every kernel that reads them (measured on the FOMPC's
-    annealing, see ``control.fompc``).
+    annealing, see ``control.fompc``).  ``with_coast`` (static): return (burns, (T_1, T_2)), the coasts of
+    eq. (20) that the solve used, for ``effect`` without computing them again.
     """
     search_raises = default_raise_index if vdt_raises_mps is None else None
     vdt_raises_mps = default_vdt_raises() if vdt_raises_mps is None else vdt_raises_mps
@@ -181,7 +182,8 @@ def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None
     # Eq. (14): dv = -V (cos b cos a, cos b sin a, sin b).
     alpha = atan2(-dv[:, 1], -dv[:, 0])
     beta = atan2(-dv[:, 2], jnp.hypot(dv[:, 0], dv[:, 1]))
-    return BurnPair(dv, jnp.stack(v), alpha, beta, jnp.stack(l_rad), raise_mps, feasible)
+    burns = BurnPair(dv, jnp.stack(v), alpha, beta, jnp.stack(l_rad), raise_mps, feasible)
+    return (burns, plane.coast_s) if with_coast else burns
 
 
 # A stage (``_stage`` with an anchor) returns a tuple of per-sample scalars, never a stacked vector: XLA's
@@ -421,11 +423,15 @@ def effect(burns: BurnPair, l_start_rad, coast_offset_s=0.0):
     return jnp.stack(_effect_terms(*_effect_inputs(burns, l_start_rad, coast_offset_s)))
 
 
+def _dv_rows(burns: BurnPair):
+    """The burns' components, ((v_r, v_t, v_n) of thruster 1, then of thruster 2)."""
+    return tuple(tuple(burns.dv_rsw_mps[n, j] for j in range(3)) for n in range(2))
+
+
 def _effect_inputs(burns: BurnPair, l_start_rad, coast_offset_s=0.0):
     """``_effect_terms``'s arguments for a solution."""
     coast = cycle_coast_s(burns.l_rad, l_start_rad) + coast_offset_s
-    dv = tuple(tuple(burns.dv_rsw_mps[n, j] for j in range(3)) for n in range(2))
-    return dv, (burns.l_rad[0], burns.l_rad[1]), (coast[0], coast[1])
+    return _dv_rows(burns), (burns.l_rad[0], burns.l_rad[1]), (coast[0], coast[1])
 
 
 def _effect_terms(dv_rows, l_rad, coast_s):
@@ -468,8 +474,9 @@ def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_es
     drift_goal = target[1] + vdt_estimate * (estimated_drift_rad_s(next_deviation, l_start_rad) - target[1])
     deviation = deviation.at[0].set(wrap_angle(deviation[0])).at[1].set(drift_goal - prediction[1])
     v_n = None if v_n_fraction is None else v_n_fraction * full_correction_mps(deviation)
-    burns = solve(deviation, l_start_rad, limits, v_n_mps=v_n, anchor=anchor)
-    effect_terms = _stage(lambda b: _effect_terms(*_effect_inputs(b, l_start_rad)), burns, anchor=anchor)
+    burns, coast = solve(deviation, l_start_rad, limits, v_n_mps=v_n, anchor=anchor, with_coast=True)
+    effect_terms = _stage(lambda b, coast: _effect_terms(_dv_rows(b), (b.l_rad[0], b.l_rad[1]), coast), burns, coast,
+                          anchor=anchor)
     after = prediction + jnp.where(burns.feasible, jnp.stack(effect_terms), 0.0)
     return prediction, burns, after.at[0].set(wrap_angle(after[0]))
 
