@@ -43,7 +43,6 @@ from geojax.physics.forces import Environment, ForceModel
 from geojax.physics.frames import latitude_rad, rsw_to_eci_xyz, subsatellite_lon_tan_lat_xyz
 from geojax.physics.fusion import materialized
 from geojax.physics.integrate import rk4_step
-from geojax.physics.trig import sincos
 from geojax.params import Params
 from geojax.physics.propagate import MEE, CycleMeans, Dynamics, cycle_means
 
@@ -160,7 +159,7 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
                                        StepEnvironment(env3, step_s, j, jnp.stack(r), jnp.stack(v)))
             has_propellant = state.mass_kg > params.spacecraft["dry_mass_kg"]  # else the thrusters stop
             thrust = thrust._replace(on_fraction=jnp.where(has_propellant, thrust.on_fraction, 0.0))
-            east = _to_ecef(env3.earth_angle_rad[0])
+            east = _to_ecef(env3.cos_earth_angle[0], env3.sin_earth_angle[0])
             lon, tan_lat = subsatellite_lon_tan_lat_xyz(*east(r))  # latitudes once per cycle, from extremes
             accel = thrust.on_fraction * thrust.thrust_n / state.mass_kg
             d = thrust.direction_rsw
@@ -173,10 +172,10 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
         # the cycle's mean elements from the step starts' records and the end state, whose longitude and
         # latitude are stored once (``materialized``: else XLA's CPU fusion evaluates them again for each of the
         # n samples of every kernel that appends them)
-        angle_end = env_steps.earth_angle_rad[-1, 2]
+        end = _to_ecef(env_steps.cos_earth_angle[-1, 2], env_steps.sin_earth_angle[-1, 2])
         lon_end, tan_lat_end = materialized(
-            lambda orbit: subsatellite_lon_tan_lat_xyz(*_to_ecef(angle_end)(dynamics.rv_xyz(orbit, mu)[0])),
-            final.orbit, anchor=angle_end)
+            lambda orbit: subsatellite_lon_tan_lat_xyz(*end(dynamics.rv_xyz(orbit, mu)[0])),
+            final.orbit, anchor=env_steps.earth_angle_rad[-1, 2])
         orbits = jnp.concatenate([orbits, final.orbit[None]], axis=0)
         means = cycle_means(dynamics.to_mee(orbits, mu), jnp.append(lon, lon_end), jnp.append(tan_lat, tan_lat_end),
                             cycle_s, ctx.t_s + cycle_s / 2)
@@ -198,9 +197,9 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
     return final, Records(cycles, steps)
 
 
-def _to_ecef(earth_angle_rad):
-    """ECI components (x, y, z) -> ECEF components, for an Earth angle shared by the batch."""
-    cos_angle, sin_angle = sincos(earth_angle_rad)  # XLA evaluates it per lane: in plain arithmetic (``physics.trig``)
+def _to_ecef(cos_angle, sin_angle):
+    """ECI components (x, y, z) -> ECEF components, for an Earth angle shared by the batch (its cosine and
+    sine from the environment grid)."""
     return lambda u: (cos_angle * u[0] + sin_angle * u[1], -sin_angle * u[0] + cos_angle * u[1], u[2])
 
 

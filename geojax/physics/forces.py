@@ -21,7 +21,6 @@ import jax.numpy as jnp
 
 from geojax.physics import constants as c
 from geojax.physics.fusion import skipped_where_idle
-from geojax.physics.trig import sincos
 
 
 class ForceModel(NamedTuple):
@@ -51,6 +50,8 @@ class Environment(NamedTuple):
     r_sun_eci_m: jnp.ndarray  # [..., 3]
     r_moon_eci_m: jnp.ndarray  # [..., 3]
     earth_angle_rad: jnp.ndarray  # [...], ECI x axis to Greenwich
+    cos_earth_angle: jnp.ndarray  # [...], its cosine and sine: once per instant for the batch (inside the vmapped
+    sin_earth_angle: jnp.ndarray  # step XLA evaluates a batch-invariant cos per lane, in every kernel reading it)
 
 
 def _xyz(vector):
@@ -196,8 +197,7 @@ def perturbing_xyz(x, y, z, mass_kg, env: Environment, fm: ForceModel, boundarie
     35,136 at 96 per sidereal day; 1.7 % for a batch spread over 10 deg of longitude), behind a conditional that also keeps XLA's CPU fusion from evaluating
     it again in every kernel that reads it.
     """
-    angle = env.earth_angle_rad
-    cos_angle, sin_angle = sincos(angle)  # batch-invariant, but XLA evaluates it per lane: plain arithmetic
+    cos_angle, sin_angle = env.cos_earth_angle, env.sin_earth_angle
     ax, ay, az = (fm.j2_on * a for a in j2_xyz(x, y, z, fm.mu_m3_s2, fm.j2, fm.r_earth_m))
     for switch, term in (
         (fm.c22_on, c22_s22_xyz(x, y, z, cos_angle, sin_angle, fm.mu_m3_s2, fm.c22, fm.s22, fm.r_earth_m)),

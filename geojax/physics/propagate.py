@@ -87,11 +87,14 @@ def steps_per_cycle(step_s: float) -> int:
 
 
 def environment_at(t_tt_s, frame_epoch_tt_s, tt_minus_ut1_s) -> Environment:
-    """Sun, Moon and Earth angle at TT times of any shape (leaves [..., 3] and [...])."""
+    """Sun, Moon and Earth angle (and its cosine and sine) at TT times of any shape (leaves [..., 3] and [...])."""
+    angle = earth_rotation_angle_rad(t_tt_s, frame_epoch_tt_s, tt_minus_ut1_s)
     return Environment(
         sun_position_eci_m(t_tt_s, frame_epoch_tt_s),
         moon_position_eci_m(t_tt_s, frame_epoch_tt_s),
-        earth_rotation_angle_rad(t_tt_s, frame_epoch_tt_s, tt_minus_ut1_s),
+        angle,
+        jnp.cos(angle),
+        jnp.sin(angle),
     )
 
 
