@@ -15,7 +15,7 @@ import jax.numpy as jnp
 
 from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.physics.dynamics import cartesian_rhs, mee_rhs
-from geojax.physics.elements import cartesian_to_mee, cycle_mean, mee_to_cartesian, mee_to_rv_xyz, semi_major_axis_m, wrap_angle
+from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, mee_to_rv_xyz, wrap_angle
 from geojax.physics.ephemeris import moon_position_eci_m, sun_position_eci_m
 from geojax.physics.forces import Environment
 from geojax.physics.frames import earth_rotation_angle_rad, latitude_rad
@@ -110,9 +110,10 @@ def environment_grid(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cyc
     return jax.tree_util.tree_map(lambda x: x[index].reshape((n_cycles, n_steps, 3) + x.shape[1:]), env)
 
 
-def cycle_means(mee_samples, lon_rad, tan_lat, cycle_s, t_mid_s) -> CycleMeans:
-    """Mean elements from [n + 1] MEE samples equally spaced over one cycle, both ends included, and the
-    sub-satellite longitude and the tangent of the latitude at the same samples
+def cycle_means(fghk_mean, a_mean_m, lon_rad, tan_lat, cycle_s, t_mid_s) -> CycleMeans:
+    """One cycle's mean elements: the one-cycle means (``cycle_mean``'s trapezoid rule) of MEE (f, g, h, k)
+    [4] and of the semi-major axis, which the loop sums as it steps, and the sub-satellite longitude and the
+    tangent of the latitude at [n + 1] samples equally spaced over the cycle, both ends included
     (``frames.subsatellite_lon_tan_lat_xyz``: the loop has them from its step records).
 
     The longitude is unwrapped relative to the first sample (it moves < pi between samples); the trapezoid
@@ -122,15 +123,14 @@ def cycle_means(mee_samples, lon_rad, tan_lat, cycle_s, t_mid_s) -> CycleMeans:
     turns = wrap_angle(jnp.diff(lon_rad))  # [n], each |.| < pi
     n = turns.shape[0]
     dlon_mean = jnp.sum(turns * ((n - 0.5 - jnp.arange(n)) / n))
-    mean = cycle_mean(mee_samples)
     return CycleMeans(
         t_s=t_mid_s,
         lon_rad=wrap_angle(lon_rad[0] + dlon_mean),
         drift_rad_s=jnp.sum(turns) / cycle_s,
-        ex=mean[1],
-        ey=mean[2],
-        ix=mean[3],
-        iy=mean[4],
-        a_m=cycle_mean(semi_major_axis_m(mee_samples)),
+        ex=fghk_mean[0],
+        ey=fghk_mean[1],
+        ix=fghk_mean[2],
+        iy=fghk_mean[3],
+        a_m=a_mean_m,
         max_abs_lat_rad=latitude_rad(jnp.max(jnp.abs(tan_lat))),
     )
