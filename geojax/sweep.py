@@ -75,15 +75,16 @@ DISPERSION_FIELDS = {
     "mee_1sigma": Field(list, [0.0] * 6, length=6),
     "offset_ecef_1sigma_km": Field(list, [0.0] * 3, length=3),
 }
-# Samples per device in one compiled call, per controller (measured on 2 CPU cores, one year of li2022):
-# the QFFC's per-step work is small, so wide batches amortise the loop (s per orbit per sample: 3.2e-4
-# at 8 lanes, 1.2e-4 at 64); the FOMPC's annealing is already a wide vmap, so 8 lanes reach its
-# throughput (2.4e-3 at 8 and at 32) and a small sweep pads less; the MPC's interior point likewise (10 days,
-# 2 loaded cores: 7.5-8.9e-3 at 8 lanes, 1.0e-2 at 32 and 64; 14 MB of temporaries at 8, 108 MB at 64).  Fixed per controller, whatever the
-# sweep or the chunk, because XLA's vectorisation (and so the last bit of every result) depends on
-# the batch shape; memory is bounded by this width, not by the sweep.
-LANES_PER_DEVICE = {"fompc": 8, "mpc": 8}
-DEFAULT_LANES_PER_DEVICE = 64
+# Samples per device in one compiled call, per controller (measured on one pinned core, li2022, H = 1, after
+# issue 13's fused step and planner): the QFFC's per-step work is small, so wide batches amortise the loop
+# (simulated years/s over 30 days: 77 at 64 lanes, 89 at 128, 100 at 256); the FOMPC's annealing is a wide
+# vmap of its own (8 chains per sample), so fewer lanes reach most of its throughput (4 days: 2.8 at 8 lanes,
+# 3.8 at 32, 4.1 at 64) and a small sweep pads less; the MPC's interior point likewise (10 days, 2 loaded
+# cores: 7.5-8.9e-3 s per orbit per sample at 8 lanes, 1.0e-2 at 32 and 64; 14 MB of temporaries at 8, 108 MB
+# at 64).  Fixed per controller, whatever the sweep or the chunk, because XLA's vectorisation (and so the last
+# bit of every result) depends on the batch shape; memory is bounded by this width, not by the sweep.
+LANES_PER_DEVICE = {"fompc": 32, "mpc": 8}
+DEFAULT_LANES_PER_DEVICE = 128
 
 
 @dataclasses.dataclass(frozen=True)

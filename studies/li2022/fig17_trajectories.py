@@ -9,7 +9,7 @@ sweep's first repetition at that level is flown again, one year, with the sweep'
 (``fold_in(key(seed), sample index)``), keeping every step, and its sub-satellite track is drawn in the
 box beside the same controller without errors (Li's Fig. 4).  The longitude and latitude half-ranges are
 printed beside Li's (±0.025° QFFC, ±0.030° FOMPC; latitude "hardly changes").  The re-flown ΔV is set
-beside the sweep's record of the same sample: they agree to rounding (the sweep compiled 64 lanes, this
+beside the sweep's record of the same sample: they agree to rounding (the sweep compiled its lanes, this
 one), except where the FOMPC's annealing takes another path on a last-bit difference.
 Writes ``results/fig17_trajectories.png`` and ``.md``.
 """
