@@ -432,6 +432,12 @@ def _tune(args) -> int:
         say(f"  {name:24s} {value:.6g}")
     say(f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept "
         f"(constraint lon {result.best_constraint[0]:+.4f}, lat {result.best_constraint[1]:+.4f})")
+    fault = tune.tuned_scenario_fault(spec, result.best_params)
+    if fault is not None:  # the descent kept each key in its bounds, not the scenario's joint checks
+        print(f"wrote {args.out} and {tune.tuned_scenario_path(args.out)}")
+        print(f"geojax tune: the tuned scenario fails its load checks (geojax simulate refuses it): {fault}",
+              file=sys.stderr)
+        return 1
     print(f"wrote {args.out} and {tune.tuned_scenario_path(args.out)} (run it: geojax simulate "
           f"{tune.tuned_scenario_path(args.out)})")
     return 0

@@ -733,9 +733,8 @@ def tuned_scenario_path(out) -> Path:
     return out.with_name(f"{out.stem}-tuned.toml")
 
 
-def tuned_scenario_toml(spec: TuneSpec, params: Params) -> str:
-    """The tuned scenario as TOML (``geojax simulate FILE-tuned.toml`` runs it): the tuning's scenario with
-    each tuned key set to its best value, in the key's own unit."""
+def tuned_config(spec: TuneSpec, params: Params) -> dict:
+    """The tuning's scenario table with each tuned key set to its value in ``params``, in the key's own unit."""
     config = copy.deepcopy(spec.scenario.config)
     for entry in tuned(spec.scenario, spec.controller, spec.parameters):
         leaf = np.asarray(getattr(params, entry.table)[entry.field.si], dtype=float)
@@ -745,6 +744,27 @@ def tuned_scenario_toml(spec: TuneSpec, params: Params) -> str:
             value = entry.field.from_si(leaf)
         config[entry.table][entry.name.rpartition(".")[2]] = value
     config["name"] = f"{spec.scenario.name}-tuned"
+    return config
+
+
+def tuned_scenario_fault(spec: TuneSpec, params: Params) -> str | None:
+    """Why ``geojax simulate`` would refuse the tuned scenario (one line), or None.
+
+    The descent moves each tuned key within its own bounds, but a scenario's load checks also tie keys
+    together (Ye 2022 eq. (41): a t_max whose burn beats the largest daily drift at the thrust), so a tuned
+    thrust or burn limit can leave them."""
+    try:  # read back from the TOML that is written, as ``geojax simulate`` reads it
+        scenario_mod.from_dict(scenario_mod.tomllib.loads(scenario_mod.to_toml(tuned_config(spec, params))),
+                               spec.controller)
+    except ValueError as error:
+        return str(error)
+    return None
+
+
+def tuned_scenario_toml(spec: TuneSpec, params: Params) -> str:
+    """The tuned scenario as TOML (``geojax simulate FILE-tuned.toml`` runs it): the tuning's scenario with
+    each tuned key set to its best value, in the key's own unit."""
+    config = tuned_config(spec, params)
     header = (f"# {spec.scenario.name} with the gains tuned by geojax tune ({', '.join(spec.parameters)});\n"
               f"# run it with: geojax simulate THIS_FILE\n")
     return header + scenario_mod.to_toml(config)

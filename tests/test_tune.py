@@ -1,5 +1,7 @@
 """geojax tune: input checks, per-iteration records in HDF5, and a diverging run that keeps its best point."""
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -158,3 +160,20 @@ def test_population_hessian_recovers_a_quadratic_and_stays_positive_definite():
     saddle = tune.population_hessian(theta, theta @ np.diag([1.0, -1.0, 2.0]), np.eye(3))
     assert np.all(np.linalg.eigvalsh(saddle) > 0)
     assert tune.population_hessian(theta[:3], grad[:3], np.eye(3) * 7.0)[0, 0] == 7.0
+
+
+def test_a_tuned_scenario_that_fails_its_load_checks_is_named():
+    """The descent keeps each tuned key within its own bounds, not the checks that tie keys together: a tuned
+    thrust 100 times below ye2022-ex1's cannot beat the largest daily drift within t_max (Ye 2022 eq. (41)),
+    so ``geojax simulate`` would refuse the tuned TOML; ``tuned_scenario_fault`` names why (read back from the
+    TOML written), and finds nothing at the scenario's own thrust."""
+    from geojax.loop.setup import prepare
+
+    spec = tune.from_dict({"scenario": "ye2022-ex1", "parameters": ["thrusters.thrust_n"], "days": 2.0})
+    base = jax.tree_util.tree_map(lambda x: x[0], prepare([spec.scenario]).params)
+    entries = tune.tuned(spec.scenario, spec.controller, spec.parameters)
+    theta = tune.to_theta(base, entries)
+    assert tune.tuned_scenario_fault(spec, base) is None
+    weak = tune.from_theta(jnp.asarray(theta - np.log(100.0)), base, entries)
+    fault = tune.tuned_scenario_fault(spec, weak)
+    assert fault.startswith("thrusters.thrust_n: 0.0008 N") and "Ye 2022 eq. (41)" in fault
