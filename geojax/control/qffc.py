@@ -157,7 +157,7 @@ def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None
     refers to a time after the end of the cycle (a mean over the next cycle).
     ``v_n_mps`` (>= 0) replaces the north-south total 2 V_s |di| of eq. (30).
     ``search`` (static) finds the smallest feasible raise of V_DT: ``"all"`` tests every candidate,
-    ``"structured"`` (the default) the few that ``first_feasible_window`` brackets; both return the same
+    ``"structured"`` (the default) the few that ``first_feasible_index`` brackets; both return the same
     candidate (``tests/test_qffc.py`` checks them against each other on random deviations).
     ``anchor`` (a traced scalar shared by the batch, e.g. a loop counter; optional) puts each stage of the
     solve in a kernel of its own (``physics.fusion.materialized``): XLA's CPU fusion otherwise recomputes
@@ -190,7 +190,7 @@ def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None
 # CPU fusion writes a stacked output in one kernel that picks the component per element (no vector
 # instructions) and evaluates every component's inputs again for each (the FOMPC's effect stage spent 57 ns
 # per candidate cycle there, the node and window stages as much again).
-WINDOW = 4  # candidates ``first_feasible_window`` brackets
+WINDOW = 4  # candidates from ``first_feasible_index`` on
 
 
 def _stage(fn, *args, anchor):
@@ -288,14 +288,6 @@ def in_plane_coefficients(plane: InPlane):
     s0 = -0.5 * V_SYNC_MPS * plane.d_lon_rad + k * (t0[0] * plane.coast_s[0] + t0[1] * plane.coast_s[1])
     s1 = k * 0.5 * (plane.coast_s[0] + plane.coast_s[1])
     return 0.5 * jnp.stack([s0 + plane.v_r_diff_mps, s0 - plane.v_r_diff_mps]), 0.5 * s1, t0
-
-
-def first_feasible_window(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, width: int = WINDOW,
-                          search=None):
-    """Indices [width] into the sorted ``raises_mps`` that hold its first feasible candidate
-    (``first_feasible_index`` and the ``width - 1`` after it, within the grid)."""
-    first = first_feasible_index(plane, raises_mps, v_n_total, trig, search)
-    return jnp.clip(first + jnp.arange(width), 0, raises_mps.shape[0] - 1)
 
 
 def first_feasible_index(plane: InPlane, raises_mps, v_n_total, trig: ArmTrig, search=None):
