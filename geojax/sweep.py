@@ -82,7 +82,8 @@ DISPERSION_FIELDS = {
 # 3.8 at 32, 4.1 at 64) and a small sweep pads less; the MPC's interior point likewise (10 days, 2 loaded
 # cores: 7.5-8.9e-3 s per orbit per sample at 8 lanes, 1.0e-2 at 32 and 64; 14 MB of temporaries at 8, 108 MB
 # at 64).  Fixed per controller, whatever the sweep or the chunk, because XLA's vectorisation (and so the last
-# bit of every result) depends on the batch shape; memory is bounded by this width, not by the sweep.
+# bit of every result) can depend on the batch shape (the change from 64 to 128 QFFC and 8 to 32 FOMPC lanes
+# left 64 samples of each bit for bit: 120 and 60 days); memory is bounded by this width, not by the sweep.
 LANES_PER_DEVICE = {"fompc": 32, "mpc": 8}
 DEFAULT_LANES_PER_DEVICE = 128
 
