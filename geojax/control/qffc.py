@@ -150,7 +150,7 @@ def full_correction_mps(delta_x):
 
 
 def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None, coast_offset_s=0.0,
-          v_n_mps=None, search: str = "structured", anchor=None, with_coast: bool = False) -> BurnPair:
+          v_n_mps=None, search: str = "structured", anchor=None, with_coast: bool = False):
     """Two burns that cancel the predictive deviation ``delta_x`` [6] (see module docstring).
 
     ``coast_offset_s`` is added to the coast T_i of eq. (20) when the deviation

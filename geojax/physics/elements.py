@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from geojax.physics.frames import eci_to_ecef, subsatellite_lon_lat_rad
 from geojax.physics.trig import sincos
 
 P, F, G, H, K, L = range(6)
@@ -155,12 +154,6 @@ def cartesian_to_mee(r_eci, v_eci, mu):
 def semi_major_axis_m(mee):
     """a = p / (1 - f^2 - g^2)."""
     return mee[..., P] / (1 - mee[..., F] ** 2 - mee[..., G] ** 2)
-
-
-def subsatellite_point_rad(mee, earth_angle_rad, mu):
-    """Sub-satellite longitude and latitude (radians) of a MEE state."""
-    r_eci, _ = mee_to_cartesian(mee, mu)
-    return subsatellite_lon_lat_rad(eci_to_ecef(r_eci, earth_angle_rad))
 
 
 def wrap_angle(angle_rad):
