@@ -3,7 +3,7 @@
     geojax demo [--out DIR]
     geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5]
     geojax simulate SCENARIO [--controller qffc|fompc|lyapunov] [--horizon N] [--days D] [--seed S] [--out FILE.h5] [--plots DIR]
-    geojax sweep SWEEP.toml --out FILE.h5 [--resume] [--chunk N] [--ray [ADDRESS]] [--workers N]
+    geojax sweep SWEEP.toml --out FILE.h5 [--resume] [--chunk N] [--lanes N] [--ray [ADDRESS]] [--workers N]
     geojax tune TUNE.toml --out FILE.h5
     geojax plot FILE.h5 [--out DIR] [--format png|pdf|svg] [--dpi N]
     geojax scenarios [--show NAME]
@@ -134,12 +134,15 @@ def _parser() -> argparse.ArgumentParser:
     swp.add_argument("--out", required=True, help="results file (HDF5); chunks are kept in FILE.h5.parts/ until done")
     swp.add_argument("--resume", action="store_true", help="continue an interrupted sweep into the same --out")
     swp.add_argument("--chunk", type=int, help="samples per saved chunk (default: one compiled batch of the widest "
-                     "controller, 64 per device; a resumed sweep keeps its cut)")
+                     "controller on every device; a resumed sweep keeps its cut)")
+    swp.add_argument("--lanes", type=int, help="samples per device in one compiled call (default: the platform's, "
+                     "128 QFFC / 32 FOMPC / 8 MPC per CPU core, on a GPU the widest batch its memory holds, up to "
+                     "65536); the results do not depend on it; one that cannot fit is refused")
     swp.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
                      help="run the chunks as Ray tasks: alone, on a Ray instance started here; 'auto', HOST:PORT or "
                      "ray://HOST:PORT, on a running cluster (pip install \"geojax[ray]\"); same results as a local run")
-    swp.add_argument("--workers", type=int, help="with --ray: worker processes (default one per node, each using "
-                     "its node's cores)")
+    swp.add_argument("--workers", type=int, help="with --ray: worker processes (default one per GPU of a GPU node "
+                     "and one per CPU node, each using its share of the node's cores)")
     swp.set_defaults(func=_sweep)
 
     plot = command("plot", help="draw the figures of a results file (simulate, propagate, sweep, tune)")
@@ -493,7 +496,7 @@ def _sweep(args) -> int:
     say(f"{spec.name}: {len(spec.controllers)} controller(s) x {spec.n_points} grid point(s) x "
         f"{spec.repetitions} repetition(s) = {len(spec.controllers) * n} samples", flush=True)
     path = sweep.run_sweep(spec, args.out, resume=args.resume, chunk=args.chunk, progress=False if args.quiet else None,
-                           ray=args.ray, workers=args.workers)
+                           ray=args.ray, workers=args.workers, lanes=args.lanes)
     groups, attrs = store.read_h5(path)
     _detail(args)(f"  compiled in {float(attrs.get('compile_s', float('nan'))):.1f} s, {float(attrs['wall_s']):.1f} s "
                   f"wall in all, on {attrs['device']}")

@@ -2,7 +2,8 @@
 
 ``geojax sweep SWEEP.toml --out FILE.h5 --ray [ADDRESS]`` (``sweep.run_sweep(..., ray=ADDRESS)``) plans the
 chunks exactly as a local sweep does and hands them to Ray.  The workers are Ray actors, by default one
-per node, each using its share of the node's cores (or GPUs) as XLA devices through ``parallel.per_device``; a
+per GPU of a GPU node and one per CPU node, each using its share of the node's cores (or its GPU) as XLA
+devices through ``parallel.per_device``; a
 worker compiles each controller once (``sweep.ChunkRunner``) and runs chunk after chunk.  The driver
 keeps at most two chunks queued per worker, so a fast worker takes more, and writes every finished chunk
 into ``FILE.h5.parts/`` itself, atomically and once: ``--resume`` continues whatever stopped (the driver,
@@ -14,9 +15,10 @@ to the others; a chunk that has failed ``MAX_ATTEMPTS`` times, or the last worke
 with the chunks done saved.  An error raised by the engine inside a worker (a bad scenario value) is
 raised here as itself.
 
-Same numbers: a sample's keys come from (seed, global index) and every worker compiles the same
-one-device program of ``LANES_PER_DEVICE`` lanes, so the file is bit for bit a local run's, whatever
-the number of workers, their device counts and the order chunks finish in.
+Same numbers: a sample's keys come from (seed, global index) and every worker compiles one-device programs
+whose numbers do not depend on their width (``geojax.lanes``: the platform's, or the sweep's ``lanes``),
+so the file is bit for bit a local run's on the same platform, whatever the number of workers, their device
+counts and the order chunks finish in.
 """
 
 from __future__ import annotations
@@ -103,17 +105,26 @@ class ChunkWorker:
 
 
 def placements(nodes: list[dict], workers: int | None) -> list[tuple[str, int, float]]:
-    """(node id, XLA CPU devices, GPUs) of each worker: round-robin over the alive nodes (ordered by id),
-    each worker one CPU device per core of its equal share of its node's CPUs, and its share of the node's
-    GPUs (Ray hides the GPUs from a worker that does not ask for them)."""
+    """(node id, XLA CPU devices, GPUs) of each worker.
+
+    By default one worker per GPU of a GPU node (``num_gpus = 1``: Ray makes that GPU the worker's only JAX
+    device, so each runs the one-device program at the GPU's width) and one per CPU node, the node's cores
+    shared by its workers.  ``workers``: that many, round-robin over the alive nodes (ordered by id), each an
+    equal share of its node's CPUs and GPUs (Ray hides the GPUs from a worker that does not ask for them).
+    """
     alive = sorted((n for n in nodes if n.get("Alive") and n.get("Resources", {}).get("CPU", 0) >= 1),
                    key=lambda n: n["NodeID"])
     if not alive:
         raise ValueError("--ray: the cluster has no alive node with a CPU")
-    count = workers or len(alive)
-    per_node = collections.Counter(i % len(alive) for i in range(count))
+    if workers is None:
+        placed = []
+        for node in alive:
+            cpus, gpus = int(node["Resources"]["CPU"]), int(node["Resources"].get("GPU", 0.0))
+            placed += [(node["NodeID"], max(1, cpus // max(1, gpus)), 1.0 if gpus else 0.0)] * max(1, gpus)
+        return placed
+    per_node = collections.Counter(i % len(alive) for i in range(workers))
     placed = []
-    for i in range(count):
+    for i in range(workers):
         node, sharing = alive[i % len(alive)], per_node[i % len(alive)]
         gpus = node["Resources"].get("GPU", 0.0)
         placed.append((node["NodeID"], max(1, int(node["Resources"]["CPU"]) // sharing),

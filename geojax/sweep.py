@@ -28,8 +28,11 @@ epoch, the FOMPC's annealing size, a thrust law) cannot, and say so.  Each
 controller compiles once (the FOMPC's horizon padded to the largest N of the
 sweep); a sweep that varies the initial state or the forces runs each sample's
 own predictor reference inside the batch.  The batch is
-vmapped and sharded over the local devices, ``LANES_PER_DEVICE`` samples per
-device per call whatever the sweep, so memory does not grow with it.  Sample
+vmapped and spread over the local devices, each running one compiled call of
+the platform's width (``geojax.lanes``: the controller's measured width on a
+CPU, the widest batch that fits an accelerator's memory; ``lanes = N`` in the
+file or ``--lanes N`` fixes it), so memory does not grow with the sweep and a
+sample's numbers do not depend on the width.  Sample
 ``j`` of a controller (grid point ``j // reps``, repetition ``j % reps``) draws
 its errors and annealing from ``fold_in(key(seed), j)`` and its dispersion from
 ``fold_in(fold_in(key(seed), j), DISPERSION_STREAM)``: the same draws for both
@@ -58,11 +61,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax import scenario as scenario_mod, store
+from geojax import lanes as lanes_mod, scenario as scenario_mod, store
 from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.loop.metrics import CYCLE_NAMES, STATUS_TEXT, cycle_series
 from geojax.loop.rollout import rollout_fn
-from geojax.loop.setup import disperse, prepare
+from geojax.loop.setup import controller_of, cycle_count, disperse, prepare
 from geojax.params import Field, check_table
 from geojax.parallel import per_device
 from geojax.progress import Progress
@@ -75,17 +78,6 @@ DISPERSION_FIELDS = {
     "mee_1sigma": Field(list, [0.0] * 6, length=6),
     "offset_ecef_1sigma_km": Field(list, [0.0] * 3, length=3),
 }
-# Samples per device in one compiled call, per controller (measured on one pinned core, li2022, H = 1, after
-# issue 13's fused step and planner): the QFFC's per-step work is small, so wide batches amortise the loop
-# (simulated years/s over 30 days: 77 at 64 lanes, 89 at 128, 100 at 256); the FOMPC's annealing is a wide
-# vmap of its own (8 chains per sample), so fewer lanes reach most of its throughput (4 days: 2.8 at 8 lanes,
-# 3.8 at 32, 4.1 at 64) and a small sweep pads less; the MPC's interior point likewise (10 days, 2 loaded
-# cores: 7.5-8.9e-3 s per orbit per sample at 8 lanes, 1.0e-2 at 32 and 64; 14 MB of temporaries at 8, 108 MB
-# at 64).  Fixed per controller, whatever the sweep or the chunk, because XLA's vectorisation (and so the last
-# bit of every result) can depend on the batch shape (the change from 64 to 128 QFFC and 8 to 32 FOMPC lanes
-# left 64 samples of each bit for bit: 120 and 60 days); memory is bounded by this width, not by the sweep.
-LANES_PER_DEVICE = {"fompc": 32, "mpc": 8}
-DEFAULT_LANES_PER_DEVICE = 128
 
 
 @dataclasses.dataclass(frozen=True)
@@ -101,6 +93,7 @@ class Sweep:
     cycles: bool = False  # keep the per-cycle records (loop.metrics.CYCLE_NAMES)
     dispersion: dict = dataclasses.field(default_factory=lambda: {k: f.default for k, f in DISPERSION_FIELDS.items()})
     custom: dict = dataclasses.field(default_factory=dict)  # {name: Controller} of a user's own controllers
+    lanes: int | None = None  # samples per device per compiled call; None: the platform's (``geojax.lanes``)
 
     @property
     def dispersed(self) -> bool:
@@ -131,7 +124,7 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
     if changes:
         raw = {**raw, **changes, "set": {**raw.get("set", {}), **changes.get("set", {})}}
         text = scenario_mod.to_toml(raw)
-    allowed = {"name", "scenario", "controllers", "repetitions", "seed", "set", "grid", "cycles", "dispersion"}
+    allowed = {"name", "scenario", "controllers", "repetitions", "seed", "set", "grid", "cycles", "dispersion", "lanes"}
     unknown = sorted(set(raw) - allowed)
     if unknown:
         raise ValueError(f"{unknown[0]}: unknown key; allowed: {', '.join(sorted(allowed))}")
@@ -152,6 +145,9 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
         raise ValueError(f"repetitions: must be an integer from 1 to {MAX_SAMPLES}, got {reps!r}")
     if not (isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
         raise ValueError(f"seed: must be an integer >= 0, got {seed!r}")
+    lanes = raw.get("lanes")
+    if lanes is not None and not (isinstance(lanes, int) and not isinstance(lanes, bool) and 1 <= lanes <= lanes_mod.MAX_LANES):
+        raise ValueError(f"lanes: must be an integer from 1 to {lanes_mod.MAX_LANES}, got {lanes!r}")
     if not isinstance(raw.get("cycles", False), bool):
         raise ValueError(f"cycles: must be true or false, got {raw['cycles']!r}")
     grid = raw.get("grid", {})
@@ -172,7 +168,7 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
     dispersion = check_table("dispersion.", raw.get("dispersion", {}), DISPERSION_FIELDS)
     sweep = Sweep(str(raw.get("name", path.stem)), str(raw["scenario"]), tuple(controllers), reps, seed, dict(fixed),
                   {k: list(v) for k, v in grid.items()}, text, raw.get("cycles", False), dispersion,
-                  {k: v for k, v in controllers_extra.items() if k in controllers})
+                  {k: v for k, v in controllers_extra.items() if k in controllers}, lanes)
     for controller in sweep.controllers:  # every value within its range, every batch compilable
         prepare_check(sweep, controller)
     return sweep
@@ -204,12 +200,16 @@ def _scenario(sweep: Sweep, controller: str, point: dict):
 
 
 def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | None = None,
-              progress: bool | None = None, ray: str | None = None, workers: int | None = None) -> Path:
+              progress: bool | None = None, ray: str | None = None, workers: int | None = None,
+              lanes: int | None = None) -> Path:
     """Run every sample not yet saved, then write ``out`` (HDF5).  Returns its path.
+
+    ``lanes``: samples per device per compiled call, instead of the sweep file's or the platform's
+    (``geojax.lanes``); one that cannot fit the device is refused before anything is compiled or written.
 
     ``ray``: run the chunks as Ray tasks (``geojax.cluster``): ``"local"`` starts a Ray instance on this
     machine, ``"auto"``, ``"HOST:PORT"`` or ``"ray://HOST:PORT"`` joins a running cluster; ``workers`` Ray
-    worker processes (default one per node).  The results are bit for bit those of a local run.
+    worker processes (default one per GPU, or per node without GPUs).  The results are bit for bit those of a local run.
     """
     out = store.check_output_file(out)
     if workers is not None and ray is None:
@@ -232,6 +232,9 @@ def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | 
             store.discard_folder(parts)
         return out  # finished earlier
     n_samples = sweep.n_points * sweep.repetitions
+    if lanes is not None:
+        sweep = dataclasses.replace(sweep, lanes=lanes)  # the file's identity (its text) unchanged: resumable
+    widths = {c: lane_plan(sweep, c).lanes for c in sweep.controllers}  # refused here if it cannot fit
     with contextlib.ExitStack() as connection:
         if ray is not None:  # reach the cluster before anything is written
             from geojax import cluster
@@ -240,7 +243,7 @@ def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | 
         if parts.exists():
             chunk = _resumed_chunk(parts, digest, chunk)
         else:
-            chunk = chunk or default_chunk(n_samples)
+            chunk = chunk or default_chunk(n_samples, max(widths.values()))
             fresh = store.temporary(parts)  # complete before it is visible
             fresh.mkdir(parents=True)
             store.atomic_write(fresh / "chunk", str(chunk).encode())
@@ -299,7 +302,8 @@ def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool
                 if controller not in runners:
                     runners[controller] = ChunkRunner(sweep, controller)
                     compile_s += runners[controller].compile_s
-                    bar.restart(f"{controller} compiled in {runners[controller].compile_s:.1f} s")
+                    bar.restart(f"{controller} compiled in {runners[controller].compile_s:.1f} s "
+                                f"({runners[controller].plan.lanes} lanes per device)")
                 save(controller, first, runners[controller].run(first, length, bar.update))
     return _write_results(sweep, out, parts, wall_s=time.perf_counter() - start, compile_s=compile_s)
 
@@ -308,15 +312,16 @@ class ChunkRunner:
     """One controller of a sweep, compiled once for this process's devices: ``run(first, length)`` gives the
     metrics of samples ``first .. first + length - 1`` (numpy, one row per sample).
 
-    The batch is ``LANES_PER_DEVICE`` samples per device whatever the chunk (the last call padded with the
-    chunk's last sample), so a sample's numbers do not depend on the chunk, the device count or the process
+    The batch is ``plan.lanes`` samples per device whatever the chunk (the last call padded with the chunk's
+    last sample); a sample's numbers depend on neither the chunk, the width, the device count nor the process
     that runs it: a local sweep and every Ray worker use this.
     """
 
     def __init__(self, sweep: Sweep, controller: str):
         self.n_samples = sweep.n_points * sweep.repetitions
         self.repetitions = sweep.repetitions
-        self.width = LANES_PER_DEVICE.get(controller, DEFAULT_LANES_PER_DEVICE) * jax.device_count()
+        self.plan = lane_plan(sweep, controller)
+        self.width = self.plan.lanes * jax.local_device_count()
         self._batch_fn, self._params, self.compile_s = _compiled_batch(sweep, controller, self.width)
 
     def run(self, first: int, length: int, on_samples=None) -> dict:
@@ -361,13 +366,21 @@ def _write_results(sweep: Sweep, out: Path, parts: Path, wall_s: float, compile_
     return out
 
 
-def default_chunk(n_samples: int) -> int:
-    """Samples per saved chunk: one compiled batch of the widest controller (about a minute of FOMPC
-    years on 2 cores), so a kill loses little and no compiled batch is left half empty.
+def default_chunk(n_samples: int, lanes_per_device: int) -> int:
+    """Samples per saved chunk: one compiled batch of the widest controller on every local device (on 2 CPU
+    cores about a minute of FOMPC years; on a GPU one call of tens of thousands of lanes), so a kill loses
+    little and no compiled batch is left half empty.  Memory is bounded by the compiled batch, not the chunk."""
+    return max(1, min(n_samples, lanes_per_device * jax.local_device_count()))
 
-    Memory is bounded by the compiled batch (``LANES_PER_DEVICE`` per device), not by the chunk.
-    """
-    return max(1, min(n_samples, max(DEFAULT_LANES_PER_DEVICE, *LANES_PER_DEVICE.values()) * jax.device_count()))
+
+def lane_plan(sweep: Sweep, controller: str) -> lanes_mod.LanePlan:
+    """The width of ``controller``'s compiled call on this process's devices (``geojax.lanes.plan``): the
+    sweep's ``lanes`` if set (``ValueError`` if it cannot fit), else the platform's."""
+    scenarios = [_scenario(sweep, controller, p) for p in _points(sweep)]
+    ctrl = sweep.custom.get(controller) or controller_of(scenarios)
+    samples = math.ceil(sweep.n_points * sweep.repetitions / jax.local_device_count())
+    return lanes_mod.plan(ctrl, cycle_count(scenarios[0].days), samples,
+                          kept_records=len(CYCLE_NAMES) if sweep.cycles else 0, requested=sweep.lanes)
 
 
 def _chunk_len(start: int, chunk: int, n_samples: int) -> int:
@@ -379,7 +392,9 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int):
     compilation seconds)."""
     scenarios = [_scenario(sweep, controller, p) for p in _points(sweep)]
     batch = prepare(scenarios, sweep.custom.get(controller))
-    one_rollout = rollout_fn(batch, lanes=width // jax.device_count())
+    # The step compiled for the controller's CPU width whatever the batch (``Controller.lanes_cpu``): the
+    # fusion boundaries it sets move the last bit, so every width gives the same numbers.
+    one_rollout = rollout_fn(batch, lanes=batch.controller.lanes_cpu)
     base_key = jax.random.key(sweep.seed)
     first = scenarios[0]
     dispersion = (jnp.asarray(sweep.dispersion["mee_1sigma"]) * jnp.array([1e3, 1, 1, 1, 1, 1]),

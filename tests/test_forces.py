@@ -124,7 +124,9 @@ def test_shadow_skipped_for_a_sunlit_batch_gives_the_same_numbers_and_derivative
     np.testing.assert_array_equal(fast[(slow == 0) | (slow == 1)], slow[(slow == 0) | (slow == 1)])
     np.testing.assert_allclose(fast, slow, rtol=1e-9, atol=1e-12)
     hlo = jax.jit(jax.vmap(gated)).lower(x, y, z).compile().as_text()
-    assert "conditional" in hlo  # the batch-level skip exists on the CPU
+    # The batch-level skip is a conditional on the CPU only (``fusion.skipped_where_idle``: on a GPU a
+    # conditional costs a host round trip, so the shadow is computed for every lane there).
+    assert ("conditional" in hlo) == (jax.default_backend() == "cpu")
     np.testing.assert_array_equal(jax.jit(jax.vmap(gated))(x, y, jnp.abs(z) + 1e7), 1.0)  # all sunlit: skipped
     # Derivatives: penumbra lanes have nonzero ones.
     dz = jax.vmap(jax.grad(gated, argnums=2))(x, y, z)

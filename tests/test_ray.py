@@ -113,7 +113,7 @@ def test_worker_placement_shares_each_nodes_cores():
     nodes = [{"NodeID": "b", "Alive": True, "Resources": {"CPU": 2.0}},
              {"NodeID": "a", "Alive": True, "Resources": {"CPU": 8.0, "GPU": 2.0}},
              {"NodeID": "c", "Alive": False, "Resources": {"CPU": 64.0}}]
-    assert cluster.placements(nodes, None) == [("a", 8, 2.0), ("b", 2, 0.0)]  # one per alive node, all of it
+    assert cluster.placements(nodes, None) == [("a", 4, 1.0), ("a", 4, 1.0), ("b", 2, 0.0)]  # one per GPU, or node
     assert cluster.placements(nodes, 3) == [("a", 4, 1.0), ("b", 2, 0.0), ("a", 4, 1.0)]  # two on a: halves
     assert cluster.placements(nodes, 5)[0] == ("a", 2, pytest.approx(2 / 3))  # three on a: GPUs shared
     with pytest.raises(ValueError, match="no alive node"):

@@ -18,7 +18,9 @@ settings are ``params.controller`` (a dict of SI array leaves named by
 
 Optional parts: ``fields`` declares the keys of the scenario's ``[controller]``
 table (TOML key, unit conversion, bounds, tuning transform: ``params.Field``);
-``reference_cycles`` > 0 asks the loop for the shared uncontrolled reference and
+``lanes_cpu``, ``lane_bytes`` and ``lane_bytes_per_cycle`` tell the orchestration how wide
+to batch it (``geojax.lanes``: the width measured on one CPU core, and the memory model that sizes a
+GPU's batch); ``reference_cycles`` > 0 asks the loop for the shared uncontrolled reference and
 the mean-element estimate it enables (Li 2022 eqs. (24)-(27)), that many cycle
 boundaries from the cycle's start on; ``record(plan) -> {name: array}`` adds
 per-cycle records (a ``"solved"`` bool counts cycles without a solution, the
@@ -67,6 +69,16 @@ class Controller:
     reference_cycles: int = 0
     record: Callable | None = None
     surrogate: Any = None  # a Controller, or None: the controller is its own surrogate
+    # How wide to batch it (``geojax.lanes``).  Samples per CPU device per compiled call, measured on one pinned
+    # core; the step is also compiled for this many lanes on every platform (``physics.propagate.for_lanes``), so a
+    # wider batch gives the same numbers bit for bit.
+    lanes_cpu: int = 128
+    # Working memory per lane, bytes: XLA's ``memory_analysis`` of the compiled batch on the CPU (temporaries,
+    # arguments and outputs per lane), split into what a run needs whatever its length and what each cycle adds
+    # (the stacked ``CycleRecord``s).  These defaults are twice the QFFC's (li2022, 64 lanes, 10 and 40 cycles:
+    # 15.6 and 21.3 kB per lane), for a user's controller that does not say.
+    lane_bytes: int = 32_000
+    lane_bytes_per_cycle: int = 400
 
 
 def stateless_init(params, context):

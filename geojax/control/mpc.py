@@ -398,4 +398,8 @@ def controller(shape: Shape = Shape()) -> Controller:
                 "violation": plan_.violation, "iterations": plan_.iterations, "certified": plan_.certified}
 
     # Plans N_max cycles ahead: the reference at the cycle's start boundary and the n_max after it.
-    return Controller(init, plan_cycle, thrust, FIELDS, reference_cycles=shape.n_max + 1, record=record)
+    # Widths and memory (``geojax.lanes``): the interior point's matrices dominate (10 days, 2 loaded cores: 7.5-8.9e-3 s
+    # per orbit per sample at 8 lanes, 1.0e-2 at 32 and 64), so 8 lanes per CPU core; XLA's memory_analysis at 8
+    # lanes, 4 and 12 cycles (li2022-mpc's horizon): 1.73 MB per lane and 0.33 kB more per cycle.
+    return Controller(init, plan_cycle, thrust, FIELDS, reference_cycles=shape.n_max + 1, record=record,
+                      lanes_cpu=8, lane_bytes=1_750_000, lane_bytes_per_cycle=400)

@@ -120,8 +120,7 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
         raise ValueError("params: give one scenario with a batch of params, or a list of scenarios")
     n = jax.tree_util.tree_leaves(params)[0].shape[0]
     if keys is None:
-        seeds = range(n) if seeds is None else seeds
-        keys = jnp.stack([jax.random.key(int(s)) for s in seeds])
+        keys = keys_of(np.arange(n) if seeds is None else seeds)
     args = (params, keys, batch.shared, _reference_env(batch))
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, n),
                   keep_steps=keep_steps)
@@ -139,6 +138,18 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     to_numpy = lambda tree: jax.tree_util.tree_map(np.asarray, tree)  # noqa: E731
     return Result(metrics, status, to_numpy(records), to_numpy(final), to_numpy(params), batch.step_s,
                   time.perf_counter() - start, compile_s)
+
+
+def keys_of(seeds) -> jax.Array:
+    """``jax.random.key(s)`` of every seed [n], made on the device in one vectorised call (the same keys as one
+    at a time: a seed of 64 bits is split into the key's two words either way), not one transfer per seed."""
+    seeds = np.asarray(seeds)
+    if seeds.ndim != 1 or not (np.issubdtype(seeds.dtype, np.integer) or seeds.size == 0):
+        raise ValueError(f"seeds: must be a list of integers, got {seeds.dtype} of shape {seeds.shape}")
+    return _keys_of(jnp.asarray(seeds.astype(np.int64)))
+
+
+_keys_of = jax.jit(jax.vmap(jax.random.key))
 
 
 def prepare_params(scenario: Scenario, n: int, controller: Controller | None = None) -> Params:

@@ -1,0 +1,116 @@
+"""The width of a compiled batch (``geojax.lanes``): chosen by the device, never in the numbers.
+
+Checks: a sweep forced to a wide batch on the CPU writes the same file bit for bit as the default width (the
+second method is the same sweep at another width); the memory model against XLA's own ``memory_analysis``
+of a compiled batch (an independent measurement); the width rules on a GPU's memory (arithmetic); a width
+that cannot fit refused before anything is written; the vectorised keys against ``jax.random.key`` one seed
+at a time.
+"""
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from geojax import cli, lanes, store, sweep
+from geojax.control import qffc
+from geojax.loop.rollout import keys_of
+
+SPEC = """
+name = "wide"
+scenario = "li2022-qffc"
+controllers = ["qffc"]
+repetitions = 6
+seed = 11
+cycles = true
+[set]
+"duration.days" = 20
+"errors.h_rv" = 1.0
+"errors.h_att" = 1.0
+[grid]
+"thrusters.beta_max_deg" = [60.0, 80.0]
+"""
+
+
+def test_a_wide_batch_writes_the_same_file_bit_for_bit(tmp_path):
+    """1024 QFFC lanes against the default 128, 20 days with errors: before the cycle sums were taken in order
+    (``loop.metrics.sum_over_cycles``) ``mean_beta_deg`` moved by 4.5e-16 between these widths."""
+    path = tmp_path / "wide.toml"
+    path.write_text(SPEC)
+    spec = sweep.load(path)
+    default = store.read_h5(sweep.run_sweep(spec, tmp_path / "default.h5", progress=False))[0]
+    wide = store.read_h5(sweep.run_sweep(spec, tmp_path / "wide.h5", progress=False, lanes=1024))[0]
+    assert np.all(default["metrics"]["mean_beta_deg"] > 0)  # burns flown: the sums are not trivial
+    for group in ("metrics", "cycles", "status"):
+        for name in default[group]:
+            np.testing.assert_array_equal(wide[group][name], default[group][name], err_msg=f"{group}/{name}")
+
+
+def test_the_memory_model_covers_what_xla_allocates():
+    """The model's bytes per lane (margin taken off) against ``memory_analysis`` of the compiled QFFC batch on
+    the CPU (temporaries, arguments, outputs): at least what XLA plans, and not wildly more."""
+    from geojax import scenario
+    from geojax.loop.rollout import rollout_fn
+    from geojax.loop.setup import prepare
+
+    width, days = 64, 12
+    batch = prepare([scenario.load("li2022-qffc", {"duration.days": days})])
+    one = rollout_fn(batch, lanes=width)
+    params = jax.tree_util.tree_map(lambda x: jnp.repeat(x, width, 0), batch.params)
+    compiled = jax.jit(jax.vmap(lambda p, k: one(p, k)[2])).lower(params, keys_of(np.arange(width))).compile()
+    use = compiled.memory_analysis()
+    measured = (use.temp_size_in_bytes + use.argument_size_in_bytes + use.output_size_in_bytes) / width
+    model = lanes.bytes_per_lane(batch.controller, batch.n_cycles) / lanes.MEMORY_MARGIN
+    assert measured <= model <= 3 * measured
+
+
+def test_the_width_follows_the_platform_and_the_memory():
+    gib = 1 << 30
+    per_lane = lanes.bytes_per_lane(qffc.CONTROLLER, 366)
+    assert lanes.plan(qffc.CONTROLLER, 366, 10_000, platform="cpu", available=8 * gib).lanes == 128
+    narrow = dataclasses.replace(qffc.CONTROLLER, lanes_cpu=32)
+    assert lanes.plan(narrow, 366, 3, platform="cpu", available=8 * gib)[::4] == (32, "measured")
+    gpu = lanes.plan(qffc.CONTROLLER, 366, 131_072, platform="gpu", available=70 * gib)
+    assert gpu.lanes == lanes.ACCELERATOR_MAX_LANES  # 65,536 lanes x 2 x 89 kB = 11.7 GB: fits 80 % of 70 GiB
+    small = lanes.plan(qffc.CONTROLLER, 366, 131_072, platform="gpu", available=2 * gib)
+    assert small.lanes * per_lane <= lanes.FREE_FRACTION * 2 * gib < 2 * small.lanes * per_lane  # the widest power of 2
+    assert small.lanes & (small.lanes - 1) == 0
+    few = lanes.plan(qffc.CONTROLLER, 366, 3000, platform="gpu", available=70 * gib)
+    assert few.lanes == 4096  # no wider than the sweep needs (rounded up to a power of two)
+    assert lanes.plan(qffc.CONTROLLER, 366, 5, platform="gpu", available=70 * gib).lanes == lanes.ACCELERATOR_MIN_LANES
+    with pytest.raises(ValueError, match="lanes: 65536 lanes need about .* at most"):
+        lanes.plan(qffc.CONTROLLER, 366, 10, platform="gpu", available=2 * gib, requested=65536)
+    with pytest.raises(ValueError, match="lanes: must be an integer"):
+        lanes.plan(qffc.CONTROLLER, 366, 10, requested=0)
+
+
+def test_controllers_declare_their_widths():
+    from geojax import scenario
+    from geojax.loop.setup import controller_of
+
+    made = {name: controller_of([scenario.load(f"li2022-{name}")]) for name in ("qffc", "fompc", "mpc")}
+    assert {name: c.lanes_cpu for name, c in made.items()} == {"qffc": 128, "fompc": 32, "mpc": 8}
+    assert made["mpc"].lane_bytes > 50 * made["qffc"].lane_bytes  # the interior point's matrices
+
+
+def test_a_batch_that_cannot_fit_is_refused_before_anything_is_written(tmp_path, capsys):
+    path = tmp_path / "s.toml"
+    path.write_text(SPEC)
+    out = tmp_path / "out.h5"
+    assert cli.main(["sweep", str(path), "--out", str(out), "--lanes", "4000000", "-q"]) == cli.EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "lanes: 4000000 lanes need about" in err[0] and "at most" in err[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml"]
+    path.write_text(SPEC.replace('seed = 11', 'seed = 11\nlanes = 0'))
+    assert cli.main(["sweep", str(path), "--out", str(out), "-q"]) == cli.EXIT_BAD_INPUT
+    assert "lanes: must be an integer from 1" in capsys.readouterr().err
+
+
+def test_keys_made_on_the_device_are_jax_random_key_of_each_seed():
+    seeds = [0, 1, 7, 2**31 - 1, 2**31, 2**32 + 5, 2**62 + 3, -1, -(2**40)]
+    one_by_one = jnp.stack([jax.random.key(s) for s in seeds])
+    np.testing.assert_array_equal(jax.random.key_data(keys_of(seeds)), jax.random.key_data(one_by_one))
+    with pytest.raises(ValueError, match="seeds: must be a list of integers"):
+        keys_of([0.5, 1.0])
