@@ -153,7 +153,7 @@ def write(rows, loop, args) -> None:
                      f"{r['speedup']:.1f}x | {r['run_sample_years_per_s']:.3g} | {r['run_speedup']:.1f}x | "
                      f"{r['peak_rss_mb']:.0f} | {r['dv_mean']:.2f} ± {r['dv_std']:.2f} |")
     lines += ["", "Peak memory is the resident set of the whole process (Python, JAX, XLA, the compiled program); "
-              "it is bounded by the fixed compiled width (`geojax.sweep.LANES_PER_DEVICE`), not by B."]
+              "it is bounded by the compiled width (`geojax.lanes`: 128 QFFC lanes per CPU device), not by B."]
     (RESULTS / "sweep.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

@@ -85,13 +85,14 @@ def _check_reachable(address: str) -> None:
 
 
 class ChunkWorker:
-    """A Ray actor: one worker process, its XLA devices, each controller compiled once."""
+    """A Ray actor: one worker process, its XLA devices, each controller compiled once (for ``chunk``
+    samples a call at most)."""
 
-    def __init__(self, sweep, devices: int):
+    def __init__(self, sweep, devices: int, chunk: int):
         from geojax.parallel import use_host_cores
 
         use_host_cores(devices, replace=True)  # before this process's first JAX computation
-        self.sweep, self.runners = sweep, {}
+        self.sweep, self.chunk, self.runners = sweep, chunk, {}
 
     def run(self, controller: str, first: int, length: int):
         """The metrics of one chunk, and (process id, seconds compiling for it)."""
@@ -99,7 +100,7 @@ class ChunkWorker:
 
         compile_s = 0.0
         if controller not in self.runners:
-            self.runners[controller] = ChunkRunner(self.sweep, controller)
+            self.runners[controller] = ChunkRunner(self.sweep, controller, self.chunk)
             compile_s = self.runners[controller].compile_s
         return self.runners[controller].run(first, length), (os.getpid(), compile_s)
 
@@ -132,6 +133,19 @@ def placements(nodes: list[dict], workers: int | None) -> list[tuple[str, int, f
     return placed
 
 
+def default_chunk(n_samples: int, nodes: list[dict]) -> int | None:
+    """Samples per chunk on a cluster with GPUs: an even share of the sweep per GPU worker, at most one GPU
+    batch (``lanes.ACCELERATOR_MAX_LANES``), so every GPU gets work and each call is wide; ``None`` on a
+    cluster of CPUs (the driver's own width then serves, as every CPU worker computes the same).  The
+    workers size their batch to their GPU's memory themselves.  ``nodes``: ``ray.nodes()``."""
+    import math
+
+    from geojax.lanes import ACCELERATOR_MAX_LANES
+
+    gpus = sum(int(n.get("Resources", {}).get("GPU", 0)) for n in nodes if n.get("Alive"))
+    return max(1, min(math.ceil(n_samples / gpus), ACCELERATOR_MAX_LANES)) if gpus else None
+
+
 def run_chunks(sweep, todo: list[tuple[str, int, int]], save, bar, workers: int | None = None) -> float:
     """Run each (controller, first sample, length) of ``todo`` on the cluster joined by ``connected``,
     calling ``save(controller, first, values)`` once per chunk as it finishes.  Returns the longest
@@ -145,7 +159,7 @@ def run_chunks(sweep, todo: list[tuple[str, int, int]], save, bar, workers: int 
     actors = [remote.options(num_cpus=devices, num_gpus=gpus, max_restarts=MAX_RESTARTS,
                              max_task_retries=MAX_RESTARTS,
                              scheduling_strategy=NodeAffinitySchedulingStrategy(node, soft=True))
-              .remote(sweep, devices)
+              .remote(sweep, devices, max(length for _, _, length in todo))
               for node, devices, gpus in placements(ray.nodes(), workers)]
     live = set(range(len(actors)))
     pending = collections.deque(todo)

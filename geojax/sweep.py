@@ -243,6 +243,8 @@ def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | 
         if parts.exists():
             chunk = _resumed_chunk(parts, digest, chunk)
         else:
+            if chunk is None and ray is not None:
+                chunk = cluster.default_chunk(n_samples, ray_nodes())
             chunk = chunk or default_chunk(n_samples, max(widths.values()))
             fresh = store.temporary(parts)  # complete before it is visible
             fresh.mkdir(parents=True)
@@ -300,7 +302,7 @@ def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool
             compile_s, runners = 0.0, {}
             for controller, first, length in todo:
                 if controller not in runners:
-                    runners[controller] = ChunkRunner(sweep, controller)
+                    runners[controller] = ChunkRunner(sweep, controller, chunk)
                     compile_s += runners[controller].compile_s
                     bar.restart(f"{controller} compiled in {runners[controller].compile_s:.1f} s "
                                 f"({runners[controller].plan.lanes} lanes per device)")
@@ -317,10 +319,10 @@ class ChunkRunner:
     that runs it: a local sweep and every Ray worker use this.
     """
 
-    def __init__(self, sweep: Sweep, controller: str):
+    def __init__(self, sweep: Sweep, controller: str, chunk: int | None = None):
         self.n_samples = sweep.n_points * sweep.repetitions
         self.repetitions = sweep.repetitions
-        self.plan = lane_plan(sweep, controller)
+        self.plan = lane_plan(sweep, controller, chunk)
         self.width = self.plan.lanes * jax.local_device_count()
         self._batch_fn, self._params, self.compile_s = _compiled_batch(sweep, controller, self.width)
 
@@ -373,14 +375,21 @@ def default_chunk(n_samples: int, lanes_per_device: int) -> int:
     return max(1, min(n_samples, lanes_per_device * jax.local_device_count()))
 
 
-def lane_plan(sweep: Sweep, controller: str) -> lanes_mod.LanePlan:
+def lane_plan(sweep: Sweep, controller: str, chunk: int | None = None) -> lanes_mod.LanePlan:
     """The width of ``controller``'s compiled call on this process's devices (``geojax.lanes.plan``): the
-    sweep's ``lanes`` if set (``ValueError`` if it cannot fit), else the platform's."""
+    sweep's ``lanes`` if set (``ValueError`` if it cannot fit), else the platform's for a chunk of ``chunk``
+    samples (default: the whole sweep)."""
     scenarios = [_scenario(sweep, controller, p) for p in _points(sweep)]
     ctrl = sweep.custom.get(controller) or controller_of(scenarios)
-    samples = math.ceil(sweep.n_points * sweep.repetitions / jax.local_device_count())
+    samples = math.ceil(min(chunk or math.inf, sweep.n_points * sweep.repetitions) / jax.local_device_count())
     return lanes_mod.plan(ctrl, cycle_count(scenarios[0].days), samples,
                           kept_records=len(CYCLE_NAMES) if sweep.cycles else 0, requested=sweep.lanes)
+
+
+def ray_nodes() -> list[dict]:
+    import ray
+
+    return ray.nodes()
 
 
 def _chunk_len(start: int, chunk: int, n_samples: int) -> int:

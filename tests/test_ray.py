@@ -118,6 +118,9 @@ def test_worker_placement_shares_each_nodes_cores():
     assert cluster.placements(nodes, 5)[0] == ("a", 2, pytest.approx(2 / 3))  # three on a: GPUs shared
     with pytest.raises(ValueError, match="no alive node"):
         cluster.placements(nodes[2:], None)
+    # Chunks on a GPU cluster: an even share per GPU, at most one GPU batch; a CPU cluster keeps the driver's.
+    assert cluster.default_chunk(1000, nodes) == 500 and cluster.default_chunk(10**6, nodes) == 65536
+    assert cluster.default_chunk(1000, nodes[::2]) is None
 
 
 def test_a_sweep_on_two_nodes_is_bit_for_bit_the_local_run(two_nodes, local, tmp_path, chunk_writes):

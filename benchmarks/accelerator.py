@@ -1,0 +1,255 @@
+"""geojax on whatever devices JAX finds (a GPU where there is one), in one run: the engine against the
+minimal kernel, ``geojax sweep`` at its automatic width, and the gap between the two.
+
+    python benchmarks/accelerator.py [--quick]
+
+On the platform of ``jax.devices()[0]`` (named in the results):
+
+1. **Uncontrolled step**: the minimal Cartesian RK4 kernel of the same physics (``benchmarks/core.py``'s
+   ``measure_minimal``: point mass, J2, Sun, Moon, SRP) against geojax's uncontrolled rollout through
+   ``simulate_batch`` (controller ``none``, keys from one ``jax.random.split``), orbit-years per second
+   after compilation, batches up to the largest the platform's memory holds (``--batches``);
+2. **Sweeps**: ``geojax.sweep.run_sweep`` of li2022-qffc, -fompc and -mpc (H_rv = H_att = 1) at the
+   automatic width (``geojax.lanes``), sample-years per second with compilation and after it, the width it
+   chose, and the device's peak memory (an accelerator's allocator statistics; the process's peak resident
+   set on a CPU);
+3. **The command line against the engine**: the same QFFC samples through ``simulate_batch`` (one compiled
+   call, keys ``fold_in(key(seed), j)`` as the sweep draws them), and the mean Delta-V of both;
+4. **Host work**: ``simulate_batch(..., seeds=range(100_000))`` (one cycle, controller ``none``): the seconds
+   outside the compiled call (the call's wall less the same compiled executable run alone).
+
+Results: ``benchmarks/results/accelerator_<platform>.json`` and ``.md`` (a CPU run does not overwrite a GPU
+run's).  On a CPU the sizes are small (a few minutes on 2 cores); ``--quick`` smaller still.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+RESULTS = HERE / "results"
+SIDEREAL_YEAR_FRACTION = 86164.0905 / (365.25 * 86400)  # years per cycle
+
+# (samples, days) per controller: the issue's GPU sizes, and what 2 CPU cores finish in minutes.
+SIZES = {"gpu": {"qffc": (131_072, 365.25), "fompc": (8192, 30.0), "mpc": (2048, 10.0)},
+         "cpu": {"qffc": (1024, 30.0), "fompc": (128, 10.0), "mpc": (16, 4.0)}}
+STEP_BATCHES = {"gpu": [4096, 16_384, 65_536, 131_072], "cpu": [256, 1024]}
+
+SWEEP = """
+name = "accelerator"
+scenario = "li2022-{controller}"
+controllers = ["{controller}"]
+repetitions = {samples}
+seed = 7
+[set]
+"duration.days" = {days}
+"errors.h_rv" = 1.0
+"errors.h_att" = 1.0
+[grid]
+"thrusters.beta_max_deg" = [70.0]
+"""
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="a tenth of the samples (a check that it runs)")
+    parser.add_argument("--batches", type=int, nargs="+", help="step batches (default: the platform's)")
+    parser.add_argument("--controllers", nargs="+", default=["qffc", "fompc", "mpc"])
+    args = parser.parse_args()
+
+    from geojax.parallel import use_host_cores
+
+    use_host_cores()  # one XLA CPU device per core, as the geojax command does (no effect on a GPU)
+    import jax
+
+    device = jax.devices()[0]
+    platform = "cpu" if device.platform == "cpu" else "gpu"
+    scale = 10 if args.quick else 1
+    sizes = {c: (max(16, n // scale), days) for c, (n, days) in SIZES[platform].items() if c in args.controllers}
+    batches = args.batches or [max(16, b // scale) for b in STEP_BATCHES[platform]]
+    results = {"platform": device.platform, "device": f"{jax.device_count()} x {device.device_kind}",
+               "date_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d"),
+               "git": _git(), "jax": jax.__version__, "cpus": os.cpu_count(), "command": " ".join(sys.argv)}
+    results["step"] = measure_step(batches)
+    results["sweeps"] = {c: measure_sweep(c, *sizes[c]) for c in sizes}
+    if "qffc" in sizes:
+        results["engine_qffc"] = measure_engine("qffc", *sizes["qffc"])
+    results["host_keys"] = measure_host_keys(10_000 if args.quick else 100_000)
+    write(results, platform)
+
+
+def measure_step(batches) -> dict:
+    """Orbit-years/s of the minimal kernel and of geojax's uncontrolled rollout, per batch."""
+    import jax
+
+    sys.path.insert(0, str(HERE))
+    import core
+
+    from geojax import scenario
+    from geojax.loop.rollout import simulate_batch, prepare_params
+
+    n_cycles = 4
+    rows = {}
+    for batch in batches:
+        minimal = core.measure_minimal([batch], n_cycles)["step"][batch]
+        sc = scenario.load("li2022-qffc", {"controller.kind": "none", "duration.days": n_cycles})
+        params = prepare_params(sc, batch)
+        keys = jax.random.split(jax.random.key(0), batch)
+        compiled = []
+        simulate_batch(sc, params, keys=keys, on_compiled=compiled.append)  # compiles, warms
+        best = min(_timed(lambda: simulate_batch(sc, params, keys=keys)) for _ in range(3))
+        years = batch * n_cycles * SIDEREAL_YEAR_FRACTION
+        rows[batch] = {"minimal_orbit_years_per_s": minimal["orbit_years_per_s"],
+                       "geojax_orbit_years_per_s": years / best, "geojax_compile_s": compiled[0],
+                       "ratio_to_minimal": years / best / minimal["orbit_years_per_s"]}
+        print(f"step, batch {batch}: geojax {years / best:.4g} orbit-years/s, minimal "
+              f"{minimal['orbit_years_per_s']:.4g} ({rows[batch]['ratio_to_minimal']:.2f}x)", flush=True)
+    return rows
+
+
+def measure_sweep(controller: str, samples: int, days: float) -> dict:
+    import jax
+
+    from geojax import store, sweep
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "s.toml"
+        path.write_text(SWEEP.format(controller=controller, samples=samples, days=days))
+        spec = sweep.load(path)
+        width = sweep.lane_plan(spec, controller)
+        start = time.perf_counter()
+        out = sweep.run_sweep(spec, Path(tmp) / "s.h5", progress=False)
+        wall_s = time.perf_counter() - start
+        groups, attrs = store.read_h5(out)
+    years = samples * round(days * 86400 / 86164.0905) * SIDEREAL_YEAR_FRACTION
+    compile_s = float(attrs["compile_s"])
+    row = {"samples": samples, "days": days, "lanes_per_device": width.lanes, "lanes_source": width.source,
+           "model_bytes_per_lane": width.bytes_per_lane, "wall_s": wall_s, "compile_s": compile_s,
+           "sample_years_per_s": years / wall_s, "run_sample_years_per_s": years / (wall_s - compile_s),
+           "peak_memory_gb": _peak_memory_gb(jax.devices()[0]),
+           "mean_dv_per_year_mps": float(groups["metrics"]["dv_per_year_mps"].mean()),
+           "status_ok_fraction": float((groups["status"]["code"] == 0).mean())}
+    print(f"sweep {controller}: {samples} x {days:g} days at {width.lanes} lanes: {row['sample_years_per_s']:.4g} "
+          f"sample-years/s ({row['run_sample_years_per_s']:.4g} after compilation)", flush=True)
+    return row
+
+
+def measure_engine(controller: str, samples: int, days: float) -> dict:
+    """The sweep's samples (one grid point, keys fold_in(key(7), j)) through ``simulate_batch`` in one call."""
+    import jax
+    import jax.numpy as jnp
+
+    from geojax import scenario
+    from geojax.loop.rollout import prepare_params, simulate_batch
+
+    sc = scenario.load(f"li2022-{controller}", {"duration.days": days, "errors.h_rv": 1.0, "errors.h_att": 1.0,
+                                                "thrusters.beta_max_deg": 70.0})
+    params = prepare_params(sc, samples)
+    keys = jax.vmap(lambda j: jax.random.fold_in(jax.random.key(7), j))(jnp.arange(samples))
+    compiled = []
+    start = time.perf_counter()
+    result = simulate_batch(sc, params, keys=keys, on_compiled=compiled.append)
+    wall_s = time.perf_counter() - start
+    years = samples * round(days * 86400 / 86164.0905) * SIDEREAL_YEAR_FRACTION
+    row = {"samples": samples, "days": days, "wall_s": wall_s, "compile_s": compiled[0],
+           "run_sample_years_per_s": years / (wall_s - compiled[0]),
+           "mean_dv_per_year_mps": float(result.metrics["dv_per_year_mps"].mean())}
+    print(f"simulate_batch {controller}: {row['run_sample_years_per_s']:.4g} sample-years/s after compilation",
+          flush=True)
+    return row
+
+
+def measure_host_keys(n: int) -> dict:
+    """Seconds of ``simulate_batch(seeds=range(n))`` outside its compiled call (one cycle, no controller)."""
+    import jax
+
+    from geojax import scenario
+    from geojax.loop import rollout
+    from geojax.loop.rollout import prepare_params, simulate_batch
+
+    sc = scenario.load("li2022-qffc", {"controller.kind": "none", "duration.days": 1})
+    params = prepare_params(sc, n)
+    simulate_batch(sc, params, seeds=range(n))  # compile and warm
+    whole = min(_timed(lambda: simulate_batch(sc, params, seeds=range(n))) for _ in range(3))
+    batch = rollout.prepare([sc])
+    keys = rollout.keys_of(range(n))
+    static = dict(controller=batch.controller, step_s=batch.step_s,
+                  dynamics=rollout.for_lanes(batch.dynamics, n), keep_steps=False)
+    args = (params, keys, batch.shared, None)
+    compiled = rollout._batched.lower(*args, **static).compile()
+    alone = min(_timed(lambda: jax.block_until_ready(compiled(*args))) for _ in range(3))
+    row = {"samples": n, "simulate_batch_s": whole, "compiled_call_s": alone, "outside_s": whole - alone}
+    print(f"simulate_batch(seeds=range({n})): {whole:.3f} s, of which {whole - alone:.3f} s outside the "
+          f"compiled call", flush=True)
+    return row
+
+
+def write(results: dict, platform: str) -> None:
+    RESULTS.mkdir(exist_ok=True)
+    stem = RESULTS / f"accelerator_{platform}"
+    stem.with_suffix(".json").write_text(json.dumps(results, indent=2) + "\n")
+    lines = [f"# geojax on {results['device']} ({results['platform']})", "",
+             f"`{results['command']}`, {results['date_utc']}, git {results['git']}, JAX {results['jax']}, "
+             f"{results['cpus']} CPU cores. li2022 scenarios, H_rv = H_att = 1 in the sweeps.", "",
+             "## Uncontrolled step: geojax against the minimal kernel (orbit-years/s after compilation)", "",
+             "| batch | geojax | minimal kernel | geojax / minimal |", "|---:|---:|---:|---:|"]
+    for batch, r in results["step"].items():
+        lines.append(f"| {batch} | {r['geojax_orbit_years_per_s']:.4g} | {r['minimal_orbit_years_per_s']:.4g} | "
+                     f"{r['ratio_to_minimal']:.2f}x |")
+    lines += ["", "## `geojax sweep` at the automatic width", "",
+              "| controller | samples x days | lanes per device | sample-years/s | after compilation | compile s | "
+              "peak memory GB | mean ΔV m/s/yr | ok |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for c, r in results["sweeps"].items():
+        lines.append(f"| {c} | {r['samples']} x {r['days']:g} | {r['lanes_per_device']} ({r['lanes_source']}) | "
+                     f"{r['sample_years_per_s']:.4g} | {r['run_sample_years_per_s']:.4g} | {r['compile_s']:.1f} | "
+                     f"{r['peak_memory_gb']:.2f} | {r['mean_dv_per_year_mps']:.3f} | {r['status_ok_fraction']:.0%} |")
+    if "engine_qffc" in results:
+        e, s = results["engine_qffc"], results["sweeps"]["qffc"]
+        lines += ["", f"The same QFFC samples through `simulate_batch` in one call: {e['run_sample_years_per_s']:.4g} "
+                  f"sample-years/s after compilation ({e['compile_s']:.1f} s), mean ΔV {e['mean_dv_per_year_mps']:.3f} "
+                  f"m/s/yr; the sweep reaches {s['run_sample_years_per_s'] / e['run_sample_years_per_s']:.2f}x of it."]
+    h = results["host_keys"]
+    lines += ["", f"`simulate_batch(..., seeds=range({h['samples']}))`, one cycle: {h['simulate_batch_s']:.3f} s, "
+              f"of which {h['outside_s']:.3f} s outside the compiled call ({h['compiled_call_s']:.3f} s)."]
+    stem.with_suffix(".md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+def _timed(fn) -> float:
+    import jax
+
+    start = time.perf_counter()
+    jax.block_until_ready(fn())
+    return time.perf_counter() - start
+
+
+def _peak_memory_gb(device) -> float:
+    stats = device.memory_stats() if device.platform != "cpu" else None
+    if stats and "peak_bytes_in_use" in stats:
+        return stats["peak_bytes_in_use"] / 1e9
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9  # Linux: kB
+
+
+def _git() -> str:
+    import subprocess
+
+    try:
+        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=True,
+                             cwd=HERE).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True,
+                               text=True, cwd=HERE).stdout
+        return rev + (" + uncommitted" if dirty.strip() else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+if __name__ == "__main__":
+    main()
