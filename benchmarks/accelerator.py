@@ -6,9 +6,9 @@ minimal kernel, ``geojax sweep`` at its automatic width, and the gap between the
 On the platform of ``jax.devices()[0]`` (named in the results):
 
 1. **Uncontrolled step**: the minimal Cartesian RK4 kernel of the same physics (``benchmarks/core.py``'s
-   ``measure_minimal``: point mass, J2, Sun, Moon, SRP) against geojax's uncontrolled rollout through
-   ``simulate_batch`` (controller ``none``, keys from one ``jax.random.split``), orbit-years per second
-   after compilation, batches up to the largest the platform's memory holds (``--batches``);
+   ``measure_minimal``: point mass, J2, Sun, Moon, SRP) against geojax's uncontrolled rollout (controller
+   ``none``: ``simulate_batch``'s compiled batch run alone, records and metrics included, keys from one
+   ``jax.random.split``), orbit-years per second after compilation, batches up to ``--batches``;
 2. **Sweeps**: ``geojax.sweep.run_sweep`` of li2022-qffc, -fompc and -mpc (H_rv = H_att = 1) at the
    automatic width (``geojax.lanes``), sample-years per second with compilation and after it, the width it
    chose, and the device's peak memory (an accelerator's allocator statistics; the process's peak resident
@@ -87,32 +87,44 @@ def main() -> None:
 
 
 def measure_step(batches) -> dict:
-    """Orbit-years/s of the minimal kernel and of geojax's uncontrolled rollout, per batch."""
-    import jax
-
+    """Orbit-years/s of the minimal kernel and of geojax's uncontrolled rollout (controller ``none``, the
+    compiled batch of ``simulate_batch`` run alone, records and metrics included), per batch."""
     sys.path.insert(0, str(HERE))
     import core
 
     from geojax import scenario
-    from geojax.loop.rollout import simulate_batch, prepare_params
 
     n_cycles = 4
     rows = {}
     for batch in batches:
         minimal = core.measure_minimal([batch], n_cycles)["step"][batch]
         sc = scenario.load("li2022-qffc", {"controller.kind": "none", "duration.days": n_cycles})
-        params = prepare_params(sc, batch)
-        keys = jax.random.split(jax.random.key(0), batch)
-        compiled = []
-        simulate_batch(sc, params, keys=keys, on_compiled=compiled.append)  # compiles, warms
-        best = min(_timed(lambda: simulate_batch(sc, params, keys=keys)) for _ in range(3))
+        compiled, args = _compiled_rollouts(sc, batch)
+        best = min(_timed(lambda: compiled(*args)) for _ in range(3))
         years = batch * n_cycles * SIDEREAL_YEAR_FRACTION
         rows[batch] = {"minimal_orbit_years_per_s": minimal["orbit_years_per_s"],
-                       "geojax_orbit_years_per_s": years / best, "geojax_compile_s": compiled[0],
+                       "geojax_orbit_years_per_s": years / best,
                        "ratio_to_minimal": years / best / minimal["orbit_years_per_s"]}
         print(f"step, batch {batch}: geojax {years / best:.4g} orbit-years/s, minimal "
               f"{minimal['orbit_years_per_s']:.4g} ({rows[batch]['ratio_to_minimal']:.2f}x)", flush=True)
     return rows
+
+
+def _compiled_rollouts(sc, n: int, keys=None):
+    """``simulate_batch``'s compiled executable for ``n`` copies of ``sc`` and its arguments."""
+    import jax
+
+    from geojax.loop import rollout
+
+    batch = rollout.prepare([sc])
+    params = rollout.prepare_params(sc, n)
+    keys = jax.random.split(jax.random.key(0), n) if keys is None else keys
+    static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=rollout.for_lanes(batch.dynamics, n),
+                  keep_steps=False)
+    args = (params, keys, batch.shared, rollout._reference_env(batch))
+    compiled = rollout._batched.lower(*args, **static).compile()
+    jax.block_until_ready(compiled(*args))  # warm
+    return compiled, args
 
 
 def measure_sweep(controller: str, samples: int, days: float) -> dict:
@@ -169,23 +181,15 @@ def measure_engine(controller: str, samples: int, days: float) -> dict:
 
 def measure_host_keys(n: int) -> dict:
     """Seconds of ``simulate_batch(seeds=range(n))`` outside its compiled call (one cycle, no controller)."""
-    import jax
-
     from geojax import scenario
-    from geojax.loop import rollout
-    from geojax.loop.rollout import prepare_params, simulate_batch
+    from geojax.loop.rollout import keys_of, prepare_params, simulate_batch
 
     sc = scenario.load("li2022-qffc", {"controller.kind": "none", "duration.days": 1})
     params = prepare_params(sc, n)
     simulate_batch(sc, params, seeds=range(n))  # compile and warm
     whole = min(_timed(lambda: simulate_batch(sc, params, seeds=range(n))) for _ in range(3))
-    batch = rollout.prepare([sc])
-    keys = rollout.keys_of(range(n))
-    static = dict(controller=batch.controller, step_s=batch.step_s,
-                  dynamics=rollout.for_lanes(batch.dynamics, n), keep_steps=False)
-    args = (params, keys, batch.shared, None)
-    compiled = rollout._batched.lower(*args, **static).compile()
-    alone = min(_timed(lambda: jax.block_until_ready(compiled(*args))) for _ in range(3))
+    compiled, args = _compiled_rollouts(sc, n, keys_of(range(n)))
+    alone = min(_timed(lambda: compiled(*args)) for _ in range(3))
     row = {"samples": n, "simulate_batch_s": whole, "compiled_call_s": alone, "outside_s": whole - alone}
     print(f"simulate_batch(seeds=range({n})): {whole:.3f} s, of which {whole - alone:.3f} s outside the "
           f"compiled call", flush=True)

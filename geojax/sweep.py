@@ -43,7 +43,8 @@ Each finished chunk is saved at once to ``OUT.parts/`` (written to a temporary
 name and renamed, so a kill leaves either the whole chunk or nothing); when
 every chunk is in, the HDF5 file is written atomically and the parts removed.
 ``resume=True`` picks up the saved chunks (with the cut they were made with).
-The file's ``wall_s`` and ``compile_s`` count the last run only.
+The file's ``wall_s`` and ``compile_s`` count the last run only; ``compile_s`` is the set-up of every
+controller's batch: its shared arrays and the predictor's reference run, and the compilation.
 """
 
 from __future__ import annotations
@@ -398,7 +399,8 @@ def _chunk_len(start: int, chunk: int, n_samples: int) -> int:
 
 def _compiled_batch(sweep: Sweep, controller: str, width: int):
     """(function of (params [width], sample indices [width]) -> metrics, params of every grid point [n_points],
-    compilation seconds)."""
+    set-up seconds: the batch's shared arrays and its reference run, compiled and run, and the compilation)."""
+    begun = time.perf_counter()
     scenarios = [_scenario(sweep, controller, p) for p in _points(sweep)]
     batch = prepare(scenarios, sweep.custom.get(controller))
     # The step compiled for the controller's CPU width whatever the batch (``Controller.lanes_cpu``): the
@@ -420,8 +422,8 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int):
         return out
 
     lanes = np.zeros(width, dtype=int)
-    run, compile_s = per_device(jax.vmap(one), (_lanes(batch.params, lanes), lanes))
-    return lambda p, idx: run(p, np.asarray(idx)), batch.params, compile_s
+    run, _ = per_device(jax.vmap(one), (_lanes(batch.params, lanes), lanes))
+    return lambda p, idx: run(p, np.asarray(idx)), batch.params, time.perf_counter() - begun
 
 
 def _lanes(params, point_index):

@@ -164,10 +164,12 @@ seed = 3
 """
 
 
-def test_fompc_results_do_not_depend_on_the_device_count(tmp_path):
+def test_fompc_results_do_not_depend_on_the_device_count_or_the_width(tmp_path):
     """Issue 19, defect 4: with the batch sharded by a plain ``jit``, XLA's SPMD pipeline fused the FOMPC's
     annealing differently on two devices and sample (0, 1) moved by 1.4e-14 m/s/yr from cycle 17 on.  Each
-    device now runs the one-device program on its share (``parallel.per_device``): bit for bit."""
+    device now runs the one-device program on its share (``parallel.per_device``): bit for bit.  And 128
+    lanes instead of the FOMPC's 32 (issue 31): a step compiled for the batch's width moved the cycle means'
+    e_x by 8e-15; it is compiled for the controller's CPU width whatever the batch."""
     spec_path = write_spec(tmp_path, FOMPC_SPEC.replace('seed = 3', 'seed = 3\ncycles = true'), "fompc.toml")
     one = sweep.run_sweep(sweep.load(spec_path), tmp_path / "one.h5", progress=False)
     env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=2"}
@@ -175,11 +177,14 @@ def test_fompc_results_do_not_depend_on_the_device_count(tmp_path):
     code = ("import jax; from geojax import sweep; assert jax.device_count() == 2; "
             f"sweep.run_sweep(sweep.load({str(spec_path)!r}), {str(two)!r}, progress=False)")
     subprocess.run([sys.executable, "-c", code], check=True, env=env)
-    a, b = store.read_h5(one)[0], store.read_h5(two)[0]
+    wide = sweep.run_sweep(sweep.load(spec_path), tmp_path / "wide.h5", progress=False, lanes=128)
+    a = store.read_h5(one)[0]
     assert a["status"]["code"][0, 1].tolist() == [3, 3]  # the wide Delta-i limit leaves the latitude box
-    for group in ("metrics", "cycles", "status"):
-        for name in a[group]:
-            np.testing.assert_array_equal(b[group][name], a[group][name], err_msg=f"{group}/{name}")
+    for other in (two, wide):
+        b = store.read_h5(other)[0]
+        for group in ("metrics", "cycles", "status"):
+            for name in a[group]:
+                np.testing.assert_array_equal(b[group][name], a[group][name], err_msg=f"{other.name}: {group}/{name}")
 
 
 def test_a_stray_parts_folder_is_refused_in_one_line(tmp_path, capsys):
