@@ -5,7 +5,9 @@ import subprocess
 import sys
 import textwrap
 
+import jax
 import numpy as np
+import pytest
 
 SCRIPT = textwrap.dedent(
     """
@@ -38,12 +40,17 @@ def run_with_devices(count, path):
     return np.load(path)
 
 
+HOST_DEVICES = pytest.mark.skipif(jax.default_backend() != "cpu", reason="XLA host devices: the CPU's device count")
+
+
+@HOST_DEVICES
 def test_two_devices_match_one(tmp_path):
     one = run_with_devices(1, tmp_path / "one.npy")
     two = run_with_devices(2, tmp_path / "two.npy")
     np.testing.assert_allclose(two, one, rtol=1e-14, atol=0)
 
 
+@HOST_DEVICES
 def test_importing_geojax_leaves_the_device_count_to_the_command():
     """``geojax`` (the CLI) asks for one XLA CPU device per core after importing the package, so nothing in
     the package may start JAX's backend at import (a jnp array built at module level did, and every
