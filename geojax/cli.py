@@ -498,8 +498,9 @@ def _sweep(args) -> int:
     path = sweep.run_sweep(spec, args.out, resume=args.resume, chunk=args.chunk, progress=False if args.quiet else None,
                            ray=args.ray, workers=args.workers, lanes=args.lanes)
     groups, attrs = store.read_h5(path)
+    lanes = f" ({attrs['lanes_per_device']} lanes per device)" if attrs.get("lanes_per_device") else ""
     _detail(args)(f"  compiled in {float(attrs.get('compile_s', float('nan'))):.1f} s, {float(attrs['wall_s']):.1f} s "
-                  f"wall in all, on {attrs['device']}")
+                  f"wall in all, on {attrs['device']}{lanes}")
     for line in sweep_summary(spec, groups):
         say(line)
     print(f"wrote {path}")

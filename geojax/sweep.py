@@ -308,7 +308,8 @@ def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool
                     bar.restart(f"{controller} compiled in {runners[controller].compile_s:.1f} s "
                                 f"({runners[controller].plan.lanes} lanes per device)")
                 save(controller, first, runners[controller].run(first, length, bar.update))
-    return _write_results(sweep, out, parts, wall_s=time.perf_counter() - start, compile_s=compile_s)
+    widths = "" if on_ray else ", ".join(f"{c} {r.plan.lanes}" for c, r in runners.items())
+    return _write_results(sweep, out, parts, wall_s=time.perf_counter() - start, compile_s=compile_s, lanes=widths)
 
 
 class ChunkRunner:
@@ -338,8 +339,10 @@ class ChunkRunner:
         return {k: np.concatenate([p[k] for p in pieces])[:length] for k in pieces[0]}
 
 
-def _write_results(sweep: Sweep, out: Path, parts: Path, wall_s: float, compile_s: float) -> Path:
-    """Join the saved chunks of every controller into ``out`` (written atomically), then remove the parts."""
+def _write_results(sweep: Sweep, out: Path, parts: Path, wall_s: float, compile_s: float, lanes: str = "") -> Path:
+    """Join the saved chunks of every controller into ``out`` (written atomically), then remove the parts.
+    ``lanes``: the widths this run compiled ("qffc 128, fompc 32"; empty on a cluster, where each worker
+    chooses its own)."""
     results = {}
     for controller in sweep.controllers:
         pieces = [dict(np.load(f)) for f in sorted(parts.glob(f"{controller}_*.npz"))]
@@ -362,7 +365,7 @@ def _write_results(sweep: Sweep, out: Path, parts: Path, wall_s: float, compile_
     base = scenario_mod.to_toml(_scenario(sweep, sweep.controllers[0], {}).config)  # [set] applied, fully resolved
     store.write_h5(out, {"grid": grid, "metrics": metrics, "status": {"code": status}, **groups}, sweep.text, wall_s,
                    attrs={"kind": "sweep", "name": sweep.name, "grid_axes": ",".join(["controller", *sweep.grid]),
-                          "compile_s": compile_s, "base_scenario_toml": base,
+                          "compile_s": compile_s, "lanes_per_device": lanes, "base_scenario_toml": base,
                           "status_codes": STATUS_TEXT},
                    dims=dims_of_sweep(list(sweep.grid), sweep.cycles))
     store.discard_folder(parts)
