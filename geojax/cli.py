@@ -47,13 +47,28 @@ def main(argv: list[str] | None = None) -> int:
         print(f"geojax {args.command}: error: {err}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        print(f"geojax {args.command}: interrupted", file=sys.stderr)
+        hint = ""
+        if args.command == "sweep":  # its finished chunks are on disk
+            hint = f"; the chunks done are saved: geojax sweep {args.file} --out {args.out} --resume continues"
+        print(f"geojax {args.command}: interrupted{hint}", file=sys.stderr)
         return 130
     except BrokenPipeError:  # `geojax scenarios | head`: the reader left; say nothing more
         import os
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+
+
+def flown_days(days: float) -> str:
+    """``days`` as a run flies them: whole sidereal-day cycles, named when the rounding is more than 2 %."""
+    from geojax.loop.setup import cycle_count
+    from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
+
+    n = cycle_count(days)
+    flown = n * SIDEREAL_DAY_S / SECONDS_PER_DAY
+    if abs(flown - days) <= 0.02 * days:
+        return f"{days:g} days"
+    return f"{days:g} days, flown as {n} sidereal-day cycle{'s' * (n != 1)} ({flown:.3f} days)"
 
 
 def _version() -> str:
@@ -240,7 +255,7 @@ def _simulate(args) -> int:
         raise ValueError(f"controller.kind: {sc.name} has no controller; give --controller or use 'geojax propagate'")
     _check_outputs(args)
     say, detail = _say(args), _detail(args)
-    say(f"{sc.name}: {sc.controller} for {sc.days:g} days; compiling...", flush=True)
+    say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; compiling...", flush=True)
     feedback = sc.controller == "lyapunov"
     result = simulate(sc, args.seed, keep_steps=feedback,
                       on_compiled=lambda s: say(f"compiled in {s:.1f} s; running...", flush=True))

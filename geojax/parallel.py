@@ -72,7 +72,6 @@ def per_device(fn, example_args, devices=None, shared=()):
     batched ones, ``fn(*args, *shared)``; they are placed on each device once, and ``run(*args,
     shared=...)`` may replace them by values of the same shapes.
     """
-    import concurrent.futures
     import time
 
     devices = list(devices or jax.local_devices())
@@ -91,9 +90,8 @@ def per_device(fn, example_args, devices=None, shared=()):
 
     start = time.perf_counter()
     on_devices = placed(shared)
-    with concurrent.futures.ThreadPoolExecutor(len(devices)) as pool:  # XLA compiles outside the GIL
-        compiled = list(pool.map(lambda pair: jitted.lower(*pair[0], *pair[1]).compile(),
-                                 zip(shares(example_args), on_devices)))
+    compiled = _concurrently([lambda pair=pair: jitted.lower(*pair[0], *pair[1]).compile()
+                              for pair in zip(shares(example_args), on_devices)])
     compile_s = time.perf_counter() - start
 
     def run(*args, shared=None):
@@ -102,3 +100,30 @@ def per_device(fn, example_args, devices=None, shared=()):
         return jax.tree_util.tree_map(lambda *xs: np.concatenate([np.asarray(x) for x in xs]), *outs)
 
     return run, compile_s
+
+
+def _concurrently(tasks):
+    """The results of ``tasks`` (functions of nothing) run in threads at once (XLA compiles outside the GIL).
+
+    Daemon threads, joined a tenth of a second at a time: Ctrl-C reaches this thread at once and the process
+    may end without waiting for a compilation to finish (a thread pool would hold it for the whole compile).
+    """
+    import threading
+
+    results, errors = [None] * len(tasks), []
+
+    def run(i):
+        try:
+            results[i] = tasks[i]()
+        except BaseException as err:  # noqa: BLE001 (raised again in the caller's thread)
+            errors.append(err)
+
+    threads = [threading.Thread(target=run, args=(i,), daemon=True) for i in range(len(tasks))]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        while thread.is_alive():
+            thread.join(0.1)
+    if errors:
+        raise errors[0]
+    return results

@@ -18,6 +18,11 @@ class Progress:
         self._resumed = 0  # done before the last restart: counted, not in the rate
         self.start = time.perf_counter()
 
+    def skip(self, n: int) -> None:
+        """Count ``n`` done earlier (a resumed run's saved work): shown, never in the rate."""
+        self.done = min(self.total, self.done + n)
+        self.restart()
+
     def restart(self, note: str = "") -> None:
         """Start the rate and ETA afresh from here (after a compilation, which says nothing of the rate)."""
         self._resumed, self.start = self.done, time.perf_counter()

@@ -293,8 +293,7 @@ def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool
         store.atomic_write(parts / f"{controller}_{first:09d}.npz", _npz_bytes(values))
 
     with Progress(total, "samples", enabled=progress) as bar:
-        bar.update(done)
-        bar.restart()  # what an earlier run did is not in the rate
+        bar.skip(done)  # what an earlier run did is not in the rate
         if on_ray:
             from geojax import cluster
 
