@@ -256,7 +256,11 @@ def _simulate(args) -> int:
     _check_outputs(args)
     say, detail = _say(args), _detail(args)
     say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; compiling...", flush=True)
-    feedback = sc.controller == "lyapunov"
+    from geojax.loop.setup import controller_of
+
+    # A feedback law (no plan, no predictor reference: Katz's laws, a user's) keeps its per-step records for
+    # the ground-track figures; a planner gets the reference and targets beside its cycles instead.
+    feedback = controller_of([sc]).reference_cycles == 0
     result = simulate(sc, args.seed, keep_steps=feedback,
                       on_compiled=lambda s: say(f"compiled in {s:.1f} s; running...", flush=True))
     cycles = result.cycles()
@@ -265,9 +269,8 @@ def _simulate(args) -> int:
         f"status {int(result.status)} ({STATUS_MEANINGS[int(result.status)]})")
     detail(f"  devices {_devices()}; the run is one compiled call (no host callbacks in the loop), so it reports "
            f"its times instead of a progress bar")
-    if feedback:
-        mode = sc.config["controller"]["thrust_mode"]
-        paper, source = (KATZ.get(mode, {}), "Katz 2025") if sc.name.startswith("katz2025") else ({}, "")
+    if sc.name.startswith("katz2025"):
+        paper, source = KATZ.get(sc.config["controller"]["thrust_mode"], {}), "Katz 2025"
     else:
         paper, source = (PAPER.get(sc.controller, {}), "Li 2022") if sc.name.startswith("li2022") else ({}, "")
     metrics = {**{k: float(v) for k, v in result.metrics.items()}, "cpu_s_per_orbit": run_s / len(cycles["t_s"])}

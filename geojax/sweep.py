@@ -117,7 +117,7 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
     stores its changed text.  ``controllers`` ({name: Controller}) adds a user's own controllers, named
     in the file's ``controllers`` list like the registered ones.
     """
-    from geojax.control import REGISTRY
+    from geojax.control import REGISTRY, lookup
 
     path = Path(path)
     controllers_arg = controllers
@@ -137,10 +137,16 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
     controllers = raw.get("controllers", ["qffc"])
     known = {**REGISTRY, **(controllers_extra := dict(controllers_arg or {}))}
     if not (isinstance(controllers, list) and controllers
-            and all(isinstance(c, str) and c in known for c in controllers)
+            and all(isinstance(c, str) and (c in known or ":" in c) for c in controllers)
             and len(set(controllers)) == len(controllers)):
-        raise ValueError(f"controllers: must be a non-empty list of distinct names from {', '.join(known)}, "
-                         f"got {controllers!r}")
+        raise ValueError(f"controllers: must be a non-empty list of distinct names from {', '.join(known)} or "
+                         f"controllers of one's own as 'package.module:NAME', got {controllers!r}")
+    for name in controllers:
+        if name not in known:
+            try:
+                lookup(name)
+            except ValueError as err:
+                raise ValueError(f"controllers: {str(err).removeprefix('controller.kind: ')}") from None
     reps, seed = raw.get("repetitions", 1), raw.get("seed", 0)
     if not (isinstance(reps, int) and not isinstance(reps, bool) and 1 <= reps <= MAX_SAMPLES):
         raise ValueError(f"repetitions: must be an integer from 1 to {MAX_SAMPLES}, got {reps!r}")

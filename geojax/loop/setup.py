@@ -21,7 +21,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
-from geojax.control import REGISTRY, none
+from geojax.control import lookup, none
 from geojax.control.base import Controller
 from geojax.control.predictor import Reference
 from geojax.physics.dynamics import SpacecraftState
@@ -69,7 +69,7 @@ def controller_of(scenarios: list[Scenario]) -> Controller:
     kinds = {sc.controller for sc in scenarios}
     if len(kinds) > 1:
         raise ValueError(f"controller.kind: one per batch, got {sorted(kinds)}")
-    return REGISTRY[kinds.pop()].make([sc.config["controller"] for sc in scenarios])
+    return lookup(kinds.pop()).make([sc.config["controller"] for sc in scenarios])
 
 
 def prepare(scenarios: list[Scenario], controller: Controller | None = None, reference_pad: int = 0) -> Batch:
