@@ -1,8 +1,8 @@
 """HDF5 results (DESIGN.md, "Contracts").
 
 Every file carries the attributes ``geojax_version``, ``jax_version``, ``jaxlib_version``,
-``source_revision`` (the git commit of the source, ``+dirty`` with uncommitted changes, when it is a
-checkout), ``config_toml``, ``created_utc``, ``wall_s`` and ``device``, and every dataset its units and
+``source_revision`` (the git commit of the source, ``+dirty`` with uncommitted changes: read from git in a
+checkout, recorded at build time in an installed copy), ``config_toml``, ``created_utc``, ``wall_s`` and ``device``, and every dataset its units and
 axis names (``geojax.results``).  Files are written to a temporary
 name in the same folder (``.NAME.tmp-PID``) and renamed, so a reader never sees
 a half-written file; folders are removed by renaming them first
@@ -32,12 +32,14 @@ def device_description() -> str:
 
 
 def source_revision() -> str:
-    """The git commit geojax runs from (``+dirty`` with uncommitted changes), or "unknown" (an installed wheel)."""
+    """The git commit geojax runs from (``+dirty`` with uncommitted changes): the checkout's, else the one
+    ``setup.py`` recorded when this copy was built (``geojax/_revision.txt``), else "unknown"."""
     import subprocess
 
     root = Path(geojax.__file__).resolve().parent.parent
     if not (root / ".git").exists():
-        return "unknown"
+        recorded = Path(geojax.__file__).resolve().parent / "_revision.txt"
+        return recorded.read_text().strip() if recorded.is_file() else "unknown"
     try:
         head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
                               timeout=10).stdout.strip()

@@ -163,3 +163,25 @@ def test_sweep_summary_per_grid_point_and_identical_repetitions_warned():
     assert "beta_max_deg 60: ΔV 62.00 ± 0.00 m/s/yr" in text and "beta_max_deg 90: ΔV 55.50 ± 0.41 m/s/yr" in text
     assert "1 left the longitude box" in text
     assert "identical for qffc:" in text and "fompc:" not in lines[-1]
+
+
+def test_an_installed_copy_names_the_commit_it_was_built_from(tmp_path):
+    """``setup.py``'s build step records ``git rev-parse HEAD`` (the second method: git itself) in the built
+    package, and a copy with no checkout around it reports that, not "unknown"."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+    if not head:
+        pytest.skip("not a git checkout")
+    lib = tmp_path / "lib"
+    subprocess.run([sys.executable, "setup.py", "-q", "build_py", "--build-lib", str(lib)], cwd=root, check=True,
+                   capture_output=True)
+    assert (lib / "geojax" / "_revision.txt").read_text().strip().removesuffix("+dirty") == head
+    code = "from geojax.store import source_revision; print(source_revision())"
+    out = subprocess.run([sys.executable, "-c", code], cwd=lib, capture_output=True, text=True, check=True,
+                         env={**os.environ, "PYTHONPATH": str(lib)})
+    assert out.stdout.strip().removesuffix("+dirty") == head
