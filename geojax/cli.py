@@ -59,6 +59,20 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
 
+def sweep_title(attrs, axes: list[str]) -> str:
+    """What a sweep figure shows: its swept key, the sweep's name and the run's length
+    ("thrusters.beta_max_deg: fig09, 365.25 days")."""
+    from geojax import scenario
+
+    days = ""
+    try:
+        base = scenario.tomllib.loads(str(attrs.get("base_scenario_toml", "")))
+        days = f", {base['duration']['days']:g} days"
+    except (ValueError, KeyError, TypeError):
+        pass
+    return f"{axes[1]}: {attrs.get('name', 'sweep')}{days}"
+
+
 def flown_days(days: float) -> str:
     """``days`` as a run flies them: whole sidereal-day cycles, named when the rounding is more than 2 %."""
     from geojax.loop.setup import cycle_count
@@ -586,8 +600,8 @@ def _plot(args) -> int:
     title = str(attrs.get("scenario", attrs.get("name", path.stem)))
     kind = attrs.get("kind")
     if kind == "sweep":
-        figures = [plots.plot_sweep(groups, str(attrs["grid_axes"]).split(","), out / f"{path.stem}.{ext}",
-                                    title=str(attrs.get("name", path.stem)), dpi=dpi)]
+        axes = str(attrs["grid_axes"]).split(",")
+        figures = [plots.plot_sweep(groups, axes, out / f"{path.stem}.{ext}", title=sweep_title(attrs, axes), dpi=dpi)]
     elif kind == "tune":
         if "iterations" not in groups:
             raise ValueError(f"file {str(path)!r}: a tuning file without /iterations (stopped before its first)")

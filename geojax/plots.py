@@ -170,32 +170,42 @@ def plot_sweep(groups, axes_names: list[str], path: str | Path, metric: str = "d
 def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
                 dpi: int = 150) -> Path:
     """``plot_sweep`` for several sweeps over the same parameter on one axis: ``runs`` is [(label, groups)]."""
+    from matplotlib.patches import Patch
+
     fig, ax = plt.subplots(figsize=(5.0, 3.4), constrained_layout=True)
     param = axes_names[1]
     x_power = decade(*(np.asarray(g["grid"][param.replace(".", "__")], float) for _, g in runs))
     y_power = decade(*(np.asarray(g["metrics"][metric], float) for _, g in runs))
+    grid_values, bands = set(), []
     for prefix, groups in runs:
         values = np.asarray(groups["metrics"][metric], float) / 10.0**y_power  # [controller, grid..., reps]
         status = np.asarray(groups["status"]["code"])
         controllers = [c.decode() if isinstance(c, bytes) else str(c) for c in groups["grid"]["controller"]]
         x = np.asarray(groups["grid"][param.replace(".", "__")], float) / 10.0**x_power
+        grid_values.update(x.tolist())
         for i, controller in enumerate(controllers):
             v = values[i].reshape(len(x), -1, values.shape[-1])  # [x, other axes, reps]
             s = status[i].reshape(v.shape)
             for j in range(v.shape[1]):
-                name = " ".join(filter(None, [prefix, controller.upper(), f"#{j}" if v.shape[1] > 1 else ""]))
+                name = " ".join(filter(None, [prefix, controller, f"#{j}" if v.shape[1] > 1 else ""]))
                 stable = np.where(s[:, j] == 2, np.nan, v[:, j])
                 bad = np.any(s[:, j] == 2, axis=-1)
                 with warnings.catch_warnings():  # a point whose every repetition is unstable has no spread
                     warnings.simplefilter("ignore", RuntimeWarning)
                     mean, low, high = (f(stable, axis=-1) for f in (np.nanmean, np.nanmin, np.nanmax))
                     unstable = np.nanmean(np.where(np.isfinite(v[bad, j]), v[bad, j], np.nan), axis=-1)
-                line, = ax.plot(x, mean, "o-", ms=3.5, label=name)
-                ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, lw=0)
+                line, = ax.plot(x, mean, "o-", ms=3.5, label=f"{name}: mean")
+                if v.shape[-1] > 1:
+                    ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, lw=0)
+                    bands.append(Patch(color=line.get_color(), alpha=0.2, lw=0,
+                                       label=f"{name}: min–max of {v.shape[-1]} repetitions"))
                 if bad.any():
                     ax.plot(x[bad], unstable, "x", color=line.get_color(), ms=8, mew=1.5, label=f"{name}: unstable")
+    if len(grid_values) <= 12:  # the ticks on the grid's values, not between them
+        ax.set_xticks(sorted(grid_values), [f"{v:g}" for v in sorted(grid_values)])
     ax.set(xlabel=_label(*_quantity(param), x_power), ylabel=_label(*_quantity(metric), y_power))
-    ax.legend(loc="best", fontsize="small")
+    handles, _ = ax.get_legend_handles_labels()
+    ax.legend(handles=handles + bands, loc="best", fontsize="small")
     return _save(fig, [ax], title, path, dpi)
 
 

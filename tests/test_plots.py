@@ -205,3 +205,22 @@ def test_decade_brings_small_values_near_one_and_leaves_ordinary_ones():
     assert plots.decade(np.array([2e-6])) == -6
     assert plots.decade(np.zeros(3)) == 0
     assert plots.decade(np.array([1000.0, 222.0])) == 0 and plots.decade(np.array([3e5])) == 5  # ΔV, H_rv as they are
+
+
+def test_a_sweep_figure_marks_the_grid_and_draws_only_what_its_legend_names(tmp_path, monkeypatch):
+    """Ticks at the grid's values (they fell between them), controllers as written, the min-max band in the
+    legend with its repetitions, the unstable point too; the title as the command line writes it."""
+    from geojax import cli
+
+    kept = []
+    monkeypatch.setattr(plt, "close", kept.append)
+    groups = _sweep()
+    groups["grid"]["controller__di_max"] = np.array([60.0, 70.0, 80.0, 90.0])
+    plots.plot_sweep(groups, ["controller", "controller.di_max"], tmp_path / "sweep.png")
+    ax = kept[-1].axes[0]
+    assert list(ax.get_xticks()) == [60.0, 70.0, 80.0, 90.0]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        "qffc: mean", "fompc: mean", "fompc: unstable", "qffc: min–max of 3 repetitions",
+        "fompc: min–max of 3 repetitions"]
+    attrs = {"name": "fig09", "base_scenario_toml": '[duration]\ndays = 365.25\n'}
+    assert cli.sweep_title(attrs, ["controller", "thrusters.beta_max_deg"]) == "thrusters.beta_max_deg: fig09, 365.25 days"
