@@ -82,9 +82,7 @@ def plan(controller, n_cycles: int, samples_per_device: int, *, kept_records: in
     available = free_bytes() if available is None else available
     per_lane = bytes_per_lane(controller, n_cycles, kept_records)
     fit = int(FREE_FRACTION * available) // per_lane
-    if requested is not None:
-        if not (isinstance(requested, int) and not isinstance(requested, bool) and 1 <= requested <= MAX_LANES):
-            raise ValueError(f"lanes: must be an integer from 1 to {MAX_LANES}, got {requested!r}")
+    if checked(requested) is not None:
         if requested > fit:
             raise ValueError(f"lanes: {requested} lanes need about {_gb(requested * per_lane)} on each {platform} "
                              f"device ({per_lane / 1e3:.0f} kB per lane over {n_cycles} cycles), which has "
@@ -98,6 +96,14 @@ def plan(controller, n_cycles: int, samples_per_device: int, *, kept_records: in
         raise ValueError(f"lanes: not one lane fits on the {platform} device ({_gb(available)} free, "
                          f"{per_lane / 1e3:.0f} kB per lane over {n_cycles} cycles); shorten the run")
     return LanePlan(lanes, per_lane, available, platform, "memory")
+
+
+def checked(requested):
+    """``requested`` lanes if it is None or an integer in range, else ``ValueError`` naming ``lanes``."""
+    if requested is not None and not (isinstance(requested, int) and not isinstance(requested, bool)
+                                      and 1 <= requested <= MAX_LANES):
+        raise ValueError(f"lanes: must be an integer from 1 to {MAX_LANES}, got {requested!r}")
+    return requested
 
 
 def _next_power_of_two(n: int) -> int:

@@ -12,6 +12,7 @@ repetitions and optional Monte Carlo dispersions of the initial state:
     repetitions = 20
     seed = 0
     cycles = false             # true: also keep per-cycle records (/cycles/<name> [controller, grid..., reps, cycle])
+    lanes = 1024               # optional: samples per device per compiled call (default: the platform's, geojax.lanes)
     [set]                      # fixed overrides, any scenario key
     "thrusters.alpha_max_deg" = 90.0
     [grid]                     # one axis per key, in this order
@@ -125,7 +126,8 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
     if changes:
         raw = {**raw, **changes, "set": {**raw.get("set", {}), **changes.get("set", {})}}
         text = scenario_mod.to_toml(raw)
-    allowed = {"name", "scenario", "controllers", "repetitions", "seed", "set", "grid", "cycles", "dispersion", "lanes"}
+    allowed = {"name", "scenario", "controllers", "repetitions", "seed", "set", "grid", "cycles", "dispersion",
+               "lanes"}
     unknown = sorted(set(raw) - allowed)
     if unknown:
         raise ValueError(f"{unknown[0]}: unknown key; allowed: {', '.join(sorted(allowed))}")
@@ -152,9 +154,7 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
         raise ValueError(f"repetitions: must be an integer from 1 to {MAX_SAMPLES}, got {reps!r}")
     if not (isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
         raise ValueError(f"seed: must be an integer >= 0, got {seed!r}")
-    lanes = raw.get("lanes")
-    if lanes is not None and not (isinstance(lanes, int) and not isinstance(lanes, bool) and 1 <= lanes <= lanes_mod.MAX_LANES):
-        raise ValueError(f"lanes: must be an integer from 1 to {lanes_mod.MAX_LANES}, got {lanes!r}")
+    lanes = lanes_mod.checked(raw.get("lanes"))
     if not isinstance(raw.get("cycles", False), bool):
         raise ValueError(f"cycles: must be true or false, got {raw['cycles']!r}")
     grid = raw.get("grid", {})
@@ -216,7 +216,8 @@ def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | 
 
     ``ray``: run the chunks as Ray tasks (``geojax.cluster``): ``"local"`` starts a Ray instance on this
     machine, ``"auto"``, ``"HOST:PORT"`` or ``"ray://HOST:PORT"`` joins a running cluster; ``workers`` Ray
-    worker processes (default one per GPU, or per node without GPUs).  The results are bit for bit those of a local run.
+    worker processes (default one per GPU, or per node without GPUs).  The results are bit for bit those of a
+    local run.
     """
     out = store.check_output_file(out)
     if workers is not None and ray is None:
