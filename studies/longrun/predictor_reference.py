@@ -10,7 +10,8 @@ costs more every year.  ``loop.setup`` now re-starts it from the station's nomin
 ``REFERENCE_SEGMENT_CYCLES`` cycles.  For each controller (li2022-<controller>, no orbit or attitude errors,
 seed 0) and each segment length (0: never re-started, the reference of before issue 32) this script measures
 
-* the Delta-V of each 366-cycle year of a run of ``--years`` years started on 2020-01-01 12:00 UTC, and of a
+* the Delta-V of each 366-cycle year (``dv_year<k>_mps``, per 365.25 days) of a run of ``--years`` years
+  started on 2020-01-01 12:00 UTC, its steady state (``dv_steady_per_year_mps``), and the Delta-V of a
   fresh one-year run started at the station on the day the long run's last year starts (the same initial
   orbital elements, its true longitude moved with the Earth angle so that the geographic longitude is the
   same: ``at_station``); the check of issue 32 is the last year within 2 % of the fresh run;
@@ -35,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from geojax import scenario
+from geojax.loop.metrics import YEAR_CYCLES
 from geojax.loop.rollout import rollout_fn
 from geojax.loop.setup import prepare, unstack
 from geojax.loop.simulate import propagate
@@ -45,7 +47,6 @@ from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.physics.propagate import CARTESIAN
 
 HERE = Path(__file__).resolve().parent
-YEAR_CYCLES = 366  # cycle_count(365.25): the cycles of a one-year run
 START_UTC = dt.datetime(2020, 1, 1, 12)
 EVERY = 10  # cycles between the drift checks
 
@@ -75,7 +76,7 @@ def drift_errors(batch, params, records, years: int) -> dict:
     inclination vector against uncontrolled Cartesian propagations from the controlled orbit's true state."""
     ref = batch.shared.reference
     mu = params.forces.mu_m3_s2
-    boundary = np.asarray(records.cycles.boundary)  # true (lon, a, f, g, h, k) at each cycle start
+    boundary = jnp.asarray(records.cycles.boundary)  # true (lon, a, f, g, h, k) at each cycle start
     env = batch.shared.env
     starts = np.arange(1, boundary.shape[0] - 2, EVERY)
 
@@ -111,16 +112,16 @@ def measure(controller: str, years: int, segment_cycles: int) -> dict:
     overrides = {"errors.h_rv": 0.0, "errors.h_att": 0.0}
     long = scenario.load(name, {**overrides, "duration.days": years * 365.25})
     batch, params, records, metrics, wall_s = run(long, segment_cycles)
-    dv = np.asarray(records.cycles.dv_mps)
-    per_year = [float(dv[y * YEAR_CYCLES:(y + 1) * YEAR_CYCLES].sum()) for y in range(years)]
+    per_year = [metrics[f"dv_year{y + 1}_mps"] for y in range(years)]
     last_start = START_UTC + dt.timedelta(seconds=(years - 1) * YEAR_CYCLES * SIDEREAL_DAY_S)
     fresh_sc = at_station(name, last_start, {**overrides, "duration.days": 365.25})
     _, _, fresh_records, fresh_metrics, fresh_wall_s = run(fresh_sc, segment_cycles)
-    fresh = float(np.asarray(fresh_records.cycles.dv_mps).sum())
-    row = {"controller": controller, "segment_cycles": segment_cycles, "years_dv_mps": per_year,
-           "fresh_start_utc": last_start.isoformat(timespec="seconds"), "fresh_dv_mps": fresh,
+    fresh = fresh_metrics["dv_year1_mps"]
+    row = {"controller": controller, "segment_cycles": segment_cycles, "years_dv_per_year_mps": per_year,
+           "fresh_start_utc": last_start.isoformat(timespec="seconds"), "fresh_dv_per_year_mps": fresh,
            "last_over_fresh": per_year[-1] / fresh - 1, "status": int(metrics["status"]),
            "fresh_status": int(fresh_metrics["status"]), "max_abs_di": metrics["max_abs_di"],
+           "steady_dv_per_year_mps": metrics["dv_steady_per_year_mps"],
            "wall_s": wall_s + fresh_wall_s}
     if controller == "qffc":
         row.update(drift_errors(batch, params, records, years))
@@ -129,13 +130,13 @@ def measure(controller: str, years: int, segment_cycles: int) -> dict:
 
 
 def table(rows: list[dict], years: int) -> str:
-    head = ("| controller | reference re-started every | " + " | ".join(f"year {y + 1} (m/s)" for y in range(years))
-            + " | fresh run of the last year (m/s) | last year / fresh | status (long, fresh) | max |i - i_T| |")
+    head = ("| controller | reference re-started every | " + " | ".join(f"year {y + 1} (m/s/yr)" for y in range(years))
+            + " | steady state, years 2+ (m/s/yr) | fresh run of the last year (m/s/yr) | last year / fresh | status (long, fresh) | max abs(i - i_T) |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     for r in rows:
         every = "never" if r["segment_cycles"] == 0 else f"{r['segment_cycles']} cycles"
-        lines.append(f"| {r['controller']} | {every} | " + " | ".join(f"{v:.2f}" for v in r["years_dv_mps"])
-                     + f" | {r['fresh_dv_mps']:.2f} | {100 * r['last_over_fresh']:+.2f} % | {r['status']}, "
+        lines.append(f"| {r['controller']} | {every} | " + " | ".join(f"{v:.2f}" for v in r["years_dv_per_year_mps"])
+                     + f" | {r['steady_dv_per_year_mps']:.2f} | {r['fresh_dv_per_year_mps']:.2f} | {100 * r['last_over_fresh']:+.2f} % | {r['status']}, "
                      f"{r['fresh_status']} | {r['max_abs_di']:.2e} |")
     mech = [r for r in rows if "ref_i_deg" in r]
     if mech:
