@@ -212,10 +212,10 @@ def test_cli_bound_writes_results_and_refuses_an_impossible_box(tmp_path, capsys
 
 def test_gazzino_scenario_takes_its_four_fixed_thrusters_from_the_layout_key():
     # The scenario names its layout (thrusters.layout = "fixed4"): four thrusters, the flown plan holds the box,
-    # the bound (full box) is below the plan (flown within the box less its 1e-3 margin).  Second method for the
+    # the bound (full box, free end: about the same trajectory as the plan) is below the plan (flown within the box less its 1e-3 margin).  Second method for the
     # fuel: the plan's per-thruster Delta-Vs add up to it.
     sc = geojax.load_scenario("gazzino2016", {"duration.days": 10})
-    result = bound(sc)
+    result = bound(sc, free_end=True)
     assert result.geometry == "fixed4" and result.thruster_mps.shape[1] == 4
     assert 0 < result.lower_mps <= result.fuel_mps
     assert np.sum(result.thruster_mps) == pytest.approx(result.fuel_mps, rel=1e-9)

@@ -1,6 +1,7 @@
 """Issue 32, item 1: long runs that do not degrade -- the predictor's reference, measured.
 
     python studies/longrun/predictor_reference.py [--controllers qffc,fompc,mpc] [--years 3]
+                                                  [--long-controllers qffc] [--long-years 10]
                                                   [--segments 0,30] [--out studies/longrun/results]
 
 The predictor (``control.predictor``, Li 2022 eqs. (24)-(27)) takes the natural drift of the mean elements
@@ -20,7 +21,8 @@ seed 0) and each segment length (0: never re-started, the reference of before is
   independent uncontrolled propagation (Cartesian dynamics) started from the controlled orbit's true state,
   every 10th cycle: RMS of |predicted - propagated| / RMS |propagated|, per year.
 
-Writes ``predictor_reference.md`` and ``.json``.
+Writes ``predictor_reference.md`` and ``.json`` (``--controllers`` over ``--years``), and
+``predictor_reference_10yr.md`` and ``.json`` (``--long-controllers`` over ``--long-years``).
 """
 
 from __future__ import annotations
@@ -155,21 +157,26 @@ def table(rows: list[dict], years: int) -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--controllers", default="qffc,fompc,mpc")
+    ap.add_argument("--controllers", default="qffc,fompc,mpc", help="run for --years years ('' for none)")
     ap.add_argument("--years", type=int, default=3)
+    ap.add_argument("--long-controllers", default="qffc", help="also run for --long-years years ('' for none)")
+    ap.add_argument("--long-years", type=int, default=10)
     ap.add_argument("--segments", default="0,30", help="cycles between re-starts of the reference; 0: never")
     ap.add_argument("--out", type=Path, default=HERE / "results")
-    ap.add_argument("--name", default="predictor_reference")
     args = ap.parse_args(argv)
-    rows = [measure(c, args.years, int(k)) for c in args.controllers.split(",") for k in args.segments.split(",")]
-    args.out.mkdir(parents=True, exist_ok=True)
     command = "python studies/longrun/predictor_reference.py " + " ".join(argv or [])
-    text = (f"# The predictor's reference over {args.years}-year runs (li2022, no errors)\n\n`{command.strip()}`; "
-            f"each year is {YEAR_CYCLES} cycles; the fresh run starts at the station on the day the last year "
-            "starts.\n\n" + table(rows, args.years))
-    (args.out / f"{args.name}.md").write_text(text)
-    (args.out / f"{args.name}.json").write_text(json.dumps(rows, indent=1) + "\n")
-    print(text)
+    args.out.mkdir(parents=True, exist_ok=True)
+    for controllers, years, name in ((args.controllers, args.years, "predictor_reference"),
+                                     (args.long_controllers, args.long_years, f"predictor_reference_{args.long_years}yr")):
+        if not controllers:
+            continue
+        rows = [measure(c, years, int(k)) for c in controllers.split(",") for k in args.segments.split(",")]
+        text = (f"# The predictor's reference over {years}-year runs (li2022, no errors)\n\n`{command.strip()}`; "
+                f"each year is {YEAR_CYCLES} cycles; the fresh run starts at the station on the day the last year "
+                "starts.\n\n" + table(rows, years))
+        (args.out / f"{name}.md").write_text(text)
+        (args.out / f"{name}.json").write_text(json.dumps(rows, indent=1) + "\n")
+        print(text)
     return 0
 
 
