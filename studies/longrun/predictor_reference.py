@@ -24,7 +24,10 @@ seed 0) and each segment length (0: never re-started, the reference of before is
   independent uncontrolled propagation (Cartesian dynamics) started from the controlled orbit's true state,
   every 10th cycle: RMS of |predicted - propagated| / RMS |propagated|, per year.
 
-Writes ``predictor_reference.md`` and ``.json`` (``--controllers`` over ``--years``), and
+The segment length of ``loop.setup.REFERENCE_SEGMENT_CYCLES`` was chosen with
+``--controllers qffc --segments 10,30,91,366 --long-controllers "" --name segment_length``.
+
+Writes ``predictor_reference.md`` and ``.json`` (``--controllers`` over ``--years``; ``--name``), and
 ``predictor_reference_10yr.md`` and ``.json`` (``--long-controllers`` over ``--long-years``).
 """
 
@@ -189,10 +192,11 @@ def main(argv=None) -> int:
     ap.add_argument("--long-years", type=int, default=10)
     ap.add_argument("--segments", default="0,30", help="cycles between re-starts of the reference; 0: never")
     ap.add_argument("--out", type=Path, default=HERE / "results")
+    ap.add_argument("--name", default="predictor_reference", help="results file of the --years runs")
     args = ap.parse_args(argv)
     command = "python studies/longrun/predictor_reference.py " + " ".join(argv or [])
     args.out.mkdir(parents=True, exist_ok=True)
-    for controllers, years, name in ((args.controllers, args.years, "predictor_reference"),
+    for controllers, years, name in ((args.controllers, args.years, args.name),
                                      (args.long_controllers, args.long_years, f"predictor_reference_{args.long_years}yr")):
         if not controllers:
             continue
