@@ -134,8 +134,9 @@ def _parser() -> argparse.ArgumentParser:
                           "(default: gimbal for a lyapunov or zone_nssk scenario, else arms)")
     bnd.add_argument("--acquisition-days", type=float, default=0.0,
                      help="hold the box from this day on (a start the thrusters cannot hold at once; default 0)")
-    bnd.add_argument("--terminal", action="store_true",
-                     help="end where it starts, x(T) = x(0) (Gazzino's periodic condition; default: a free end)")
+    bnd.add_argument("--free-end", action="store_true",
+                     help="no end condition (the free end: the plan may end anywhere in the box); default: periodic, "
+                          "the plan ends where it started, x(T) = x(0) (Gazzino 2016), a steady state's Delta-V")
     bnd.add_argument("--out", help="write /metrics, /rounds and the per-slot /slots to this HDF5 file")
     bnd.set_defaults(func=_bound)
 
@@ -390,7 +391,7 @@ def _bound(args) -> int:
     say(f"{sc.name}: the least Delta-V over {sc.days:g} days within +-{sc.config['station']['box_half_width_deg']:g} deg "
         f"(slots of {args.slot_steps} steps); linearising about the uncontrolled run...", flush=True)
     r = bound(sc, slot_steps=args.slot_steps, thrusters=args.thrusters, acquisition_days=args.acquisition_days,
-              terminal=args.terminal, say=say)
+              free_end=args.free_end, say=say)
     gap = 100 * (r.resim["dv_per_year_mps"] - r.bound_per_year_mps) / r.bound_per_year_mps if r.lower_mps > 0 else 0.0
     say(f"{sc.name} ({r.geometry} thrusters, {r.days:.2f} days, {r.slot_s:.0f} s slots):")
     say(f"  bound                 {r.bound_per_year_mps:10.3f} m/s/yr  (lower bound over every direction the thrusters allow)")
@@ -407,7 +408,7 @@ def _bound(args) -> int:
                    "resim_max_abs_dlon_deg": r.resim["max_abs_dlon_deg"],
                    "resim_max_abs_dlat_deg": r.resim["max_abs_dlat_deg"], "status": r.resim_status,
                    "linear_error_deg": r.linear_error_deg, "max_abs_box_after_acquisition_deg": r.max_abs_box_deg,
-                   "acquisition_days": args.acquisition_days, "terminal": int(args.terminal)}
+                   "acquisition_days": args.acquisition_days, "free_end": int(args.free_end)}
         rounds = {k: np.array([row[k] for row in r.rounds]) for k in r.rounds[0]}
         slots = {"t_s": r.t_s, "dv_r_mps": r.u_rsw_mps[:, 0], "dv_s_mps": r.u_rsw_mps[:, 1],
                  "dv_w_mps": r.u_rsw_mps[:, 2], "dv_thruster_mps": r.thruster_mps,

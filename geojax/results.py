@@ -26,6 +26,8 @@ DIMENSIONLESS = {"ex", "ey", "ix", "iy", "max_abs_de", "max_abs_di", "duty_x", "
                  "constraint_lat", "status"}
 DESCRIPTIONS = {
     "dv_per_year_mps": "delta-V per year of the whole run",
+    "dv_steady_per_year_mps": "delta-V per year in steady state: the mean of the years after the first",
+    **{f"dv_year{k}_mps": f"delta-V of year {k} of the run (366 cycles), per 365.25 days" for k in range(1, 101)},
     "mass_used_kg": "propellant used",
     "max_abs_dlon_deg": "largest |longitude - station| at any step (osculating sub-satellite point)",
     "max_abs_dlat_deg": "largest |latitude| at any step",

@@ -1,6 +1,6 @@
 """Regenerate a paper's tables and figures with one command.
 
-    python studies/reproduce.py li2022 [katz2025 ye2022 ma2023 bounds ablation ...]   # or: all
+    python studies/reproduce.py li2022 [katz2025 ye2022 ma2023 bounds ablation longrun compare ...]   # or: all
     python studies/reproduce.py li2022 --only fig09 fig13         # scripts whose name contains a word
     python studies/reproduce.py all --list                         # the commands, without running them
 
@@ -32,7 +32,10 @@ STUDIES = {
     "ablation": [("ablation/fompc_annealing.py", []), ("ablation/li_predictor_error.py", []),
                  ("ablation/fig13_budget.py", []), ("ablation/katz_longitude.py", [])],
     "ma2023": [("ma2023/transfer.py", [])],
-    "bounds": [("bounds/table.py", []), ("bounds/operational.py", ["--days", "28", "--margin", "0.2"])],
+    "bounds": [("bounds/table.py", []), ("bounds/operational.py", ["--days", "28", "--margin", "0.2"]),
+               ("bounds/periodic.py", [])],
+    "longrun": [("longrun/predictor_reference.py", [])],
+    "compare": [("compare/windows.py", [])],
 }
 
 

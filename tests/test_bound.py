@@ -15,6 +15,7 @@ from geojax.bound import Infeasible, bound, program
 from geojax.bound.directions import arm_direction, arms, fixed4, gimbal
 from geojax.bound.linear import SlotModel, linearize
 from geojax.bound.run import _uncontrolled
+from geojax.control.effects import V_SYNC_MPS
 from geojax.loop.setup import prepare, unstack
 
 V_MPS = 3074.7  # GEO speed: Delta-V per unit inclination change
@@ -126,11 +127,17 @@ def test_the_linear_model_over_one_cycle_against_the_nonlinear_propagation():
     assert errors[0] / errors[1] == pytest.approx(4.0, rel=0.1)
 
 
-def test_bound_holds_the_box_and_never_exceeds_a_controller():
-    # li2022 over 10 days: the re-simulated plan holds the box in the closed loop, its Delta-V is the plan's,
-    # and the QFFC (which also holds the box) flies at least the bound.
+@pytest.fixture(scope="module")
+def ten_days():
+    """li2022-qffc over 10 days and its free-end bound."""
     sc = geojax.load_scenario("li2022-qffc", {"duration.days": 10})
-    result = bound(sc)
+    return sc, bound(sc, free_end=True)
+
+
+def test_bound_holds_the_box_and_never_exceeds_a_controller(ten_days):
+    # li2022 over 10 days: the re-simulated plan holds the box in the closed loop, its Delta-V is the plan's,
+    # and the QFFC (which also holds the box, and need not end where it started) flies at least the free-end bound.
+    sc, result = ten_days
     assert result.resim_status == 0
     assert result.resim["max_abs_dlon_deg"] <= 0.05 and result.resim["max_abs_dlat_deg"] <= 0.05
     assert result.lower_mps <= result.fuel_mps
@@ -143,15 +150,35 @@ def test_bound_holds_the_box_and_never_exceeds_a_controller():
     assert float(qffc.metrics["dv_per_year_mps"]) >= result.bound_per_year_mps
 
 
+def test_periodic_end_returns_to_the_start_and_costs_at_least_the_drift_it_cancels(ten_days):
+    """li2022 over 10 days, periodic (the default) beside the free end.  (1) The flown plan ends where it
+    started: its inclination vector (MEE h, k) within 1 % of the uncontrolled change over the horizon.
+    (2) The free end costs no more: its program is the periodic one less the six end rows (nested programs, a
+    property of the construction; here about two flown trajectories).  (3) Independent arithmetic (README, "The
+    fuel bound"): a periodic plan cancels the uncontrolled change of the inclination vector, Delta(h, k); each
+    out-of-plane m/s moves (h, k) by at most 1 / (2 V) (Gauss, circular orbit), and the arms put at most sin 70 deg
+    of a burn out of plane, so Delta-V >= 2 V |Delta(h, k)| / sin 70 deg."""
+    sc, free = ten_days
+    periodic = bound(sc)
+    uncontrolled = geojax.simulate(_uncontrolled(sc))
+    dhk = np.asarray(uncontrolled.final.orbit[3:5]) - np.asarray(uncontrolled.params.initial.orbit[3:5])
+    miss = periodic.rounds[-1]["terminal_miss"]
+    assert np.hypot(*miss[3:5]) < 0.01 * np.hypot(*dhk)
+    assert free.lower_mps <= periodic.lower_mps
+    floor_mps = 2 * V_SYNC_MPS * np.hypot(*dhk) / np.sin(np.radians(70.0))
+    assert periodic.lower_mps >= 0.99 * floor_mps
+    assert periodic.resim_status == 0
+
+
 def test_bound_of_a_gimballed_feedback_scenario_is_below_the_lyapunov_law():
     sc = geojax.load_scenario("katz2025-constant", {"duration.days": 4})
-    result = bound(sc)
+    result = bound(sc, free_end=True)
     assert result.geometry == "gimbal"
     law = geojax.simulate(sc)
     assert float(law.metrics["dv_per_year_mps"]) >= result.bound_per_year_mps
     assert result.resim_status == 0
     # A free acquisition relaxes the program: its bound can only be lower (by weak duality both are bounds).
-    relaxed = bound(sc, acquisition_days=2.0)
+    relaxed = bound(sc, acquisition_days=2.0, free_end=True)
     assert relaxed.lower_mps <= result.lower_mps * (1 + 1e-6) + 1e-9
     assert relaxed.max_abs_box_deg <= 0.05
     with pytest.raises(ValueError, match="acquisition"):
@@ -159,17 +186,17 @@ def test_bound_of_a_gimballed_feedback_scenario_is_below_the_lyapunov_law():
 
 
 def test_cli_bound_writes_results_and_refuses_an_impossible_box(tmp_path, capsys):
-    # One real process end to end, with Gazzino's x(T) = x(0): the flag reaches the program (recorded), and the
-    # end condition can only cost more than the free end of the same horizon (a program with more rows).
+    # One real process end to end, periodic by default (Gazzino's x(T) = x(0), recorded), and the end condition
+    # can only cost more than the free end of the same horizon (a program with more rows).
     out = tmp_path / "b.h5"
-    run = subprocess.run([sys.executable, "-m", "geojax", "bound", "li2022-qffc", "--days", "2", "--terminal",
+    run = subprocess.run([sys.executable, "-m", "geojax", "bound", "li2022-qffc", "--days", "2",
                           "--out", str(out)], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert "bound" in run.stdout and "re-simulated plan" in run.stdout
     data = geojax.open_results(out)
-    assert float(data["status"]) == 0 and int(data["terminal"]) == 1
+    assert float(data["status"]) == 0 and int(data["free_end"]) == 0
     assert float(data["bound_per_year_mps"]) <= float(data["resim_dv_per_year_mps"]) + 1e-6  # solver tolerance
-    free = bound(geojax.load_scenario("li2022-qffc", {"duration.days": 2}))
+    free = bound(geojax.load_scenario("li2022-qffc", {"duration.days": 2}), free_end=True)
     assert free.lower_mps > 0 and free.bound_per_year_mps < float(data["bound_per_year_mps"])
     # A box of +-0.001 deg: the start itself is outside it; refused in one line, exit 2 (in this process).
     assert cli.main(["scenarios", "--show", "li2022-qffc"]) == 0
@@ -185,10 +212,10 @@ def test_cli_bound_writes_results_and_refuses_an_impossible_box(tmp_path, capsys
 
 def test_gazzino_scenario_takes_its_four_fixed_thrusters_from_the_layout_key():
     # The scenario names its layout (thrusters.layout = "fixed4"): four thrusters, the flown plan holds the box,
-    # the bound (full box) is below the plan (flown within the box less its 1e-3 margin).  Second method for the
+    # the bound (full box, free end: about the same trajectory as the plan) is below the plan (flown within the box less its 1e-3 margin).  Second method for the
     # fuel: the plan's per-thruster Delta-Vs add up to it.
     sc = geojax.load_scenario("gazzino2016", {"duration.days": 10})
-    result = bound(sc)
+    result = bound(sc, free_end=True)
     assert result.geometry == "fixed4" and result.thruster_mps.shape[1] == 4
     assert 0 < result.lower_mps <= result.fuel_mps
     assert np.sum(result.thruster_mps) == pytest.approx(result.fuel_mps, rel=1e-9)

@@ -10,7 +10,7 @@ import pytest
 from geojax.physics import constants as c
 from geojax import scenario
 from geojax.control import none
-from geojax.loop.setup import params_of, reference
+from geojax.loop.setup import params_of, uncontrolled_boundaries
 from geojax.physics.propagate import MEE
 from geojax.control import fompc
 from geojax.physics.propagate import environment_grid, steps_per_cycle
@@ -28,8 +28,8 @@ def windows():
     n = steps_per_cycle(sc.step_s)
     h = c.SIDEREAL_DAY_S / n
     env = environment_grid(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s, h, ANNEALING.n_max + 2, n)
-    ref = jax.jit(lambda p, e: reference(p, e, h, MEE))(params_of(sc, none.CONTROLLER), env)
-    return ref.mean, n * h
+    _, mean = jax.jit(lambda p, e: uncontrolled_boundaries(p, e, h, MEE))(params_of(sc, none.CONTROLLER), env)
+    return mean, n * h
 
 
 def start_states(n, seed=0):

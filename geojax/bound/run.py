@@ -13,9 +13,13 @@
 
 The bound is the least fuel of any thrust history that is constant in RSW over each slot (``slot_steps``
 integration steps; 1 h by default) with the same thrusters (directions, F, one at a time, not in shadow where
-the geometry says so), the same box at every step start, from the same initial state, with no terminal
-condition (``terminal=True``: Gazzino's x(T) = x(0), the orbit state at the horizon's end equal to the initial
-one, its true longitude one turn per sidereal cycle on; a periodic plan).  ``lower_mps`` is rigorous for that
+the geometry says so), the same box at every step start, from the same initial state, ending where it started:
+Gazzino 2016's x(T) = x(0) (Problem 3), the orbit state at the horizon's end equal to the initial one, its true
+longitude one turn per sidereal cycle on -- a periodic plan, one that can be flown again the next period, so
+its Delta-V per year is a steady state's.  ``free_end=True`` drops that condition (the free end): the plan
+may end anywhere in the box and keep the difference, so over a short horizon it spends less than a steady
+state can (its program is the periodic one less six equality rows, so its optimum about the same
+trajectory is never above the periodic one's).  ``lower_mps`` is rigorous for that
 problem's linear model (weak duality, ``bound.program``); how it moves with the slot length is measured
 (``studies/bounds``), not assumed.
 """
@@ -71,7 +75,7 @@ class BoundResult(NamedTuple):
 
 
 def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, acquisition_days: float = 0.0,
-          iterations: int = 4, rounds: int = 8, rtol: float = 1e-3, terminal: bool = False,
+          iterations: int = 4, rounds: int = 8, rtol: float = 1e-3, free_end: bool = False,
           say: Callable = lambda *a, **k: None) -> BoundResult:
     """The fuel bound of scenario ``sc`` over its duration (see the module docstring).
 
@@ -81,9 +85,9 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
     as Katz 2025's 2 km offset; the closed loop's status still counts the acquisition);
     ``iterations`` linearisation rounds at most; ``rounds`` column-generation rounds per program;
     ``rtol`` the relative gap between the plan and the lower bound at which column generation stops;
-    ``terminal``: the plan ends where it started (Gazzino's x(T) = 0: the MEE p, f, g, h, k at the end equal
+    by default the plan ends where it started (Gazzino's x(T) = x(0): the MEE p, f, g, h, k at the end equal
     the initial ones and L the initial one plus the Earth's rotation over the horizon; each round's
-    ``terminal_miss`` is the flown end state less that target, SI); off by default.
+    ``terminal_miss`` is the flown end state less that target, SI); ``free_end``: no end condition.
     Raises ``ValueError`` (``program.Infeasible``) when the box cannot be held.
     """
     start = time.perf_counter()
@@ -129,7 +133,7 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
     target[5] += 2 * np.pi * n_cycles + float(np.angle(np.exp(1j * (angle[-1, -1, -1] - angle[0, 0, 0]))))
 
     def terminal_dx(model, horizon):
-        return target - model.x[horizon] if terminal and horizon == n_slots else None
+        return target - model.x[horizon] if not free_end and horizon == n_slots else None
 
     def linearisations(horizon, u, model, solution, prox):
         """Sequential linearisation of the program over the first ``horizon`` slots (the rest coasts)."""
@@ -147,7 +151,7 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
             history.append({"fuel_mps": solution.fuel_mps, "max_abs_box_deg": worst, "prox": prox, "slots": horizon,
                             "columns": int(sum(len(g) for g in solution.generators)), "solve_s": solution.solve_s,
                             "linear_error_deg": float(np.degrees(np.max(np.abs(predicted - model.y[:horizon])))),
-                            **({"terminal_miss": model.x[n_slots] - target} if terminal else {})})
+                            **({} if free_end else {"terminal_miss": model.x[n_slots] - target})})
             say(f"  linearisation {len(history)} ({horizon * slot_s / 86400:.0f} days): plan {solution.fuel_mps:.4f} m/s; "
                 f"flown, max |box| {worst:.5f} deg of {np.degrees(box):g}, {history[-1]['linear_error_deg']:.1e} deg "
                 f"from the linear model ({solution.solve_s:.1f} s)", flush=True)

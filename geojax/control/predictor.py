@@ -1,9 +1,9 @@
 """State predictor (Li 2022, Sec. 4.1, eqs. (24)-(27)) and the mean-element estimate it starts from.
 
-One uncontrolled propagation from the initial state (``geojax.loop.reference``:
-the closed loop with the null controller), done once per scenario and shared
-by a batch, gives at every cycle boundary the osculating elements
-and the mean elements (eq. (9)).  From it:
+Uncontrolled propagations (``geojax.loop.setup.reference``: the closed loop
+with the null controller), done once per scenario and shared by a batch, give
+at every cycle boundary the osculating elements and the mean elements
+(eq. (9)).  From them:
 
 * the natural drift of the mean elements over a cycle, Delta x_d (eq. (26)),
   is the change of the reference's boundary means;
@@ -13,6 +13,15 @@ and the mean elements (eq. (9)).  From it:
   come from the Sun, Moon, J2 and SRP and hardly depend on the small
   differences between the controlled orbit and the reference, as long as the
   eccentricity term is taken out of the longitude first (``boundary_elements``).
+
+Both hold only while the reference stays near the controlled orbit.  One
+uncontrolled run from the initial state does not: its inclination grows by
+~0.9 deg a year, and the lunisolar and J2 precession of a 2-3 deg orbit turns
+the inclination drift by ~4 deg/yr x i, so the drift it predicts in a run's
+third year is no longer the controlled satellite's.  The reference is therefore
+re-started from the station's nominal state (``station_mee``) every
+``loop.setup.REFERENCE_SEGMENT_CYCLES`` cycles; each cycle reads the segment it
+falls in (``Reference``).
 
 Boundary means are the average of the two cycle means around a boundary
 (the cycle means refer to mid-cycle times).
@@ -28,10 +37,21 @@ from geojax.physics.elements import semi_major_axis_m, wrap_angle
 
 
 class Reference(NamedTuple):
-    """Uncontrolled reference at cycle boundaries, leading axis = boundary."""
+    """What the predictor reads at each control cycle k (leading axis = cycle): the uncontrolled reference
+    segment that cycle k falls in, at boundary k and the ``width - 1`` boundaries after it."""
 
-    osc: jnp.ndarray  # [n, 6] osculating (lon, a, f, g, h, k), lon as in ``boundary_elements``
-    mean: jnp.ndarray  # [n, 7] mean (lon, drift rad/s, a, f, g, h, k)
+    osc: jnp.ndarray  # [n_cycles, 6] osculating (lon, a, f, g, h, k) at boundary k, lon as in ``boundary_elements``
+    window: jnp.ndarray  # [n_cycles, width, 7] mean (lon, drift rad/s, a, f, g, h, k) at boundaries k .. k + width - 1
+
+
+def station_mee(station: dict, p_m, earth_angle_rad):
+    """Osculating MEE [6] (p m, f, g, h, k, L rad) of the station's nominal orbit at an Earth angle: the
+    targets' e and i vectors (MEE (f, g), (h, k)), semi-latus rectum ``p_m``, and the mean longitude at the
+    station's longitude (``boundary_elements``' l = L - 2 f sin L + 2 g cos L inverted to first order in e)."""
+    mean_lon = station["lon_rad"] + earth_angle_rad
+    f, g = station["ex"], station["ey"]
+    true_lon = mean_lon + 2 * f * jnp.sin(mean_lon) - 2 * g * jnp.cos(mean_lon)
+    return jnp.stack([p_m, f, g, station["ix"], station["iy"], true_lon])
 
 
 def boundary_elements(mee, earth_angle_rad):

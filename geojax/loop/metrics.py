@@ -17,6 +17,13 @@ acquisition included (Katz 2025 eq. (10)); a sample with status 4 gets
 finite placeholders (0) for its non-finite metrics, so no NaN reaches a
 neighbour's statistics.  Burn metrics (Li 2022 eqs. (45)-(46)) are added
 for the planners, whose records carry ``control.burns`` records.
+
+Runs of a year or more also get the Delta-V of each whole year (``dv_year<k>_mps``,
+``YEAR_CYCLES`` cycles each, scaled to 365.25 days like ``dv_per_year_mps``),
+and runs of two years or more the steady-state figure ``dv_steady_per_year_mps``:
+the mean of the years after the first, whose acquisition and start it leaves
+out.  Compare them only between runs over the same calendar years: the lunar
+node's 18.6-year cycle moves the yearly Delta-V by several per cent.
 """
 
 from __future__ import annotations
@@ -25,11 +32,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.physics.constants import SECONDS_PER_DAY
+from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.elements import wrap_angle
 from geojax.params import station_target
 
 SECONDS_PER_YEAR = 365.25 * SECONDS_PER_DAY
+YEAR_CYCLES = round(SECONDS_PER_YEAR / SIDEREAL_DAY_S)  # 366 sidereal-day cycles: the cycles of a one-year run
 STATUS_OK, STATUS_NO_SOLUTION, STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE, STATUS_NO_PROPELLANT = range(6)
 STATUS_MEANINGS = ("ok", "cycles without a solution", "left the longitude box", "left the latitude box",
                    "non-finite or non-physical state", "propellant exhausted")
@@ -68,6 +76,7 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int) -> di
         "duty_x": duty[0], "duty_y": duty[1], "duty_z": duty[2],
         "cycles_without_solution": jnp.sum(~solved).astype(float),
     }
+    out.update(yearly_dv(cycles.dv_mps, cycle_s))
     if "fired_s" in cycles.controller:
         out.update(burn_metrics(cycles.controller, n_cycles))
     finite = jnp.all(jnp.isfinite(final.orbit)) & (final.mass_kg > 0)
@@ -82,6 +91,19 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int) -> di
                                                      STATUS_OK)))))
     out = {k: jnp.where(jnp.isfinite(v), v, 0.0) for k, v in out.items()}
     return {**out, "status": status.astype(jnp.int8)}
+
+
+def yearly_dv(dv_mps, cycle_s: float) -> dict:
+    """The Delta-V of each whole year of ``YEAR_CYCLES`` cycles (``dv_mps`` [n_cycles] per cycle), per 365.25
+    days: ``dv_year1_mps`` ...; with two years or more, ``dv_steady_per_year_mps``, the mean of the years after
+    the first.  None for a run shorter than a year."""
+    n_years = dv_mps.shape[0] // YEAR_CYCLES
+    years = jnp.sum(dv_mps[:n_years * YEAR_CYCLES].reshape(n_years, YEAR_CYCLES), axis=1)
+    years = years * SECONDS_PER_YEAR / (YEAR_CYCLES * cycle_s)
+    out = {f"dv_year{k + 1}_mps": years[k] for k in range(n_years)}
+    if n_years >= 2:
+        out["dv_steady_per_year_mps"] = jnp.mean(years[1:])
+    return out
 
 
 def burn_metrics(rec: dict, n_cycles: int) -> dict:

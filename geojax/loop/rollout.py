@@ -20,10 +20,11 @@ from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.control.base import Controller
 from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
-from geojax.loop.setup import Batch, prepare, reference, unstack
+from geojax.control import none
+from geojax.loop.setup import Batch, prepare, reference, uncontrolled_boundaries, unstack
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
-from geojax.physics.propagate import Dynamics, for_lanes
+from geojax.physics.propagate import Dynamics, environment_grid, for_lanes, steps_per_cycle
 from geojax.scenario import Scenario
 
 
@@ -53,12 +54,13 @@ def rollout(params: Params, key, shared: Shared, reference_env=None, *, controll
             dynamics: Dynamics, keep_steps: bool = False):
     """One sample's closed loop and its metrics: ``(final state, records, metrics)``; pure, vmappable.
 
-    ``reference_env`` (an environment grid) makes the sample run its own uncontrolled reference
-    (``loop.setup.reference``) instead of ``shared.reference``; ``controller``, ``step_s``,
+    ``reference_env`` (the reference's ``loop.setup.Segments``) makes the sample run its own uncontrolled
+    reference (``loop.setup.reference``) instead of ``shared.reference``; ``controller``, ``step_s``,
     ``dynamics`` and ``keep_steps`` are static.
     """
     if reference_env is not None:
-        shared = shared._replace(reference=reference(params, reference_env, step_s, dynamics))
+        shared = shared._replace(reference=reference(params, reference_env, step_s, dynamics,
+                                                     controller.reference_cycles))
     final, records = closed_loop(controller, params, shared, key, step_s=step_s, dynamics=dynamics,
                                  keep_steps=keep_steps)
     return final, records, summarize(params, final, records, step_s, shared.env.earth_angle_rad.shape[1])
@@ -158,12 +160,18 @@ def prepare_params(scenario: Scenario, n: int, controller: Controller | None = N
     return jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (n, *jnp.shape(x))), params)
 
 
+_uncontrolled_jit = jax.jit(uncontrolled_boundaries, static_argnames=("step_s", "dynamics"))
+
 
 def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]:
-    """The uncontrolled reference's mean elements at the first ``n_cycles + 1`` cycle boundaries (``/reference``:
-    t_s, lon_deg, ex, ey, ix, iy) and the station's targets (``/target``), for figures beside a closed loop."""
-    batch = prepare([scenario], reference_pad=1)
-    ref = np.asarray(batch.shared.reference.mean)[: n_cycles + 1]
+    """The uncontrolled run from the initial state (not re-started: the path the satellite would take without
+    control), its mean elements at the first ``n_cycles + 1`` cycle boundaries (``/reference``: t_s, lon_deg, ex,
+    ey, ix, iy), and the station's targets (``/target``), for figures beside a closed loop."""
+    batch = prepare([scenario], none.CONTROLLER)
+    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, batch.step_s,
+                           n_cycles + 1, steps_per_cycle(scenario.step_s))
+    _, ref = _uncontrolled_jit(unstack(batch.params, 0), env, step_s=batch.step_s, dynamics=batch.dynamics)
+    ref = np.asarray(ref)
     uncontrolled = {"t_s": np.arange(len(ref)) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
                     "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}
     station = scenario.config["station"]

@@ -7,9 +7,11 @@ static settings) is the same for all of them, builds each scenario's
 ``Params`` and stacks them, and computes what the batch shares once: the
 environment grid (Sun, Moon, Earth angle at every RK4 stage) and, for a
 controller that reads it, the uncontrolled reference (the same loop with the
-null controller, ``reference``).  When the scenarios differ in what the
-reference depends on (initial state, mass, force model), each sample runs its
-own reference inside the batch (``Batch.reference_per_sample``).
+null controller, ``reference``), in segments re-started from the station
+every ``REFERENCE_SEGMENT_CYCLES`` cycles (``control.predictor`` says why).
+When the scenarios differ in what the reference depends on (initial state,
+mass, force model), each sample runs its own reference inside the batch
+(``Batch.reference_per_sample``).
 """
 
 from __future__ import annotations
@@ -23,14 +25,31 @@ import numpy as np
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.control import lookup, none
 from geojax.control.base import Controller
-from geojax.control.predictor import Reference
+from geojax.control.predictor import Reference, station_mee
 from geojax.physics.dynamics import SpacecraftState
 from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, wrap_angle
+from geojax.physics.forces import Environment
 from geojax.physics.frames import ecef_to_eci
 from geojax.loop.simulate import Shared, simulate
 from geojax.params import LEAF_TABLES, Params, static_settings, table_leaves
 from geojax.physics.propagate import DYNAMICS, Dynamics, environment_grid, steps_per_cycle
 from geojax.scenario import SCHEMA, Scenario, controller_fields
+
+
+# Cycles between re-starts of the predictor's reference from the station's nominal state (``control.predictor``).
+# Measured (studies/longrun/results/predictor_reference.md, segment_length.md): never re-started, the third year
+# of a QFFC run from 2020 costs 6.8 % more than the same year flown fresh (FOMPC 7.9 %); re-started every 30
+# cycles, within 0.1 %, and the reference's inclination stays within 0.1 deg of the station's.  Shorter segments
+# change nothing measurable; a year-long one leaves the within-year drift (2022 flown fresh costs 3 % more).
+REFERENCE_SEGMENT_CYCLES = 30
+
+
+class Segments(NamedTuple):
+    """Where the uncontrolled reference runs (leading axis = segment), and where each control cycle reads it."""
+
+    env: Environment  # leaves [n_segments, segment_cycles + width - 1, n_steps, 3, ...]: each segment's cycles
+    segment: jnp.ndarray  # [n_cycles] int, the segment cycle k reads
+    offset: jnp.ndarray  # [n_cycles] int, cycle k's start boundary within that segment
 
 
 class Batch(NamedTuple):
@@ -42,7 +61,7 @@ class Batch(NamedTuple):
     step_s: float  # the step actually used: a whole number of steps per sidereal day
     dynamics: Dynamics
     n_cycles: int
-    reference_env: object  # Environment of the reference run ([n_cycles + reference_cycles - 1] cycles), or None
+    reference_env: Segments | None  # where the reference runs; None for a controller that reads none
     reference_per_sample: bool  # each sample runs its own reference (its initial state or forces differ)
 
 
@@ -72,10 +91,11 @@ def controller_of(scenarios: list[Scenario]) -> Controller:
     return lookup(kinds.pop()).make([sc.config["controller"] for sc in scenarios])
 
 
-def prepare(scenarios: list[Scenario], controller: Controller | None = None, reference_pad: int = 0) -> Batch:
+def prepare(scenarios: list[Scenario], controller: Controller | None = None,
+            segment_cycles: int = REFERENCE_SEGMENT_CYCLES) -> Batch:
     """The ``Batch`` of ``scenarios`` (``controller``: a user's, else the registered one of their kind).
 
-    ``reference_pad`` extra reference cycles (a caller that reads the reference beyond the run).
+    ``segment_cycles``: cycles between re-starts of the predictor's reference (``REFERENCE_SEGMENT_CYCLES``).
     """
     controller = controller_of(scenarios) if controller is None else controller
     first = scenarios[0]
@@ -87,16 +107,34 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None, ref
     params = [params_of(sc, controller) for sc in scenarios]
     stacked = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *params)
     width = controller.reference_cycles
-    n_env = n_cycles + max(width - 1, 0) + reference_pad
+    segment_cycles = min(segment_cycles, n_cycles)
+    n_segments = -(-n_cycles // segment_cycles)
+    n_env = max(n_cycles, n_segments * segment_cycles + width - 1) if width else n_cycles
     env = environment_grid(first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s, step_s, n_env, n_steps)
     cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
-    per_sample = width > 0 and not all(_same((p.initial, p.forces), (params[0].initial, params[0].forces))
-                                       for p in params[1:])
+    per_sample = width > 0 and not all(_same(_reference_inputs(p), _reference_inputs(params[0])) for p in params[1:])
+    segments = reference_segments(env, n_cycles, width, segment_cycles) if width else None
     ref = None
     if width and not per_sample:
-        ref = _reference_jit(params[0], env, step_s=step_s, dynamics=dynamics)
-    return Batch(controller, stacked, Shared(cycles_env, ref), step_s, dynamics, n_cycles,
-                 env if width else None, per_sample)
+        ref = _reference_jit(params[0], segments, step_s=step_s, dynamics=dynamics, width=width)
+    return Batch(controller, stacked, Shared(cycles_env, ref), step_s, dynamics, n_cycles, segments, per_sample)
+
+
+def reference_segments(env, n_cycles: int, width: int, segment_cycles: int) -> Segments:
+    """The reference's segments over an environment grid ``env`` (leaves [n_env, ...], n_env at least
+    ceil(n_cycles / segment_cycles) x segment_cycles + width - 1): segment s starts at cycle s x segment_cycles
+    and runs segment_cycles + width - 1 cycles, so that its last cycle's controller reads ``width`` boundaries
+    of it."""
+    cycle = np.arange(n_cycles)
+    starts = np.arange(0, n_cycles, segment_cycles)
+    index = starts[:, None] + np.arange(segment_cycles + width - 1)[None, :]
+    return Segments(jax.tree_util.tree_map(lambda x: x[index], env), jnp.asarray(cycle // segment_cycles),
+                    jnp.asarray(cycle % segment_cycles))
+
+
+def _reference_inputs(params: Params):
+    """What the reference depends on: the initial state, the forces, the station's nominal orbit."""
+    return params.initial, params.forces, [params.station[k] for k in ("lon_rad", "ex", "ey", "ix", "iy")]
 
 
 def _same(a, b) -> bool:
@@ -121,9 +159,25 @@ def _check_static(scenarios: list[Scenario], controller: Controller) -> None:
             raise ValueError(f"controller.{key}: sets the compiled controller; one value per batch")
 
 
-def reference(params: Params, env, step_s: float, dynamics: Dynamics) -> Reference:
-    """The uncontrolled reference (Li 2022 eqs. (24)-(27)) of one sample over the cycles of ``env``:
-    the closed loop with the null controller; elements at each cycle boundary but the last."""
+def reference(params: Params, segments: Segments, step_s: float, dynamics: Dynamics, width: int) -> Reference:
+    """The predictor's reference (Li 2022 eqs. (24)-(27)) of one sample: what each cycle reads of the
+    uncontrolled ``segments``, the first started from the sample's initial state, each later one from the
+    station's nominal state at its start (``predictor.station_mee``, the initial state's semi-latus rectum)."""
+    mu = params.forces.mu_m3_s2
+    p_m = dynamics.to_mee(params.initial.orbit, mu)[0]
+    start_angle_rad = segments.env.earth_angle_rad[:, 0, 0, 0]
+    anchors = jax.vmap(lambda angle: dynamics.from_mee(station_mee(params.station, p_m, angle), mu))(start_angle_rad)
+    orbits = anchors.at[0].set(params.initial.orbit)
+    osc, mean = jax.vmap(lambda orbit, env: uncontrolled_boundaries(
+        params._replace(initial=params.initial._replace(orbit=orbit)), env, step_s, dynamics))(orbits, segments.env)
+    s, j = segments.segment, segments.offset
+    return Reference(osc[s, j], mean[s[:, None], j[:, None] + jnp.arange(width)[None, :]])
+
+
+def uncontrolled_boundaries(params: Params, env, step_s: float, dynamics: Dynamics):
+    """One uncontrolled run of a sample over the cycles of ``env`` (the closed loop with the null controller):
+    at each cycle boundary but the last, the osculating (lon, a, f, g, h, k) [n, 6]
+    (``predictor.boundary_elements``) and the mean (lon, drift, a, f, g, h, k) [n, 7]."""
     _, records = simulate(none.CONTROLLER, params, Shared(env, None), jax.random.key(0), step_s=step_s,
                           dynamics=dynamics)
     m = records.cycles.means
@@ -132,10 +186,10 @@ def reference(params: Params, env, step_s: float, dynamics: Dynamics) -> Referen
     # Boundary means: the average of the two cycle means around a boundary (extrapolated at the first).
     first = 1.5 * mid[0] - 0.5 * mid[1]
     boundary = jnp.concatenate([first[None], 0.5 * (mid[:-1] + mid[1:])], 0)
-    return Reference(records.cycles.boundary, boundary.at[:, 0].set(wrap_angle(boundary[:, 0])))
+    return records.cycles.boundary, boundary.at[:, 0].set(wrap_angle(boundary[:, 0]))
 
 
-_reference_jit = jax.jit(reference, static_argnames=("step_s", "dynamics"))
+_reference_jit = jax.jit(reference, static_argnames=("step_s", "dynamics", "width"))
 
 
 def disperse(params: Params, key, sigma_mee, sigma_offset_ecef_m, earth_angle_rad, dynamics: Dynamics) -> Params:

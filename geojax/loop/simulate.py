@@ -109,7 +109,7 @@ class Shared(NamedTuple):
     """Arrays every sample of a batch shares (computed once per scenario)."""
 
     env: Environment  # leaves [n_cycles, n_steps, 3, ...]
-    reference: Reference | None  # at n_cycles + reference_cycles - 1 boundaries or more; None if unused
+    reference: Reference | None  # for n_cycles or more, reference_cycles boundaries or more; None if unused
 
 
 def simulate(controller: Controller, params: Params, shared: Shared, key, *, step_s: float,
@@ -126,11 +126,11 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
     mu = fm.mu_m3_s2
     width = controller.reference_cycles
     if width:
-        if shared.reference is None or shared.reference.mean.shape[0] < n_cycles + width - 1:
-            have = 0 if shared.reference is None else shared.reference.mean.shape[0]
-            raise ValueError(f"reference: the controller reads {width} boundaries per cycle, so {n_cycles} cycles "
-                             f"need {n_cycles + width - 1}, got {have}")
-        windows = shared.reference.mean[jnp.arange(n_cycles)[:, None] + jnp.arange(width)[None, :]]
+        have = (0, 0) if shared.reference is None else shared.reference.window.shape[:2]
+        if have[0] < n_cycles or have[1] < width:
+            raise ValueError(f"reference: the controller reads {width} boundaries per cycle for {n_cycles} cycles, "
+                             f"got {have[1]} for {have[0]}")
+        windows = shared.reference.window[:n_cycles, :width]
         osc_ref = shared.reference.osc[:n_cycles]
     else:
         windows, osc_ref = jnp.zeros((n_cycles, 0, 7)), jnp.zeros((n_cycles, 6))

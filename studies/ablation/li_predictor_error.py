@@ -29,6 +29,7 @@ of longitude (deg), drift (deg/day), eccentricity vector and inclination vector 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 from pathlib import Path
 
@@ -41,7 +42,7 @@ from geojax import plots
 from geojax.control import qffc
 from geojax.control.effects import V_SYNC_MPS, remaining_fraction
 from geojax.control.predictor import estimate_mean, predict_next
-from geojax.loop.setup import prepare
+from geojax.loop.setup import controller_of, prepare
 from geojax.physics.elements import wrap_angle
 
 HERE = Path(__file__).resolve().parent
@@ -72,13 +73,14 @@ def predictor_errors(controller: str, days: float, horizon: int) -> dict:
     sc = geojax.load_scenario(f"li2022-{controller}", {"duration.days": days, "errors.h_rv": 0.0, "errors.h_att": 0.0})
     result = geojax.simulate(sc)
     cycles = result.records.cycles
-    batch = prepare([sc])
+    # the reference as the controller reads it, each cycle's window widened to the horizon
+    batch = prepare([sc], dataclasses.replace(controller_of([sc]), reference_cycles=horizon + 1))
     ref = batch.shared.reference
     mu = float(result.params.forces.mu_m3_s2)
     cycle_s = batch.step_s * batch.shared.env.earth_angle_rad.shape[1]
     n = cycles.boundary.shape[0]
-    ref_osc, ref_mean = np.asarray(ref.osc), jnp.asarray(ref.mean)
-    truth = np.asarray(jax.vmap(estimate_mean, (0, 0, 0, None))(cycles.boundary, ref_osc[:n], ref_mean[:n], mu))
+    ref_osc, ref_window = np.asarray(ref.osc), jnp.asarray(ref.window)
+    truth = np.asarray(jax.vmap(estimate_mean, (0, 0, 0, None))(cycles.boundary, ref_osc[:n], ref_window[:n, 0], mu))
     l_start = true_l_start(cycles.boundary, np.asarray(batch.shared.env.earth_angle_rad[:n, 0, 0]))
     burns = delivered_burns(cycles)
     kicks = jax.vmap(qffc.effect)(burns, l_start)  # [n, 6]
@@ -93,7 +95,7 @@ def predictor_errors(controller: str, days: float, horizon: int) -> dict:
             """x_{k0+N} predicted from x = x_{k0}, N = 1 .. horizon."""
             def one(x, j):
                 k = k0 + j
-                x_next = predict_next(x, ref_mean[k], ref_mean[k + 1], cycle_s)
+                x_next = predict_next(x, ref_window[k0, j], ref_window[k0, j + 1], cycle_s)
                 if printed:  # eq. (27): the drift of the cycle before, no change over the cycle
                     x_next = x_next.at[0].set(x[0] + cycle_s * x[1])
                 x = x_next + kicks[k]

@@ -10,7 +10,7 @@ the paper's two equivalence schemes (``geojax.bound.operational``), each flown i
 3. Fuel-based (Problem 6) and effect-based (Problem 7) pulses under (i)-(iv), flown by ``bound.replay``.
 Writes ``operational.md`` (the table) and ``operational.png`` (longitude, latitude and the pulses).
 
-``--terminal``: the relaxed plans with Gazzino's terminal condition x(T) = x(0) (``bound(..., terminal=True)``),
+``--terminal``: the relaxed plans with Gazzino's terminal condition x(T) = x(0) (``bound``'s default),
 at each of ``--days``; the schemes as above plus Problem 7 as the paper writes it (``operational.effect_matched``:
 the durations match the relaxed plan's effect on the end state, no box), with both tie-breaks.  Writes
 ``operational-terminal.md`` and ``operational-terminal.png`` (the longest horizon).
@@ -66,8 +66,8 @@ def run(days: float, margin: float, constraints=op.Constraints(), say=print) -> 
     geometry = geometry_of(sc.config)
     directions = np.concatenate(geometry.generators)
     accel_mps2 = float(sc.config["thrusters"]["thrust_n"]) / float(sc.config["spacecraft"]["mass_kg"])
-    optimum = bound(sc, slot_steps=1)
-    relaxed = bound(shrunk, slot_steps=1)
+    optimum = bound(sc, slot_steps=1, free_end=True)
+    relaxed = bound(shrunk, slot_steps=1, free_end=True)
     step_s = relaxed.slot_s
     n_steps = len(relaxed.u_rsw_mps)
     horizon_s = n_steps * step_s
@@ -112,9 +112,9 @@ def run_terminal(days: float, margin: float, constraints=op.Constraints(), say=p
     shrunk = geojax.load_scenario(SCENARIO, {"duration.days": days, "station.box_half_width_deg": box_deg * (1 - margin)})
     directions = np.concatenate(geometry_of(sc.config).generators)
     accel_mps2 = float(sc.config["thrusters"]["thrust_n"]) / float(sc.config["spacecraft"]["mass_kg"])
-    free = bound(sc, slot_steps=1)
-    optimum = bound(sc, slot_steps=1, terminal=True)
-    relaxed = bound(shrunk, slot_steps=1, terminal=True)
+    free = bound(sc, slot_steps=1, free_end=True)
+    optimum = bound(sc, slot_steps=1)
+    relaxed = bound(shrunk, slot_steps=1)
     step_s, n_steps = relaxed.slot_s, len(relaxed.u_rsw_mps)
     horizon_s = n_steps * step_s
     miss = {name: r.rounds[-1]["terminal_miss"] for name, r in (("optimum", optimum), ("relaxed", relaxed))}

@@ -58,7 +58,8 @@ def run_case(name: str, days: float, rows: dict | None = None, only: list | None
         return {**rows, **_controllers([s for s in case["scenarios"] if s in only], overrides)}
     start = time.perf_counter()
     acquisition = case.get("acquisition_days", 0.0)
-    b = bound(geojax.load_scenario(case["scenarios"][0], overrides), acquisition_days=acquisition, say=print)
+    b = bound(geojax.load_scenario(case["scenarios"][0], overrides), acquisition_days=acquisition, free_end=True,
+              say=print)
     per_cycle = b.thruster_mps.sum(axis=1).reshape(-1, int(round(SIDEREAL_DAY_S / b.slot_s))).sum(axis=1)
     rows = {"bound": {"dv_per_year_mps": b.bound_per_year_mps, "plan_per_year_mps": b.plan_per_year_mps,
                       "resim_per_year_mps": b.resim["dv_per_year_mps"], "status": b.resim_status,
