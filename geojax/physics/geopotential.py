@@ -249,3 +249,14 @@ def geopotential_acceleration(r_eci, earth_angle_rad, mu, r_earth_m, field: Geop
     ax, ay, az = geopotential_xyz(r_eci[..., 0], r_eci[..., 1], r_eci[..., 2], jnp.cos(angle), jnp.sin(angle),
                                   mu, r_earth_m, field)
     return jnp.stack(jnp.broadcast_arrays(ax, ay, az), -1)
+
+
+def longitude_acceleration_rad_s2(lon_rad, radius_m, mu, r_earth_m, field: Geopotential):
+    """d^2(lambda)/dt^2 of a circular equatorial orbit of ``radius_m`` at Earth-fixed longitude ``lon_rad`` from
+    the field alone: -3 a_east / radius (with da/dt = 2 a_T / n and d(lambda)/dt = n - omega_E, d^2(lambda)/dt^2
+    = -3/2 n/a da/dt; e.g. Soop, *Handbook of Geostationary Orbits* (1994), Sec. 3.4).  Its zeros are the
+    equilibrium longitudes: stable where it decreases through zero."""
+    lon = jnp.asarray(lon_rad)
+    cos_lon, sin_lon = jnp.cos(lon), jnp.sin(lon)
+    ax, ay, _ = geopotential_ecef_xyz(radius_m * cos_lon, radius_m * sin_lon, jnp.zeros_like(lon), mu, r_earth_m, field)
+    return -3.0 * (-sin_lon * ax + cos_lon * ay) / radius_m
