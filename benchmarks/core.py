@@ -45,6 +45,11 @@ DEFAULT_BASELINES = ("1c1acb7",  # main before the fused step: issue 13's baseli
 
 def measure_engine(batches, n_cycles: int, loop_days: float) -> dict:
     """This process's geojax: the step (uncontrolled, via the one loop) and the closed loop."""
+    return {"step": _step_rows({"forces.c22_s22": True}, batches, n_cycles), "loop": _closed_loop(loop_days) if loop_days else {}}
+
+
+def _step_rows(overrides: dict, batches, n_cycles: int) -> dict:
+    """The uncontrolled step of li2022 with ``overrides``, per batch: ``_timed_step``'s row."""
     import jax
     import jax.numpy as jnp
 
@@ -55,7 +60,7 @@ def measure_engine(batches, n_cycles: int, loop_days: float) -> dict:
     from geojax.physics.dynamics import SpacecraftState
     from geojax.physics.propagate import MEE, environment_grid, steps_per_cycle
 
-    sc = scenario.load("li2022", {"forces.c22_s22": True})
+    sc = scenario.load("li2022", overrides)
     n_steps = steps_per_cycle(sc.step_s)
     step_s = SIDEREAL_DAY_S / n_steps
     env = environment_grid(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s, step_s, n_cycles, n_steps)
@@ -72,7 +77,17 @@ def measure_engine(batches, n_cycles: int, loop_days: float) -> dict:
         run = jax.jit(jax.vmap(lambda m, kg, d=dynamics: propagate(d, SpacecraftState(m, kg, jnp.asarray(0.0)), env,
                                                                   fm, step_s)[0].orbit))
         rows[batch] = _timed_step(run, (mee, mass), batch, n_cycles * n_steps, step_s)
-    return {"step": rows, "loop": _closed_loop(loop_days) if loop_days else {}}
+    return rows
+
+
+# The Earth's field (``physics.geopotential``) in the li2022 step, beside the papers' J2 + C22/S22.
+FIELD_MODELS = {"J2 + C22/S22": {"forces.c22_s22": True}, "EGM2008 2x2": {"forces.gravity_degree": 2},
+                "EGM2008 8x8": {"forces.gravity_degree": 8}, "EGM2008 20x20": {"forces.gravity_degree": 20}}
+
+
+def measure_field(batches, n_cycles: int) -> dict:
+    """The step with each force model of ``FIELD_MODELS`` (``--field``)."""
+    return {"step": {name: _step_rows(overrides, batches, n_cycles) for name, overrides in FIELD_MODELS.items()}}
 
 
 def _timed_step(fn, args, batch: int, n_steps_total: int, step_s: float) -> dict:
@@ -274,8 +289,13 @@ def main() -> None:
     parser.add_argument("--loop-days", type=float, default=20.0, help="days of the closed-loop measurement")
     parser.add_argument("--rounds", type=int, default=2, help="alternating rounds of the step measurement")
     parser.add_argument("--out", type=Path, default=RESULTS)
+    parser.add_argument("--field", action="store_true",
+                        help="only the Earth's field: J2 + C22/S22, EGM2008 2x2, 8x8, 20x20 and the minimal kernel "
+                             "(results/core_field.json and .md)")
     args = parser.parse_args()
     repo = HERE.parent
+    if args.field:
+        return field_only(args, repo)
     results = {"command": "python benchmarks/core.py " + " ".join(sys.argv[1:]), "batches": args.batches,
                "rounds": args.rounds,
                "cycles": args.cycles, "step": {}, "loop": {},
@@ -308,6 +328,35 @@ def main() -> None:
     (args.out / "core.json").write_text(json.dumps(results, indent=1))
     (args.out / "core.md").write_text(markdown(results))
     print(markdown(results))
+
+
+def field_only(args, repo: Path) -> None:
+    """``--field``: the step with each of ``FIELD_MODELS`` and the minimal kernel, alternating rounds."""
+    results = {"command": "python benchmarks/core.py " + " ".join(sys.argv[1:]), "batches": args.batches,
+               "rounds": args.rounds, "cycles": args.cycles, "step": {},
+               "machine": f"{os.cpu_count()} cores (load average {os.getloadavg()[0]:.1f} at the start"}
+    for round_ in range(args.rounds):
+        print(f"round {round_ + 1} ...", flush=True)
+        for name, rows in _in_subprocess(repo, "measure_field", args)["step"].items():
+            _keep_fastest(results["step"].setdefault(name, {}), rows)
+        _keep_fastest(results["step"].setdefault("minimal", {}), _in_subprocess(repo, "measure_minimal", args)["step"])
+    results["machine"] += f", {os.getloadavg()[0]:.1f} at the end)"
+    lines = ["# The Earth's field in the step", "",
+             f"`{results['command']}` on {results['machine']}, one device pinned to one core, li2022 with each "
+             "field (Sun, Moon, SRP and conical shadow on), MEE RK4, 96 steps per sidereal day, "
+             f"{args.cycles} cycles, the fastest of {args.rounds} rounds.  ns per right-hand side per sample; "
+             "in brackets: relative to J2 + C22/S22; compile s; fusions (conditionals) of the compiled step.", "",
+             "| batch | " + " | ".join(results["step"]) + " |", "|---:|" + "---:|" * len(results["step"])]
+    for batch in args.batches:
+        base = results["step"]["J2 + C22/S22"][str(batch)]["ns_per_rhs_per_sample"]
+        cells = [f"{r[str(batch)]['ns_per_rhs_per_sample']:.1f} ns ({r[str(batch)]['ns_per_rhs_per_sample'] / base:.2f}x), "
+                 f"{r[str(batch)]['compile_s']:.1f} s, {r[str(batch)]['fusions_per_step']} "
+                 f"({r[str(batch)]['conditionals_per_step']})" for r in results["step"].values()]
+        lines.append(f"| {batch} | " + " | ".join(cells) + " |")
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "core_field.json").write_text(json.dumps(results, indent=1))
+    (args.out / "core_field.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
 
 
 if __name__ == "__main__":

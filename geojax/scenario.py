@@ -21,6 +21,7 @@ import numpy as np
 from geojax.physics import constants as c
 from geojax.physics.elements import cartesian_to_mee, kepler_to_mee
 from geojax.physics.forces import ForceModel
+from geojax.physics.geopotential import MAX_DEGREE as MAX_GRAVITY_DEGREE, egm2008
 from geojax.physics.frames import ecef_to_eci, earth_rotation_angle_rad
 from geojax.params import LOG, REQUIRED, Field, check_table, degrees
 from geojax.physics.propulsion import arm_limits_deg
@@ -114,6 +115,10 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "srp": Field(bool, True),
         "shadow": Field(str, "conical", choices=("conical", "none")),
         "srp_pressure_n_m2": Field(_NUMBER, 4.5605e-6, lower=0.0, lower_inclusive=True, upper=1e-2),
+        # The Earth's field to degree and order N (EGM2008, tide-free, shipped to degree 20): replaces `j2` and
+        # `c22_s22` where given (those stay for the papers' models).  Order: default the degree, 0 <= M <= N.
+        "gravity_degree": Field(int, None, lower=2, upper=MAX_GRAVITY_DEGREE + 1, lower_inclusive=True),
+        "gravity_order": Field(int, None, lower=0, upper=MAX_GRAVITY_DEGREE + 1, lower_inclusive=True),
     },
     "integration": {
         "step_s": Field(_NUMBER, 900.0, lower=0.0, upper=c.SIDEREAL_DAY_S + 1.0),
@@ -264,6 +269,7 @@ def _validate(raw: dict, controller=None) -> dict:
         else:
             config.update(out)
     _check_orbit(config["orbit"])
+    _check_gravity(config["forces"])
     module = None if controller is not None else _lookup(config["controller"]["kind"])
     validate = getattr(module, "validate", None)
     if validate is not None:
@@ -272,6 +278,14 @@ def _validate(raw: dict, controller=None) -> dict:
     arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
     _check_propellant(config)
     return config
+
+
+def _check_gravity(forces: dict) -> None:
+    degree, order = forces["gravity_degree"], forces["gravity_order"]
+    if order is not None and degree is None:
+        raise ValueError(f"forces.gravity_order: needs forces.gravity_degree (got order {order} without a degree)")
+    if order is not None and order > degree:
+        raise ValueError(f"forces.gravity_order: must be <= forces.gravity_degree = {degree}, got {order}")
 
 
 def _check_propellant(config: dict) -> None:
@@ -354,6 +368,8 @@ def _force_model(config: dict) -> ForceModel:
         reflectivity=craft["reflectivity"],
         srp_area_m2=craft["srp_area_m2"],
         shadow_on=on(forces["shadow"] == "conical"),
+        gravity=None if forces.get("gravity_degree") is None else egm2008(forces["gravity_degree"],
+                                                                         forces.get("gravity_order")),
     )
 
 

@@ -48,6 +48,16 @@ def test_bad_input_exits_2_with_one_line(argv, message, capsys):
     assert err.count("\n") == 1 and "Traceback" not in err
 
 
+def test_bad_force_keys_exit_2(tmp_path, capsys):
+    # The shipped `geo` scenario with a degree beyond the shipped EGM2008 table.
+    assert cli.main(["scenarios", "--show", "geo"]) == 0
+    text = capsys.readouterr().out.replace("gravity_degree = 8", "gravity_degree = 40")
+    (tmp_path / "bad.toml").write_text(text)
+    assert cli.main(["propagate", str(tmp_path / "bad.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "forces.gravity_degree: must be >= 2 and < 21, got 40" in err and err.count("\n") == 1
+
+
 def test_demo_writes_its_figure(tmp_path, capsys):
     assert cli.main(["demo", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out

@@ -61,6 +61,10 @@ def test_overrides_and_path(tmp_path):
         ({"orbit.f": 0.8, "orbit.g": 0.8}, "orbit.f, orbit.g: eccentricity sqrt(f^2 + g^2) must be < 1"),
         ({"orbit.a_km": 42164.0}, "orbit.a_km: not used when orbit.elements = 'mee'"),
         ({"forces.sun": 1}, "forces.sun: must be true or false, got int 1"),
+        ({"forces.gravity_degree": 21}, "forces.gravity_degree: must be >= 2 and < 21, got 21"),
+        ({"forces.gravity_degree": 4, "forces.gravity_order": 5},
+         "forces.gravity_order: must be <= forces.gravity_degree = 4, got 5"),
+        ({"forces.gravity_order": 3}, "forces.gravity_order: needs forces.gravity_degree"),
         ({"epoch.utc": "yesterday"}, "epoch.utc: 'yesterday' is not an ISO 8601 date-time"),
         ({"bogus.x": 1}, "bogus.x: not a scenario key; write it as TABLE.KEY"),
         ({"days": 5.0}, "days: not a scenario key"),
@@ -82,5 +86,5 @@ def test_kepler_eccentricity_of_one_is_refused():
 
 
 def test_unknown_scenario_lists_the_names():
-    with pytest.raises(ValueError, match="scenario .li2021.: unknown; named scenarios: gazzino2016, katz2025, katz2025-constant, katz2025-continuous, katz2025-discrete, li2022"):
+    with pytest.raises(ValueError, match="scenario .li2021.: unknown; named scenarios: gazzino2016, geo, katz2025, katz2025-constant, katz2025-continuous, katz2025-discrete, li2022"):
         scenario.load("li2021")

@@ -144,7 +144,8 @@ def _same(a, b) -> bool:
 # What fixes the compiled loop's shapes and code, named by the key a user would sweep.
 STATIC_KEYS = {"integration.step_s": lambda sc: steps_per_cycle(sc.step_s), "duration.days": lambda sc: cycle_count(sc.days),
                "integration.dynamics": lambda sc: sc.dynamics, "epoch.utc": lambda sc: sc.epoch_tt_s,
-               "epoch.ut1_minus_utc_s": lambda sc: sc.tt_minus_ut1_s}
+               "epoch.ut1_minus_utc_s": lambda sc: sc.tt_minus_ut1_s,
+               "forces.gravity_degree": lambda sc: None if sc.force_model.gravity is None else sc.force_model.gravity.c_nm.shape}
 
 
 def _check_static(scenarios: list[Scenario], controller: Controller) -> None:

@@ -1,4 +1,5 @@
-"""Force models: Earth point mass, J2, C22/S22, Sun, Moon, solar radiation pressure with Earth shadow.
+"""Force models: Earth point mass, J2, C22/S22 or the field to degree N, Sun, Moon, solar radiation pressure
+with Earth shadow.
 
 Each term is a small pure function of the ECI position's components ``(x, y, z)``
 (``*_xyz``), written so that a step compiles to a few elementwise loops: no
@@ -21,6 +22,7 @@ import jax.numpy as jnp
 
 from geojax.physics import constants as c
 from geojax.physics.fusion import skipped_where_idle
+from geojax.physics.geopotential import Geopotential, geopotential_xyz
 
 
 class ForceModel(NamedTuple):
@@ -42,6 +44,9 @@ class ForceModel(NamedTuple):
     reflectivity: float = 0.6
     srp_area_m2: float = 0.0
     shadow_on: float = 1.0
+    # The Earth's field to degree and order N (``physics.geopotential``), replacing the J2 and C22/S22 terms
+    # (their switches are then not read); None: the papers' J2 (and C22/S22) model.  Static structure.
+    gravity: Geopotential | None = None
 
 
 class Environment(NamedTuple):
@@ -198,12 +203,17 @@ def perturbing_xyz(x, y, z, mass_kg, env: Environment, fm: ForceModel, boundarie
     it again in every kernel that reads it.
     """
     cos_angle, sin_angle = env.cos_earth_angle, env.sin_earth_angle
-    ax, ay, az = (fm.j2_on * a for a in j2_xyz(x, y, z, fm.mu_m3_s2, fm.j2, fm.r_earth_m))
-    for switch, term in (
-        (fm.c22_on, c22_s22_xyz(x, y, z, cos_angle, sin_angle, fm.mu_m3_s2, fm.c22, fm.s22, fm.r_earth_m)),
+    if fm.gravity is None:  # the papers' model, summed in its original order
+        ax, ay, az = (fm.j2_on * a for a in j2_xyz(x, y, z, fm.mu_m3_s2, fm.j2, fm.r_earth_m))
+        terms = [(fm.c22_on, c22_s22_xyz(x, y, z, cos_angle, sin_angle, fm.mu_m3_s2, fm.c22, fm.s22,
+                                         fm.r_earth_m))]
+    else:
+        ax, ay, az = geopotential_xyz(x, y, z, cos_angle, sin_angle, fm.mu_m3_s2, fm.r_earth_m, fm.gravity)
+        terms = []
+    for switch, term in terms + [
         (fm.sun_on, third_body_xyz(x, y, z, env.r_sun_eci_m, fm.mu_sun_m3_s2)),
         (fm.moon_on, third_body_xyz(x, y, z, env.r_moon_eci_m, fm.mu_moon_m3_s2)),
-    ):
+    ]:
         ax, ay, az = ax + switch * term[0], ay + switch * term[1], az + switch * term[2]
     if boundaries:
         sunlit = skipped_where_idle(shadow_fraction_xyz, near_shadow_cone, _sunlit, x, y, z, env.r_sun_eci_m,
