@@ -69,3 +69,30 @@ def test_refit_gives_back_the_plan_and_is_the_least_squares_fit():
         for other in np.linspace(0.8, 1.2, 9):
             assert miss(refit) <= miss(refit * np.array([scale, other])) + 1e-15
     assert miss(refit) < miss(np.asarray(pair.v_mps))
+
+
+@pytest.mark.parametrize("preset", ["normal", "weak"])
+def test_the_qffc_cannot_brake_a_drift_the_error_left(preset):
+    """The mechanism of our Fig. 15 failures (``studies/ablation/li_attitude_error.md``): a burn error of +0.02
+    m/s along the track (prograde) leaves a westward drift, 3 x 0.02 / R_s, whose undoing needs a net retrograde
+    V_DT (same inclination and e deviations as a quiet cycle).  It is not flown: braking burns' coast coupling
+    (eq. (33)'s T_i v_ti term) would need V_RS > 0, which eq. (34)'s v_r <= 0 forbids, so eq. (35) raises V_DT
+    until the burns accelerate, and the drift deviation is left whole (checked on the effect B v of eq. (29),
+    ``qffc.effect``).  A retrograde error of the same size is undone in the cycle with no raise.  The error's
+    sign decides, under the normal and the weak limits alike, so errors of both signs walk the drift one way."""
+    from geojax.control import qffc
+    from geojax.control.effects import R_SYNC_M
+    from geojax.physics.propulsion import PRESETS_DEG, arm_limits_deg
+
+    limits = arm_limits_deg(*PRESETS_DEG[preset])
+    for error_mps in (-0.02, 0.02):
+        dx = jnp.array([0.0, 3 * error_mps / R_SYNC_M, 0.0, 0.0, 1.0e-5, 0.3e-5])  # drift deviation to undo
+        sol = qffc.solve(dx, 0.0, limits)
+        achieved = float(qffc.effect(sol, 0.0)[1])
+        assert bool(sol.feasible)
+        if error_mps > 0:
+            assert float(sol.vdt_raise_mps) >= error_mps
+            assert achieved <= 0.0  # the drift is not undone at all
+        else:
+            assert float(sol.vdt_raise_mps) == 0.0
+            assert achieved == pytest.approx(float(dx[1]), rel=1e-9)
