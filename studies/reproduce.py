@@ -30,7 +30,8 @@ STUDIES = {
     "katz2025": [("katz2025/step.py", []), ("katz2025/table.py", [])],
     "ye2022": [("ye2022/table3.py", []), ("ye2022/sweep_limits.py", [])],
     "ablation": [("ablation/fompc_annealing.py", []), ("ablation/li_predictor_error.py", []),
-                 ("ablation/fig13_budget.py", []), ("ablation/katz_longitude.py", [])],
+                 ("ablation/fig13_budget.py", []), ("ablation/katz_longitude.py", []),
+                 ("ablation/li_attitude_error.py", [])],
     "ma2023": [("ma2023/transfer.py", [])],
     "bounds": [("bounds/table.py", []), ("bounds/operational.py", ["--days", "28", "--margin", "0.2"])],
 }
