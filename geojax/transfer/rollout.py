@@ -59,7 +59,7 @@ class TransferParams(NamedTuple):
     inertia_kg_m2: jnp.ndarray  # [3] J_body of eq. (6), principal moments along the body axes
     rcs_arm_m: jnp.ndarray  # attitude thrusters' couple arm and Isp (pointing.attitude_propellant_kg)
     rcs_isp_s: jnp.ndarray
-    joints: boom.JointLimits  # [3] each; the fixed layout: lower = upper = (0, 90, 0) deg
+    joints: boom.JointLimits  # [3] each; the quadrilateral: lower = upper = (0, 90, 0) deg
     weights: boom.MpcWeights  # [3] each
     d1_m: jnp.ndarray  # boom link lengths, eq. (9)
     d2_m: jnp.ndarray
@@ -135,7 +135,7 @@ class Record(NamedTuple):
 
 def initial_carry(params: TransferParams) -> Carry:
     """At the start the spacecraft is already pointed: the body at its share of eq. (1)'s first wish, the joints
-    at their targets (the fixed layout's joints stay at (0, 90, 0) deg)."""
+    at their targets (the quadrilateral's joints stay at (0, 90, 0) deg)."""
     wish = _wish(params.initial.orbit, params)
     body = pointing.body_share_rad(jnp.stack([wish.azimuth_rad, wish.elevation_rad]), *_joint_reach(params))
     theta0 = _joint_targets(wish, body, params)
@@ -199,7 +199,9 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     wished_unit = steering.direction_rsw(wish.azimuth_rad, wish.elevation_rad)
     pair, resultant = quadrilateral.best_pair(axis, beside, wished_unit, params.pair_efficiency)
     efficiency = params.pair_efficiency[pair]
-    off_by = pointing.misalignment_rad(resultant / jnp.maximum(efficiency, 1e-30), wished_unit)
+    # (a layout without the pair, the boom behind its wish, is measured from its thrust axis)
+    off_by = pointing.misalignment_rad(jnp.where(efficiency > 0, resultant / jnp.maximum(efficiency, 1e-30), axis),
+                                       wished_unit)
     (x, y, z), _ = mee_to_rv_xyz(*(craft.orbit[j] for j in range(6)), mu)
     sunlit = 1.0 - params.forces.shadow_on * (1.0 - shadow_fraction_xyz(
         x, y, z, env3.r_sun_eci_m[0], params.forces.r_earth_m))
