@@ -2,7 +2,7 @@
 
     python benchmarks/transfer.py [--batch 256] [--days 250] [--single 2]
 
-The batch (half ``ma2023-boom``, half ``ma2023-fixed``; perigee +-50 km, apogee +-200 km, inclination
+The batch (half ``ma2023-boom``, half ``ma2023-quadrilateral``; perigee +-50 km, apogee +-200 km, inclination
 +-0.5 deg, uniform) is vmapped and sharded over one XLA CPU device per core (``geojax.parallel``), compiled
 once.  The same transfers run one at a time (the jitted single transfer in a Python loop, ``--single`` of
 them) give the batching ratio.  ``--days`` is the time limit (default the scenario's 250 days; the transfers
@@ -35,7 +35,7 @@ def dispersed(batch: int, seed: int = 0):
     for j in range(batch):
         overrides = {"orbit.perigee_alt_km": 964.0 + rng.uniform(-50, 50),
                      "orbit.apogee_alt_km": 35741.0 + rng.uniform(-200, 200), "orbit.i_deg": 20.8 + rng.uniform(-0.5, 0.5)}
-        params.append(transfer.load(f"ma2023-{'boom' if j % 2 == 0 else 'fixed'}", overrides).params)
+        params.append(transfer.load(f"ma2023-{'boom' if j % 2 == 0 else 'quadrilateral'}", overrides).params)
     return params
 
 
@@ -68,7 +68,7 @@ def main() -> None:
     lines = [f"# GTO-GEO transfers (Ma 2023), batch of {args.batch}, {args.days:g}-day limit", "",
              f"`python benchmarks/transfer.py --batch {args.batch} --days {args.days:g}` on {os.cpu_count()} CPU cores "
              f"({jax.device_count()} XLA devices), shared with other work. One compilation for the batch "
-             "(half boom, half fixed; dispersed start orbits).", "",
+             "(half boom, half quadrilateral; dispersed start orbits).", "",
              "| batch | compile s | run s | s per transfer (batched) | s per transfer (one at a time) | ratio | "
              "µs per transfer step | reached GEO | mean days |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
              f"| {args.batch} | {compile_s:.1f} | {run_s:.1f} | {per:.3f} | {single_s:.3f} | {single_s / per:.1f}x | "

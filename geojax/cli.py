@@ -182,8 +182,8 @@ def _parser() -> argparse.ArgumentParser:
     plot.add_argument("--dpi", type=int, default=150, help="resolution of PNG figures (default 150)")
     plot.set_defaults(func=_plot)
 
-    xfer = command("transfer", help="GTO-GEO low-thrust transfer, gimbaled boom or fixed thrusters (Ma & Kong 2023)")
-    xfer.add_argument("scenario", help="a shipped transfer (ma2023-boom, ma2023-fixed) or a .toml path")
+    xfer = command("transfer", help="GTO-GEO low-thrust transfer, gimbaled boom or quadrilateral layout (Ma & Kong 2023)")
+    xfer.add_argument("scenario", help="a shipped transfer (ma2023-boom, ma2023-quadrilateral) or a .toml path")
     xfer.add_argument("--days", type=float, help="time limit in solar days (default: the scenario's); the transfer "
                       "stops earlier when it reaches GEO (not sidereal-day cycles: a transfer has no control cycle)")
     xfer.add_argument("--out", help="write /metrics and the daily /records to this HDF5 file")

@@ -106,6 +106,13 @@ SCHEMA: dict[str, dict[str, Field]] = {
     "errors": {
         "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_rv"),
         "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_att"),
+        # How the attitude error enters (control.burns; studies/ablation/li_attitude_error.py): its yaw and pitch
+        # parts scaled (1: eq. (47) as printed), one draw shared by a cycle's two burns instead of one each, and
+        # the burns' magnitudes re-fitted to the directions flown (the plan knows the error) instead of kept.
+        "att_yaw": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="att_yaw"),
+        "att_pitch": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="att_pitch"),
+        "att_shared": Field(bool, False, si="att_shared"),
+        "att_known": Field(bool, False, si="att_known"),
     },
     "forces": {
         "j2": Field(bool, True),

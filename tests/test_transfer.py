@@ -15,7 +15,7 @@ import pytest
 from geojax import cli, transfer
 from geojax.physics import constants as c
 from geojax.physics.elements import kepler_to_mee, mee_to_cartesian
-from geojax.transfer import boom, pointing, steering
+from geojax.transfer import boom, pointing, quadrilateral, steering
 from geojax.transfer.rollout import Static
 
 RNG = np.random.default_rng(7)
@@ -207,8 +207,8 @@ def test_short_transfer_delta_v_is_the_rocket_equation_and_joints_stay_in_table_
 OFF_COM = {"boom.d2_m": 1.5, "boom.a1_m": 0.3, "boom.base_offset_m": [0.0, 0.0, -1.0]}  # thrust line 1.5 m off
 
 
-def test_fixed_layout_keeps_its_joints_and_loses_more_thrust_to_slewing(loop):
-    """The fixed layout's thruster never moves (joints frozen at (0, 90, 0) deg), so with a slow body it must
+def test_quadrilateral_keeps_its_joints_and_loses_more_thrust_to_slewing(loop):
+    """The quadrilateral's thrusters never move (joints frozen at (0, 90, 0) deg), so with a slow body it must
     wait for slews the boom's joints absorb: more time lost to slewing over the same two days than a boom on
     a body stiff against its torque (1e8 kg m^2).  A boom mounted with its thrust line 1.5 m off the centre of
     mass (eq. (8) up to 1 N m against the wheels' 0.035 N m) loses more than either; the shipped mounting
@@ -217,7 +217,7 @@ def test_fixed_layout_keeps_its_joints_and_loses_more_thrust_to_slewing(loop):
     stiff_final, _ = _run(loop, transfer.load("ma2023-boom", {**slow, "attitude.inertia_kg_m2": [1e8] * 3}))
     boom_final, _ = _run(loop, transfer.load("ma2023-boom", slow))
     off_final, _ = _run(loop, transfer.load("ma2023-boom", {**slow, **OFF_COM}))
-    fixed_final, fixed_records = _run(loop, transfer.load("ma2023-fixed", slow))
+    fixed_final, fixed_records = _run(loop, transfer.load("ma2023-quadrilateral", slow))
     np.testing.assert_allclose(np.degrees(fixed_records.theta_rad), np.broadcast_to([0.0, 90.0, 0.0], (1440, 3)),
                                atol=1e-12)
     assert float(fixed_final.stats.lost_to_slew_s) > float(stiff_final.stats.lost_to_slew_s) + 3600.0
@@ -249,7 +249,7 @@ def test_the_body_accelerates_within_the_wheels_window_shifted_by_the_torque(loo
     """Eq. (6) with bounded wheels, |tau_c| <= J a: at every step of two days the body's rate change lies in
     [(-a + delta) dt, (a + delta) dt], delta = J^-1 tau of the step's recorded eq. (8) torque on each slew axis
     (numpy, from the records); on the mounting 1.5 m off the centre of mass the torque beats the wheels on some
-    steps (a change beyond a dt), the fixed layout's is zero (no boom arm) and its body never exceeds a."""
+    steps (a change beyond a dt), the quadrilateral's is zero (no boom arm) and its body never exceeds a."""
     sc = transfer.load("ma2023-boom", OFF_COM)
     _, records = _run(loop, sc)
     a, dt = float(sc.params.slew_accel_rad_s2), STATIC.step_s
@@ -260,7 +260,7 @@ def test_the_body_accelerates_within_the_wheels_window_shifted_by_the_torque(loo
     change = np.diff(np.asarray(records.body_rate_rad_s), axis=0) / dt
     assert np.all(change >= delta - a - 1e-12) and np.all(change <= delta + a + 1e-12)
     assert np.abs(change).max() > 10 * a
-    _, fixed = _run(loop, transfer.load("ma2023-fixed"))
+    _, fixed = _run(loop, transfer.load("ma2023-quadrilateral"))
     assert np.all(np.asarray(fixed.torque_nm) == 0.0)
     assert np.abs(np.diff(np.asarray(fixed.body_rate_rad_s), axis=0)).max() <= a * dt * (1 + 1e-12)
 
@@ -305,19 +305,19 @@ def test_cli_writes_metrics_and_records(tmp_path, capsys):
     import h5py
 
     out = tmp_path / "t.h5"
-    assert cli.main(["transfer", "ma2023-fixed", "--days", "0.5", "--out", str(out), "-q"]) == 0
+    assert cli.main(["transfer", "ma2023-quadrilateral", "--days", "0.5", "--out", str(out), "-q"]) == 0
     with h5py.File(out) as f:
-        assert int(f["metrics/status"][()]) == 0 and f.attrs["layout"] == "fixed"
+        assert int(f["metrics/status"][()]) == 0 and f.attrs["layout"] == "quadrilateral"
         assert float(f["metrics/transfer_days"][()]) == pytest.approx(0.5)
-        assert f["records/a_km"].shape == (1,) and 'layout = "fixed"' in f.attrs["config_toml"]
+        assert f["records/a_km"].shape == (1,) and 'layout = "quadrilateral"' in f.attrs["config_toml"]
 
 
 def test_a_transfer_is_refused_by_station_keeping_and_shown_by_scenarios(capsys):
     """The shipped-scenario list stays station keeping; a transfer named to `simulate` says where it belongs."""
     assert cli.main(["simulate", "ma2023-boom"]) == 2
     assert "run it with `geojax transfer ma2023-boom`" in capsys.readouterr().err
-    assert cli.main(["scenarios", "--show", "ma2023-fixed"]) == 0
-    assert 'layout = "fixed"' in capsys.readouterr().out
+    assert cli.main(["scenarios", "--show", "ma2023-quadrilateral"]) == 0
+    assert 'layout = "quadrilateral"' in capsys.readouterr().out
 
 
 def test_apsis_gain_is_the_kepler_change_of_the_apsides_and_fires_at_apogee_first():
@@ -346,3 +346,121 @@ def test_apsis_gain_is_the_kepler_change_of_the_apsides_and_fires_at_apogee_firs
     assert float(at[0.0].fire) == 1.0  # the plane change (i = 20.8 deg) fires all orbit long ...
     flat = _geometry(0.0, **gto, i_rad=0.0)
     assert float(steering.steer(flat, r_geo, 20e3, math.radians(0.1), 0.5, mu).fire) == 0.0  # ... the rule: not here
+
+
+def _rotation(angle_rad):
+    """2x2 rotation in the face's (t, l) plane, from t towards l."""
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    return np.array([[c, -s], [s, c]])
+
+
+@pytest.mark.parametrize("cant_deg", [0.0, 20.0, 40.0, 45.0, 50.0])
+def test_quadrilateral_pairs_resultant_and_cosine_loss_are_the_closed_form(cant_deg):
+    """Closed form of a planar quadrilateral canted by c from its north-south axis: the north pair's resultant
+    per unit thrust is cos c along t (lateral parts cancel), the east pair's sin c along l, a diagonal pair's
+    zero; the cosine loss 1 - cos c is 23.4 % at 40 deg and 29.3 % at 45 deg.  The thrusters are built by
+    rotation matrices; the best of the six pairs (numpy) is max(cos c, sin c), what the layout flies."""
+    cant = math.radians(cant_deg)
+    units = np.asarray(quadrilateral.thruster_units(jnp.asarray(cant)))
+    t = np.array([1.0, 0.0])  # NE, NW: t turned by +-c; SE, SW: -t turned by the same (towards +l, -l)
+    built = np.array([_rotation(cant) @ t, _rotation(-cant) @ t, -_rotation(-cant) @ t, -_rotation(cant) @ t])
+    np.testing.assert_allclose(units, built, atol=1e-15)
+    north, east, diagonal = units[[0, 1]].mean(0), units[[0, 2]].mean(0), units[[0, 3]].mean(0)
+    np.testing.assert_allclose(north, [math.cos(cant), 0.0], atol=1e-15)
+    np.testing.assert_allclose(east, [0.0, math.sin(cant)], atol=1e-15)
+    np.testing.assert_allclose(diagonal, [0.0, 0.0], atol=1e-15)
+    best = max(np.linalg.norm(units[[i, j]].mean(0)) for i in range(4) for j in range(i + 1, 4))
+    eff = np.asarray(quadrilateral.pair_axis_efficiency(jnp.asarray(cant)))
+    assert eff[0] == pytest.approx(best, abs=1e-15) and eff[1] == eff[0]
+    assert eff[2] == pytest.approx(min(math.cos(cant), math.sin(cant)), abs=1e-15)
+    if cant_deg in (40.0, 45.0):
+        assert 1 - eff[0] == pytest.approx({40.0: 0.2340, 45.0: 0.2929}[cant_deg], abs=5e-5)
+
+
+def test_best_pair_fires_the_pair_closest_to_the_wish():
+    """The south pair serves a wish behind the body (no half-turn), the north pair one ahead; the resultant's
+    norm is the pair's efficiency; a layout without a south pair (the boom: (1, 0, 0, 0)) gets none behind."""
+    t, l = jnp.array([0.0, 1.0, 0.0]), jnp.array([1.0, 0.0, 0.0])
+    eff = quadrilateral.pair_axis_efficiency(jnp.asarray(math.radians(40.0)))
+    ahead = jnp.array([0.1, 0.99, 0.0]) / math.hypot(0.1, 0.99)
+    for wish, index in ((ahead, 0), (-ahead, 1), (jnp.array([1.0, 0.0, 0.0]), 2)):
+        got, resultant = quadrilateral.best_pair(t, l, wish, eff)
+        assert int(got) == index and float(jnp.linalg.norm(resultant)) == pytest.approx(float(eff[index]))
+    _, resultant = quadrilateral.best_pair(t, l, -ahead, jnp.array([1.0, 0.0, 0.0, 0.0]))
+    assert float(jnp.linalg.norm(resultant)) == 0.0
+
+
+def test_quadrilateral_delivers_cos_cant_of_the_thrust_for_the_same_propellant(loop):
+    """Gauss's equations to first order: the same firing pattern with the pair's resultant scaled by cos c
+    turns the orbit plane (the first days' plane change) by cos c times as much per second of firing (c = 40 deg
+    against 0), for the same propellant per second (the pair's mass flow F / (Isp g0) does not depend on its cant)."""
+    final0, rec0 = _run(loop, transfer.load("ma2023-quadrilateral", {"thruster.cant_deg": 0.0}))
+    final40, rec40 = _run(loop, transfer.load("ma2023-quadrilateral"))
+    firing0, firing40 = float(final0.stats.firing_s), float(final40.stats.firing_s)
+    assert firing40 == pytest.approx(firing0, rel=0.01)  # the pattern differs only where the orbits have drifted
+    used0, used40 = (2500.0 - float(f.craft.mass_kg) for f in (final0, final40))
+    assert used40 / firing40 == pytest.approx(used0 / firing0, rel=1e-6)
+    i_start = float(steering.orbit_geometry(transfer.load("ma2023-boom").params.initial.orbit).i_rad)
+    ratio = (float(rec40.i_rad[-1]) - i_start) / firing40 / ((float(rec0.i_rad[-1]) - i_start) / firing0)
+    assert ratio == pytest.approx(math.cos(math.radians(40.0)), rel=0.01)
+    assert float(final40.stats.aligned_s) / float(final40.stats.firing_s) == pytest.approx(
+        math.cos(math.radians(40.0)), rel=0.002)
+
+
+def test_one_slews_attitude_propellant_is_the_hand_impulse_budget():
+    """Impulse budget by hand for one rest-to-rest slew of 30 deg at 0.1 deg/s on J = 2000 kg m^2: the
+    thrusters give J w = 2000 x 1.745e-3 = 3.49 N m s to start and as much to stop, 6.98 N m s, which a couple of
+    1 m arm at 220 s pays with 6.98 / (1 x 220 x 9.80665) = 3.24 g; summing |slew_torque_nm| dt over the
+    discrete slew gives the same (to the last step's chatter)."""
+    inertia, rate, accel, step = 2000.0, math.radians(0.1), math.radians(0.001), 1.0
+    angle, speed, impulse = jnp.array(0.0), jnp.array(0.0), 0.0
+    slew = jax.jit(pointing.slew_step)
+    for _ in range(500):
+        new_angle, new_speed = slew(angle, speed, math.radians(30.0), rate, accel, step)
+        impulse += abs(float(pointing.slew_torque_nm(speed, new_speed, step, 0.0, accel, inertia))) * step
+        angle, speed = new_angle, new_speed
+    assert float(angle) == pytest.approx(math.radians(30.0), abs=1e-5)
+    hand_kg = 2 * inertia * rate / (1.0 * 220.0 * 9.80665)
+    assert hand_kg == pytest.approx(3.236e-3, rel=1e-3)
+    assert float(pointing.attitude_propellant_kg(impulse, 1.0, 220.0)) == pytest.approx(hand_kg, rel=0.01)
+    # a push twice what the wheels hold, the wheels braking at full (body accelerating at 2a - a): no slew is
+    # charged; the same body change with no push is a slew of J a
+    assert float(pointing.slew_torque_nm(0.0, accel * step, step, 2.0 * accel, accel, inertia)) == 0.0
+    no_push = pointing.slew_torque_nm(0.0, accel * step, step, 0.0, accel, inertia)
+    assert float(no_push) == pytest.approx(inertia * accel)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_remark_2_split_never_exceeds_a_joint_range(seed):
+    """Ma 2023 Remark 2, joints first within their ranges, attitude for the rest, against Table 1: for wishes
+    over the whole sphere of directions and any body lag, the joints' share stays within [low, high]
+    (azimuth 0-90 deg, elevation +-15 deg); inside the range the body's share is zero; with the body at its
+    share, body + joints = the wish (mod 2 pi)."""
+    rng = np.random.default_rng(seed)
+    low, high = jnp.radians(jnp.array([0.0, -15.0])), jnp.radians(jnp.array([90.0, 15.0]))
+    for _ in range(50):
+        wish = jnp.asarray([rng.uniform(-math.pi, math.pi), rng.uniform(-math.pi / 2, math.pi / 2)])
+        body = pointing.body_share_rad(wish, low, high)
+        for lag in (jnp.zeros(2), jnp.asarray(rng.normal(0, 0.5, 2))):
+            joints = np.asarray(pointing.joint_share_rad(wish, body + lag, low, high))
+            assert np.all(joints >= np.asarray(low) - 1e-15) and np.all(joints <= np.asarray(high) + 1e-15)
+        joints = pointing.joint_share_rad(wish, body, low, high)
+        np.testing.assert_allclose(np.angle(np.exp(1j * np.asarray(body + joints - wish))), 0.0, atol=1e-12)
+        inside = (np.asarray(wish) >= np.asarray(low)) & (np.asarray(wish) <= np.asarray(high))
+        assert np.all(np.asarray(body)[inside] == 0.0)
+
+
+def test_the_slew_settles_on_a_moving_target_without_a_limit_cycle():
+    """A rest start behind a target moving at 0.004 deg/s (the attitude loop's 10 s step, 0.1 deg/s, 0.001
+    deg/s^2): the body ends on the target at the target's rate, and the total variation of its rate is that
+    of one acceleration and one braking, below 2 x the rate bound (a law that chatters about the target adds
+    a x dt at every step: 400 steps of it would be 40 times that)."""
+    rate, accel, step, v = math.radians(0.1), math.radians(0.001), 10.0, math.radians(0.004)
+    slew = jax.jit(pointing.slew_step)
+    angle, speed, target, variation = jnp.array(0.0), jnp.array(0.0), math.radians(5.0), 0.0
+    for _ in range(400):
+        new_angle, new_speed = slew(angle, speed, target, rate, accel, step, 0.0, v)
+        variation += abs(float(new_speed - speed))
+        angle, speed, target = new_angle, new_speed, target + v * step
+    assert float(angle) == pytest.approx(target, abs=1e-9) and float(speed) == pytest.approx(v, abs=1e-12)
+    assert variation <= 2 * rate

@@ -11,7 +11,14 @@ position (within +-0.05 deg of the satellite, a few seconds of eclipse
 timing); a suspended burn that would run past the end of the cycle is cut
 there.  Each burn is flown with Gaussian yaw and pitch errors (1-sigma
 ``errors.h_att`` x 0.05 deg / 3, Li 2022 eqs. (47)-(48)), drawn as row 1 of
-``normal(key_k, (2, 6))`` (the loop's orbit-determination fix takes row 0).
+``normal(key_k, (2, 6))`` (the loop's orbit-determination fix takes row 0),
+added to the planned angles of the direction flown (``attitude_error_rad``).
+The readings the paper leaves open are switches of ``errors`` (the ablation
+``studies/ablation/li_attitude_error.py`` measures each): the yaw and pitch
+parts scaled apart (``att_yaw``, ``att_pitch``), one draw for both burns of a
+cycle (``att_shared``), and the plan knowing the error: the two magnitudes
+re-fitted so that the burns flown along the perturbed directions best
+reproduce the planned effect (``att_known``, ``refit_magnitudes_mps``).
 """
 
 from __future__ import annotations
@@ -21,7 +28,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from geojax.control.effects import R_SYNC_M
+from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_matrix
 from geojax.physics.dynamics import Thrust
 from geojax.physics.forces import near_shadow_cone, shadow_fraction_xyz
 from geojax.physics.fusion import skipped_where_idle
@@ -50,15 +57,42 @@ def fly(params, burns, prediction, ns_fraction, estimate, context, key) -> BurnP
     n_steps = context.env.earth_angle_rad.shape[0]
     l_start = estimate.fix_mee[5]
     t_mid = jnp.mod(burns.l_rad - l_start, 2 * jnp.pi) / (2 * jnp.pi) * cycle_s
-    burn_s = burns.v_mps * estimate.mass_kg / thrusters["thrust_n"]  # eq. (13)
+    attitude_error = attitude_error_rad(params.errors, key)
+    directions = delta_v_direction_rsw(burns.alpha_rad + attitude_error[0], burns.beta_rad + attitude_error[1])
+    v_mps = jnp.where(params.errors["att_known"] > 0, refit_magnitudes_mps(burns, directions, l_start), burns.v_mps)
+    burn_s = v_mps * estimate.mass_kg / thrusters["thrust_n"]  # eq. (13)
     burn_s = jnp.where((burn_s >= thrusters["min_burn_s"]) & burns.feasible, burn_s, 0.0)
     start = jnp.clip(t_mid - burn_s / 2, 0.0, cycle_s - burn_s)
-    sigma_att_rad = jnp.deg2rad(params.errors["h_att"] * NOMINAL_3SIGMA_ATT_DEG / 3)
-    attitude_error = sigma_att_rad * jax.random.normal(key, (2, 6))[1, :4].reshape(2, 2)
-    directions = delta_v_direction_rsw(burns.alpha_rad + attitude_error[0], burns.beta_rad + attitude_error[1])
     clock = sunlit_clock(sunlit_fraction(context.env, params.station["lon_rad"], context.force_model), step_s)
     clock_start = jnp.interp(start, jnp.arange(n_steps + 1) * step_s, clock)
     return BurnPlan(burns, burn_s, clock, clock_start, directions, prediction, ns_fraction)
+
+
+def attitude_error_rad(errors, key):
+    """The yaw (row 0) and pitch (row 1) errors [2, 2] of a cycle's two burns (columns), rad: Li 2022 eq. (47)
+    with 1-sigma h_att x 0.05 deg / 3 (eq. (48)), each part scaled by ``att_yaw`` / ``att_pitch``, burn 1's draw
+    used for both when ``att_shared``."""
+    sigma_att_rad = jnp.deg2rad(errors["h_att"] * NOMINAL_3SIGMA_ATT_DEG / 3)
+    draws = jax.random.normal(key, (2, 6))[1, :4].reshape(2, 2)
+    draws = jnp.where(errors["att_shared"] > 0, draws[:, :1], draws)
+    return sigma_att_rad * jnp.stack([errors["att_yaw"], errors["att_pitch"]])[:, None] * draws
+
+
+# The rows of eq. (29) in velocity terms (m/s per unit): V_RS = -V_s/2 d lambda, V_DT = -R_s/3 d lambda_dot,
+# V_ET = V_s/2 de, V_N = 2 V_s di (``qffc`` module docstring), so a least-squares fit weighs them alike.
+EFFECT_ROW_MPS = (V_SYNC_MPS / 2, R_SYNC_M / 3, V_SYNC_MPS / 2, V_SYNC_MPS / 2, 2 * V_SYNC_MPS, 2 * V_SYNC_MPS)
+
+
+def refit_magnitudes_mps(burns, directions_rsw, l_start_rad):
+    """The magnitudes [2] (>= 0) of two burns along ``directions_rsw`` [2, 3] (unit velocity increments) whose
+    effect B_1 v_1 + B_2 v_2 (eq. (29), ``effects.effect_matrix``) best reproduces the planned burns' effect, in
+    the velocity metric of ``EFFECT_ROW_MPS``: a 2 x 2 least-squares fit, each magnitude clipped at zero."""
+    b = effect_matrix(burns.l_rad, cycle_coast_s(burns.l_rad, l_start_rad))  # [2, 6, 3]
+    w = jnp.asarray(EFFECT_ROW_MPS)
+    target = w * jnp.einsum("kij,kj->i", b, burns.dv_rsw_mps)
+    columns = w[:, None] * jnp.einsum("kij,kj->ik", b, directions_rsw)  # [6, 2]
+    gram = columns.T @ columns + 1e-30 * jnp.eye(2)
+    return jnp.maximum(jnp.linalg.solve(gram, columns.T @ target), 0.0)
 
 
 def thrust(params, plan: BurnPlan, t, state, environment) -> Thrust:
@@ -73,7 +107,7 @@ def record(plan: BurnPlan) -> dict:
     """Per-cycle records of a planner (read by ``loop.metrics``)."""
     fired_s = jnp.maximum(jnp.minimum(plan.burn_s, plan.clock[-1] - plan.clock_start), 0.0)
     return {"burns": plan.burns, "fired_s": fired_s, "prediction": plan.prediction,
-            "ns_fraction": plan.ns_fraction, "solved": plan.burns.feasible}
+            "ns_fraction": plan.ns_fraction, "solved": plan.burns.feasible, "directions_rsw": plan.directions_rsw}
 
 
 def sunlit_fraction(env_steps, station_lon_rad, fm):

@@ -1,8 +1,10 @@
-"""GTO-GEO low-thrust transfers with a triple orthogonal gimbaled thruster boom or a fixed layout (Ma & Kong 2023).
+"""GTO-GEO low-thrust transfers with a triple orthogonal gimbaled thruster boom or the quadrilateral layout (Ma & Kong
+2023).
 
 ``scenario`` loads and validates a transfer TOML; ``rollout.transfer`` is the pure per-transfer function
 (vmap it for a batch); ``run.run`` compiles and runs one.  ``steering`` holds eq. (1), ``boom`` eqs. (7)-(9)
-and the joint MPC of Sec. 3, ``pointing`` the body slew and the body/boom split.
+and the joint MPC of Sec. 3, ``quadrilateral`` the paper's baseline layout, ``pointing`` the body slew, the
+body/boom split of Remark 2 and the attitude propellant.
 """
 
 from geojax.transfer.rollout import STATUS_MEANINGS, Static, TransferParams, transfer

@@ -1,13 +1,16 @@
 """One GTO-GEO transfer as a pure function: a ``lax.scan`` over integration steps carrying a ``done`` flag.
 
-Each step: the guidance (``steering.steer``) wishes a thrust direction; the thruster fires along the
-direction that body and joints reached if the firing rule fires, the misalignment is within its bound, the
+Each step: the guidance (``steering.steer``) wishes a thrust direction; the thruster (the boom's, or the
+quadrilateral's pair closest to the wish, ``quadrilateral.best_pair``) fires along the direction that body and
+joints reached if the firing rule fires, the misalignment is within its bound, the
 spacecraft is in sunlight (electric propulsion stops in the Earth's shadow: the conical shadow fraction
 scales the thrust) and propellant is left.  The orbit is integrated in MEE with RK4 and the full force
 model (``physics.dynamics.mee_rhs``).  Then, for the next step, the body slews towards the part of the end
 state's wish that the boom cannot reach (``pointing``), with the boom's coupling torque (eq. (8), from the
-joint angles and the thrust of the step) acting on it through eq. (6) (``pointing.slew_step``: it shifts the
-wheels' acceleration window by torque / inertia), and the joints' MPC tracks the rest (``boom.joint_step``).
+joint angles and the thrust of the step) acting on it through eq. (6) (``pointing.slew_over_step``: it shifts
+the wheels' acceleration window by torque / inertia; the attitude loop runs at 10 s inside the step), and the
+joints' MPC tracks the rest (``boom.joint_step``, Remark 2's split).  The slews' torque is booked as attitude
+propellant (``pointing.attitude_propellant_kg``).
 When the end conditions hold (GEO radius, e and i below their thresholds) the state freezes; termination
 is data, the status and the time reached, never a Python loop.
 
@@ -17,16 +20,17 @@ transfer keeps one record per chosen interval (a day for a Monte Carlo, every st
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
 from geojax.physics.dynamics import SpacecraftState, Thrust, mee_rhs
-from geojax.physics.elements import mee_to_rv_xyz, wrap_angle
+from geojax.physics.elements import mee_to_rv_xyz
 from geojax.physics.forces import Environment, ForceModel, shadow_fraction_xyz
 from geojax.physics.integrate import rk4_step
-from geojax.transfer import boom, pointing, steering
+from geojax.transfer import boom, pointing, quadrilateral, steering
 
 STATUS_MEANINGS = {0: "time limit reached first", 1: "reached GEO (end conditions met)",
                    2: "propellant exhausted", 3: "state not finite"}
@@ -40,6 +44,9 @@ class TransferParams(NamedTuple):
     dry_mass_kg: jnp.ndarray
     thrust_n: jnp.ndarray
     isp_s: jnp.ndarray
+    # [4] resultant per unit thrust of the pairs along +t, -t, +l, -l (``quadrilateral.pair_axis_efficiency``);
+    # the boom's one thruster: (1, 0, 0, 0)
+    pair_efficiency: jnp.ndarray
     r_geo_m: jnp.ndarray  # end: |a - r_geo| < a_tol_m, e < e_end, i < i_end_rad
     a_tol_m: jnp.ndarray
     e_end: jnp.ndarray
@@ -50,7 +57,9 @@ class TransferParams(NamedTuple):
     slew_rate_rad_s: jnp.ndarray  # body slew bounds
     slew_accel_rad_s2: jnp.ndarray  # the wheels' authority: |tau_c| <= J slew_accel on each slew axis
     inertia_kg_m2: jnp.ndarray  # [3] J_body of eq. (6), principal moments along the body axes
-    joints: boom.JointLimits  # [3] each; the fixed layout: lower = upper = (0, 90, 0) deg
+    rcs_arm_m: jnp.ndarray  # attitude thrusters' couple arm and Isp (pointing.attitude_propellant_kg)
+    rcs_isp_s: jnp.ndarray
+    joints: boom.JointLimits  # [3] each; the quadrilateral: lower = upper = (0, 90, 0) deg
     weights: boom.MpcWeights  # [3] each
     d1_m: jnp.ndarray  # boom link lengths, eq. (9)
     d2_m: jnp.ndarray
@@ -74,13 +83,14 @@ class Attitude(NamedTuple):
     theta_rad: jnp.ndarray  # [3] joint angles
     omega_rad_s: jnp.ndarray  # [3] joint rates
     ref_rad: jnp.ndarray  # [3] last joint targets (their rate feeds the MPC's extrapolation)
+    body_target_rad: jnp.ndarray  # [2] last body target (its rate feeds the slew's, pointing.target_rate_rad_s)
 
 
 class Stats(NamedTuple):
     """Running totals over the transfer (frozen once done)."""
 
     firing_s: jnp.ndarray  # integral of the on-fraction
-    aligned_s: jnp.ndarray  # integral of on-fraction x cos(misalignment) (run.metrics: the efficiencies)
+    aligned_s: jnp.ndarray  # integral of on x pair resultant x cos(misalignment) (run.metrics: the efficiencies)
     lost_to_slew_s: jnp.ndarray  # time the rule fired in sunlight but the pointing was too far off
     track_max_rad: jnp.ndarray  # [3] largest |theta - target| (Fig. 14)
     track_sq_rad2: jnp.ndarray  # [3] sum of squares, for the RMS
@@ -88,6 +98,7 @@ class Stats(NamedTuple):
     torque_max_nm: jnp.ndarray  # largest |eq. (8)|
     torque_impulse_nms: jnp.ndarray  # integral of |eq. (8)|: the momentum the wheels must store or dump
     overpowered_s: jnp.ndarray  # time the torque beat the wheels (|torque / inertia| > slew_accel) on a slew axis
+    slew_impulse_nms: jnp.ndarray  # integral of |J d(omega)/dt| over both slew axes (pointing.slew_torque_nm)
 
 
 class Carry(NamedTuple):
@@ -119,20 +130,21 @@ class Record(NamedTuple):
     target_rad: jnp.ndarray  # [3]
     omega_rad_s: jnp.ndarray  # [3]
     torque_nm: jnp.ndarray  # [3]
+    pair: jnp.ndarray  # the pair that fired or would (0..3: +t, -t, +l, -l; quadrilateral.best_pair)
 
 
 def initial_carry(params: TransferParams) -> Carry:
     """At the start the spacecraft is already pointed: the body at its share of eq. (1)'s first wish, the joints
-    at their targets (the fixed layout's joints stay at (0, 90, 0) deg)."""
+    at their targets (the quadrilateral's joints stay at (0, 90, 0) deg)."""
     wish = _wish(params.initial.orbit, params)
     body = pointing.body_share_rad(jnp.stack([wish.azimuth_rad, wish.elevation_rad]), *_joint_reach(params))
     theta0 = _joint_targets(wish, body, params)
     zero = jnp.zeros(())
     return Carry(
         params.initial,
-        Attitude(body, jnp.zeros(2), theta0, jnp.zeros(3), theta0),
+        Attitude(body, jnp.zeros(2), theta0, jnp.zeros(3), theta0, body),
         wish,
-        Stats(zero, zero, zero, jnp.zeros(3), jnp.zeros(3), jnp.zeros(3), zero, zero, zero),
+        Stats(zero, zero, zero, jnp.zeros(3), jnp.zeros(3), jnp.zeros(3), zero, zero, zero, zero),
         jnp.array(False), jnp.array(0), zero, zero,
     )
 
@@ -166,8 +178,9 @@ def _joint_reach(params: TransferParams):
 
 
 def _joint_targets(wish: steering.Command, body_rad, params: TransferParams):
-    """The inverse of eq. (9) for what the body leaves of the wish, within the joint ranges."""
-    residual = wrap_angle(jnp.stack([wish.azimuth_rad, wish.elevation_rad]) - body_rad)
+    """The inverse of eq. (9) for what the body leaves of the wish, within the joint ranges (Remark 2)."""
+    residual = pointing.joint_share_rad(jnp.stack([wish.azimuth_rad, wish.elevation_rad]), body_rad,
+                                        *_joint_reach(params))
     return jnp.clip(boom.joint_targets_rad(residual[0], residual[1]), params.joints.lower_rad, params.joints.upper_rad)
 
 
@@ -178,19 +191,28 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     craft, att, wish = carry.craft, carry.attitude, carry.wish
     mu = params.forces.mu_m3_s2
 
+    # the strong pairs' axis t (the boom's thrust) where body and joints point it, the weak pairs' l beside it in
+    # the orbit plane of the thrust's azimuth; the pair closest to the wish fires (the boom: t only)
     reached = att.body_rad + jnp.stack([att.theta_rad[0] + jnp.pi / 2, att.theta_rad[2]])
-    direction = steering.direction_rsw(reached[0], reached[1])
-    off_by = pointing.misalignment_rad(direction, steering.direction_rsw(wish.azimuth_rad, wish.elevation_rad))
+    axis = steering.direction_rsw(reached[0], reached[1])
+    beside = steering.direction_rsw(reached[0] + jnp.pi / 2, 0.0)
+    wished_unit = steering.direction_rsw(wish.azimuth_rad, wish.elevation_rad)
+    pair, resultant = quadrilateral.best_pair(axis, beside, wished_unit, params.pair_efficiency)
+    efficiency = params.pair_efficiency[pair]
+    # (a layout without the pair, the boom behind its wish, is measured from its thrust axis)
+    off_by = pointing.misalignment_rad(jnp.where(efficiency > 0, resultant / jnp.maximum(efficiency, 1e-30), axis),
+                                       wished_unit)
     (x, y, z), _ = mee_to_rv_xyz(*(craft.orbit[j] for j in range(6)), mu)
     sunlit = 1.0 - params.forces.shadow_on * (1.0 - shadow_fraction_xyz(
         x, y, z, env3.r_sun_eci_m[0], params.forces.r_earth_m))
     live = (~carry.done) & (craft.mass_kg > params.dry_mass_kg)
     wants = wish.fire * sunlit * live
-    aligned = off_by <= params.max_misalignment_rad
+    aligned = (off_by <= params.max_misalignment_rad) & (efficiency > 0)
     on = wants * aligned
     torque = boom.coupling_torque_nm(att.theta_rad, params.thrust_n * on, params.d1_m, params.d2_m, params.a1_m,
                                      params.base_offset_m)
-    stepped = rk4_step(mee_rhs, craft, env3, params.forces, Thrust(direction, params.thrust_n, params.isp_s, on),
+    # the pair's two thrusters burn F / (Isp g0) and push eta F along its axis: the direction's norm is eta
+    stepped = rk4_step(mee_rhs, craft, env3, params.forces, Thrust(resultant, params.thrust_n, params.isp_s, on),
                        step_s)
     finite = jnp.all(jnp.isfinite(stepped.orbit))
     craft = jax.tree_util.tree_map(lambda new, old: jnp.where(carry.done | ~finite, old, new), stepped, craft)
@@ -200,9 +222,12 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     next_wish = _wish(craft.orbit, params)
     wished = jnp.stack([next_wish.azimuth_rad, next_wish.elevation_rad])
     disturbance = pointing.slew_disturbance_rad_s2(torque, att.theta_rad[0], params.inertia_kg_m2)
-    body, body_rate = pointing.slew_step(att.body_rad, att.body_rate_rad_s,
-                                         pointing.body_share_rad(wished, *_joint_reach(params)),
-                                         params.slew_rate_rad_s, params.slew_accel_rad_s2, step_s, disturbance)
+    body_target = pointing.body_target_rad(wished, att.body_rad, *_joint_reach(params), params.pair_efficiency[1] > 0)
+    body, body_rate, slew_impulse = pointing.slew_over_step(
+        att.body_rad, att.body_rate_rad_s, body_target,
+        pointing.target_rate_rad_s(body_target, att.body_target_rad, params.slew_rate_rad_s, step_s),
+        params.slew_rate_rad_s, params.slew_accel_rad_s2, step_s, max(1, math.ceil(step_s / pointing.ATTITUDE_STEP_S)),
+        disturbance, pointing.slew_inertia_kg_m2(att.theta_rad[0], params.inertia_kg_m2))
     target = _joint_targets(next_wish, body, params)
     theta, omega = boom.joint_step(att.theta_rad, att.omega_rad_s, target, (target - att.ref_rad) / step_s,
                                    params.joints, params.weights, step_s, static.mpc_horizon, static.mpc_iterations)
@@ -213,16 +238,17 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
 
     moving = ~carry.done
     attitude = jax.tree_util.tree_map(lambda new, old: jnp.where(moving, new, old),
-                                      Attitude(body, body_rate, theta, omega, target), att)
+                                      Attitude(body, body_rate, theta, omega, target, body_target), att)
     next_wish = jax.tree_util.tree_map(lambda new, old: jnp.where(moving, new, old), next_wish, wish)
     s = carry.stats
     count = moving.astype(float)
-    stats = Stats(s.firing_s + on * step_s, s.aligned_s + on * jnp.cos(off_by) * step_s,
+    stats = Stats(s.firing_s + on * step_s, s.aligned_s + on * efficiency * jnp.cos(off_by) * step_s,
                   s.lost_to_slew_s + wants * (~aligned) * step_s,
                   jnp.maximum(s.track_max_rad, count * track_error), s.track_sq_rad2 + count * track_error**2,
                   s.track_steps + count * trackable, jnp.maximum(s.torque_max_nm, count * jnp.linalg.norm(torque)),
                   s.torque_impulse_nms + count * jnp.linalg.norm(torque) * step_s,
-                  s.overpowered_s + count * jnp.any(jnp.abs(disturbance) > params.slew_accel_rad_s2) * step_s)
+                  s.overpowered_s + count * jnp.any(jnp.abs(disturbance) > params.slew_accel_rad_s2) * step_s,
+                  s.slew_impulse_nms + count * jnp.sum(slew_impulse))
 
     t_s = carry.t_s + step_s
     after = steering.orbit_geometry(craft.orbit)
@@ -235,5 +261,5 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     t_end = jnp.where(carry.done, carry.t_end_s, t_s)
     record = Record(t_s, after.a_m, after.e, after.i_rad, craft.mass_kg, craft.dv_mps, on, off_by, wished,
                     attitude.body_rad, attitude.body_rate_rad_s, attitude.theta_rad, target, attitude.omega_rad_s,
-                    torque)
+                    torque, pair)
     return Carry(craft, attitude, next_wish, stats, done, status, t_end, t_s), record

@@ -11,6 +11,7 @@ import numpy as np
 
 from geojax.physics.constants import G0_MPS2, SECONDS_PER_DAY
 from geojax.physics.propagate import environment_grid
+from geojax.transfer import pointing
 from geojax.transfer.rollout import STATUS_MEANINGS, Static, TransferParams, transfer
 from geojax.transfer.scenario import TransferScenario
 
@@ -95,7 +96,16 @@ def metrics(final, params) -> dict:
         # eq. (8) on the body (pointing): the momentum it hands the wheels, and the time it beat their torque
         "torque_impulse_nms": np.asarray(stats.torque_impulse_nms),
         "torque_overpowered_days": np.asarray(stats.overpowered_s) / SECONDS_PER_DAY,
+        # the attitude thrusters' propellant for the slews (pointing.attitude_propellant_kg), and what they would
+        # burn holding eq. (8)'s torque instead of the wheels (a bound on its momentum dumping)
+        "slew_impulse_nms": np.asarray(stats.slew_impulse_nms),
+        "attitude_propellant_kg": np.asarray(pointing.attitude_propellant_kg(
+            stats.slew_impulse_nms, params.rcs_arm_m, params.rcs_isp_s)),
+        "torque_hold_propellant_kg": np.asarray(pointing.attitude_propellant_kg(
+            stats.torque_impulse_nms, params.rcs_arm_m, params.rcs_isp_s)),
     }
+    # the paper's "fuel consumption" counts the attitude adjustment's with the electric thrusters'
+    out["total_propellant_kg"] = out["propellant_kg"] + out["attitude_propellant_kg"]
     for j in range(3):
         out[f"j{j + 1}_track_max_deg"] = np.rad2deg(np.asarray(stats.track_max_rad)[..., j])
         out[f"j{j + 1}_track_rms_deg"] = np.rad2deg(rms[..., j])
@@ -107,7 +117,8 @@ def record_table(records) -> dict:
     out = {"t_days": np.asarray(records.t_s) / SECONDS_PER_DAY, "a_km": np.asarray(records.a_m) / 1e3,
            "e": np.asarray(records.e), "i_deg": deg(records.i_rad), "mass_kg": np.asarray(records.mass_kg),
            "dv_mps": np.asarray(records.dv_mps), "on_fraction": np.asarray(records.on_fraction),
-           "misalignment_deg": deg(records.misalignment_rad), "torque_nm": np.asarray(records.torque_nm)}
+           "misalignment_deg": deg(records.misalignment_rad), "torque_nm": np.asarray(records.torque_nm),
+           "pair": np.asarray(records.pair)}
     for name, values in (("wished_{}_deg", records.wished_rad), ("body_{}_deg", records.body_rad),
                          ("body_rate_{}_deg_s", records.body_rate_rad_s)):
         out[name.format("azimuth")], out[name.format("elevation")] = deg(values[..., 0]), deg(values[..., 1])

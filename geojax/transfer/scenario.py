@@ -23,6 +23,7 @@ from geojax.physics.elements import kepler_to_mee
 from geojax.physics.time import TT_MINUS_TAI_S, parse_utc, tai_minus_utc_s, tt_seconds_from_utc
 from geojax.scenario import SCHEMA as SK_SCHEMA, _force_model, tomllib
 from geojax.transfer.boom import JointLimits, MpcWeights
+from geojax.transfer.quadrilateral import pair_axis_efficiency
 from geojax.transfer.rollout import TransferParams
 
 MAX_ALT_KM = 1.0e6
@@ -60,7 +61,9 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "reflectivity": _number(0.0, 0.0, 1.0 + 1e-12, True),
     },
     "thruster": {
-        "layout": Field(str, REQUIRED, choices=("boom", "fixed")),
+        "layout": Field(str, REQUIRED, choices=("boom", "quadrilateral")),
+        # the quadrilateral's cant from its north-south axis (transfer.quadrilateral); the boom ignores it
+        "cant_deg": _number(40.0, 0.0, 90.0, True),
         "thrust_n": _number(REQUIRED, 0.0, 1e5),
         "isp_s": _number(REQUIRED, 0.0, 1e6),
     },
@@ -72,6 +75,10 @@ SCHEMA: dict[str, dict[str, Field]] = {
         # (transfer.pointing).  Default (a choice): 2000 kg m^2 each, the inertia the shipped scenarios' slew
         # acceleration is quoted on (0.001 deg/s^2 = 0.035 N m of wheel torque).
         "inertia_kg_m2": Field(list, [2000.0, 2000.0, 2000.0], length=3),
+        # The attitude thrusters that the attitude propellant is counted for (transfer.pointing): a couple of
+        # 1 m arm at 220 s (hydrazine monopropellant thrusters, 220-230 s; a marked choice, both layouts).
+        "rcs_arm_m": _number(1.0, 0.0, 100.0),
+        "rcs_isp_s": _number(220.0, 0.0, 1e4),
     },
     "boom": {  # Table 1 joint ranges, the drive limits, link lengths and the MPC of Sec. 3
         "j1_deg": Field(list, [-90.0, 0.0], length=2),
@@ -217,21 +224,24 @@ def _params(config: dict) -> TransferParams:
     if thr["layout"] == "boom":
         lower = rad([bm["j1_deg"][0], 90.0, bm["j3_deg"][0]])
         upper = rad([bm["j1_deg"][1], 90.0, bm["j3_deg"][1]])
-    else:  # the fixed quadrilateral layout: the thruster along the body's S axis, joints frozen, no boom arm
+        pairs = jnp.array([1.0, 0.0, 0.0, 0.0])  # one thruster on the boom, along its wrist axis
+    else:  # the quadrilateral: strong pairs' axis along the body's S axis, joints frozen, no boom arm
         lower = upper = rad([0.0, 90.0, 0.0])
         bm = {**bm, "d1_m": 0.0, "d2_m": 0.0, "a1_m": 0.0, "base_offset_m": [0.0, 0.0, 0.0]}
+        pairs = pair_axis_efficiency(rad(thr["cant_deg"]))
     # Joint 2 is held at its working angle 90 deg (Remark 1, Fig. 11); its Table 1 range is checked above.
     three = lambda x: jnp.full(3, float(x))  # noqa: E731
     return TransferParams(
         initial=SpacecraftState(jnp.asarray(mee), f(craft["mass_kg"]), f(0.0)),
         forces=_force_model({"forces": config["forces"], "spacecraft": craft}),
-        dry_mass_kg=f(craft["dry_mass_kg"]), thrust_n=f(thr["thrust_n"]), isp_s=f(thr["isp_s"]),
+        dry_mass_kg=f(craft["dry_mass_kg"]), thrust_n=f(thr["thrust_n"]), isp_s=f(thr["isp_s"]), pair_efficiency=pairs,
         r_geo_m=f(end["radius_km"] * 1e3), a_tol_m=f(end["a_tol_km"] * 1e3), e_end=f(end["e_end"]),
         i_end_rad=rad(end["i_end_deg"]), deadband_m=f(end["deadband_km"] * 1e3),
         efficiency=f(end["efficiency"]),
         max_misalignment_rad=rad(end["max_misalignment_deg"]),
         slew_rate_rad_s=rad(att["slew_rate_deg_s"]), slew_accel_rad_s2=rad(att["slew_accel_deg_s2"]),
-        inertia_kg_m2=jnp.asarray(att["inertia_kg_m2"], dtype=float),
+        inertia_kg_m2=jnp.asarray(att["inertia_kg_m2"], dtype=float), rcs_arm_m=f(att["rcs_arm_m"]),
+        rcs_isp_s=f(att["rcs_isp_s"]),
         joints=JointLimits(lower, upper, three(np.deg2rad(bm["joint_rate_deg_s"])),
                            three(np.deg2rad(bm["joint_accel_deg_s2"]))),
         weights=MpcWeights(three(bm["mpc_q"]), three(bm["mpc_q_rate"]), three(bm["mpc_r"])),

@@ -12,6 +12,12 @@ printed beside Li's (±0.025° QFFC, ±0.030° FOMPC; latitude "hardly changes")
 beside the sweep's record of the same sample: they agree to rounding (the sweep compiled its lanes, this
 one), except where the FOMPC's annealing takes another path on a last-bit difference.
 Writes ``results/fig17_trajectories.png`` and ``.md``.
+
+    python studies/li2022/fig17_trajectories.py --level 800
+
+flies Li's own level instead, without the sweep's results file: the first repetition of each controller at
+H_rv = ``--level`` of ``sweeps/fig16_h_rv.toml`` (the sweep's key for it), beside the same controller without
+errors; writes ``results/fig17_at_h_rv_<level>.png`` and ``.md``.
 """
 
 from __future__ import annotations
@@ -72,12 +78,50 @@ def draw(tracks: dict, path: Path) -> Path:
     return plots._save(fig, list(axes), "Li 2022 Fig. 17: at the largest stable determination error", path)
 
 
+def at_level(level: float, days: float | None, out: Path) -> None:
+    """Li's Fig. 17 at his own H_rv: each controller's first repetition at ``level`` beside no errors."""
+    spec = sweep.load(HERE / "sweeps" / "fig16_h_rv.toml")
+    grid = list(spec.grid["errors.h_rv"])
+    if level not in grid:
+        raise SystemExit(f"--level: must be one of the Fig. 16 grid's H_rv {grid}, got {level:g}")
+    k = grid.index(level)
+    rows, tracks = [], {}
+    for controller in ("qffc", "fompc"):
+        clean, clean_steps = fly(spec, controller, 0.0, 0, days)
+        noisy, noisy_steps = fly(spec, controller, level, k, days)
+        m, m0 = noisy.metrics, clean.metrics
+        rows.append(f"| {controller.upper()} | {level:g} | ±{float(m['dlon_half_range_deg']):.4f}° "
+                    f"(Li ±{LI_LON_HALF_RANGE_DEG[controller]:.3f}°) | ±{float(m0['dlon_half_range_deg']):.4f}° | "
+                    f"{float(m['max_abs_mean_dlon_deg']):.4f}° | ±{float(m['dlat_half_range_deg']):.4f}° | "
+                    f"±{float(m0['dlat_half_range_deg']):.4f}° | {float(m['dv_per_year_mps']):.2f} | {int(noisy.status)} |")
+        print(rows[-1], flush=True)
+        tracks[controller] = [(f"H_rv = {level:g}", noisy_steps, "C3-"), ("no errors", clean_steps, "C0-")]
+    name = f"fig17_at_h_rv_{level:g}"
+    figure = draw(tracks, out / f"{name}.png")
+    lines = [f"# Li 2022 Fig. 17 at Li's level, H_rv = {level:g}", "",
+             f"`python studies/li2022/fig17_trajectories.py --level {level:g}`: the first repetition of each "
+             f"controller at H_rv = {level:g} of `sweeps/fig16_h_rv.toml` (its key), "
+             f"{f'{days:g} days' if days else 'one year'}, every step kept, beside the same "
+             "controller without errors. Half-ranges: half of (max − min) of the osculating sub-satellite point, "
+             "acquisition included; mean δλ: the largest one-cycle mean longitude offset (Li's measure).", "",
+             "| controller | H_rv | δλ half-range | δλ without errors | largest mean δλ | δφ half-range | "
+             "δφ without errors | ΔV (m/s/yr) | status |", "|---|---|---|---|---|---|---|---|---|", *rows, "",
+             "Li: \"the control accuracy of the longitude has risen to ±0.025° for the QFFC and ±0.030° for the "
+             "FOMPC. However, that of the latitude hardly changes\".", ""]
+    (out / f"{name}.md").write_text("\n".join(lines))
+    print(f"wrote {figure} and {out / f'{name}.md'}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--days", type=float, help="simulated days (default: the sweep's, one year)")
+    parser.add_argument("--level", type=float, help="fly this H_rv of the Fig. 16 grid (Li's: 800), no sweep file")
     parser.add_argument("--out", default=str(HERE / "results"))
     args = parser.parse_args()
     out = Path(args.out)
+    if args.level is not None:
+        at_level(args.level, args.days, out)
+        return
     results_file = out / "fig16_h_rv.h5"
     if not results_file.is_file():
         raise SystemExit(f"{results_file}: not found; run `python studies/li2022/fig16_h_rv.py` first")
