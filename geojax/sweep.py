@@ -67,7 +67,7 @@ from geojax import lanes as lanes_mod, scenario as scenario_mod, store
 from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.loop.metrics import CYCLE_NAMES, STATUS_TEXT, cycle_series
 from geojax.loop.rollout import rollout_fn
-from geojax.loop.setup import controller_of, cycle_count, disperse, prepare
+from geojax.loop.setup import controller_of, cycle_count, disperse, prepare, reference_per_sample
 from geojax.params import Field, check_table
 from geojax.parallel import per_device
 from geojax.progress import Progress
@@ -392,8 +392,11 @@ def lane_plan(sweep: Sweep, controller: str, chunk: int | None = None) -> lanes_
     scenarios = [_scenario(sweep, controller, p) for p in _points(sweep)]
     ctrl = sweep.custom.get(controller) or controller_of(scenarios)
     samples = math.ceil(min(chunk or math.inf, sweep.n_points * sweep.repetitions) / jax.local_device_count())
-    return lanes_mod.plan(ctrl, cycle_count(scenarios[0].days), samples,
-                          kept_records=len(CYCLE_NAMES) if sweep.cycles else 0, requested=sweep.lanes)
+    n_cycles = cycle_count(scenarios[0].days)
+    own_reference = reference_per_sample(scenarios, ctrl)
+    return lanes_mod.plan(ctrl, n_cycles, samples, kept_records=len(CYCLE_NAMES) if sweep.cycles else 0,
+                          reference_cycles=n_cycles + ctrl.reference_cycles if own_reference else 0,
+                          requested=sweep.lanes)
 
 
 def ray_nodes() -> list[dict]:

@@ -112,7 +112,7 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     n_env = max(n_cycles, n_segments * segment_cycles + width - 1) if width else n_cycles
     env = environment_grid(first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s, step_s, n_env, n_steps)
     cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
-    per_sample = width > 0 and not all(_same(_reference_inputs(p), _reference_inputs(params[0])) for p in params[1:])
+    per_sample = width > 0 and _references_differ(params)
     segments = reference_segments(env, n_cycles, width, segment_cycles) if width else None
     ref = None
     if width and not per_sample:
@@ -130,6 +130,16 @@ def reference_segments(env, n_cycles: int, width: int, segment_cycles: int) -> S
     index = starts[:, None] + np.arange(segment_cycles + width - 1)[None, :]
     return Segments(jax.tree_util.tree_map(lambda x: x[index], env), jnp.asarray(cycle // segment_cycles),
                     jnp.asarray(cycle % segment_cycles))
+
+
+def reference_per_sample(scenarios: list[Scenario], controller: Controller) -> bool:
+    """Whether a batch of ``scenarios`` runs one predictor reference per sample (``Batch.reference_per_sample``),
+    without preparing it."""
+    return controller.reference_cycles > 0 and _references_differ([params_of(sc, controller) for sc in scenarios])
+
+
+def _references_differ(params: list[Params]) -> bool:
+    return not all(_same(_reference_inputs(p), _reference_inputs(params[0])) for p in params[1:])
 
 
 def _reference_inputs(params: Params):
