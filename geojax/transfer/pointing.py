@@ -36,12 +36,13 @@ Isp_rcs): every change of the body's slew rate takes the torque J_k d(omega_k)/d
 of eq. (8)'s push that the wheels could not hold and that moved the body by itself (``slew_torque_nm``), and
 a torque |tau| held for dt burns |tau| dt / (L Isp_rcs g0) of propellant, whatever the couple's split (two
 thrusters of f at arm L: torque 2 f L, flow 2 f / (Isp g0)).  A rest-to-rest slew at rate w on inertia J costs
-2 J w / (L Isp_rcs g0): J w to start and J w to stop
-(``attitude_propellant_kg``).  Wheels that made the slews would store that momentum and give it back, so this
-is the cost of slewing with thrusters, the reading under which the paper's attitude fuel exists.  The boom's
-eq. (8) torque is held by the wheels and not counted here: ``run.metrics`` reports what thrusters would burn
-holding it instead (its impulse at the same arm and Isp), a bound on its momentum dumping.  The propellant is
-booked, not flown: it is left out of the orbit's mass.
+2 J w / (L Isp_rcs g0): J w to start and J w to stop (``attitude_propellant_kg``).  Wheels that made the slews
+would store that momentum and give it back, so this is the cost of slewing with thrusters, the reading under
+which the paper's attitude fuel exists.  The wheels hold the boom's eq. (8) torque within their window (not
+counted), its push beyond the window moves the body by itself (not counted), and the slews that bring the body
+back are counted; ``run.metrics`` also reports what thrusters would burn holding eq. (8) instead of the wheels
+(its impulse at the same arm and Isp), a bound on its momentum dumping.  The propellant is booked, not flown:
+it is left out of the orbit's mass.
 """
 
 from __future__ import annotations
@@ -52,8 +53,8 @@ import jax.numpy as jnp
 from geojax.physics.constants import G0_MPS2
 from geojax.physics.elements import wrap_angle
 
-# The attitude loop's step (s): short enough that a dt at the slew accelerations of the scenarios (0.001 deg/s^2:
-# 0.01 deg/s) stays below a tenth of the rate bounds (slew_over_step).
+# The attitude loop's step (s): a dt at the scenarios' slew acceleration (0.001 deg/s^2) is 0.01 deg/s, a tenth of
+# their rate bound (0.1 deg/s); at 120 s it would exceed it (slew_over_step).
 ATTITUDE_STEP_S = 10.0
 
 

@@ -87,15 +87,19 @@ def grid_cases(cants, rates):
 
 # The boom's mounting (eq. (8)'s l_0 and the links of eq. (9)): the shipped one puts the thrust line through the
 # centre of mass at the nominal pose; the earlier one put it 1.5 m off (d2) and 1.3 m below the body origin.
+# "no lever": the wrist on the centre of mass (d1 = a1 = 0, base at the origin), so eq. (8) vanishes at every pose.
 GEOMETRIES = {"through CoM": {},
-              "off CoM": {"boom.d2_m": 1.5, "boom.a1_m": 0.3, "boom.base_offset_m": [0.0, 0.0, -1.0]}}
+              "off CoM": {"boom.d2_m": 1.5, "boom.a1_m": 0.3, "boom.base_offset_m": [0.0, 0.0, -1.0]},
+              "no lever": {"boom.d1_m": 0.0, "boom.a1_m": 0.0, "boom.base_offset_m": [0.0, 0.0, 0.0]}}
 
 
 def torque_sweep(inertias, rate=0.1):
-    """The boom against the body inertia (the wheels' torque J x slew acceleration) for each mounting."""
-    rows = [(geometry, inertia) for geometry in GEOMETRIES for inertia in inertias]
-    cases = [("boom", {**GEOMETRIES[geometry], "attitude.slew_rate_deg_s": rate,
-                       "attitude.inertia_kg_m2": [inertia] * 3}) for geometry, inertia in rows]
+    """The boom against the body inertia (the wheels' torque J x slew acceleration) for each mounting, and the
+    quadrilateral at each inertia (its attitude propellant scales with it)."""
+    rows = [("boom", geometry, inertia) for geometry in GEOMETRIES for inertia in inertias]
+    rows += [("quadrilateral", None, inertia) for inertia in inertias]
+    cases = [(layout, {**GEOMETRIES.get(geometry, {}), "attitude.slew_rate_deg_s": rate,
+                       "attitude.inertia_kg_m2": [inertia] * 3}) for layout, geometry, inertia in rows]
     metrics, _, _ = batch(cases)
     return rows, metrics
 
@@ -291,15 +295,21 @@ def main() -> None:
     if args.inertias:
         torque_rows, q = torque_sweep(args.inertias, base_rate)
         lines += ["## Coupling torque (eq. 8) on the body: the boom against the wheels' torque", "",
-                  f"Body slew {base_rate:g} deg/s; the wheels' torque is J x {att['slew_accel_deg_s2']:g} deg/s^2.", "",
-                  "| mounting | inertia kg m^2 | largest eq. (8) N m | days | xenon kg | attitude kg | "
-                  "torque beyond the wheels, days | eq. (8) impulse N m s | held by thrusters instead, kg | status |",
-                  "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
-        for k, (geometry, inertia) in enumerate(torque_rows):
-            lines.append(f"| {geometry} | {inertia:.0e} | {q['max_coupling_torque_nm'][k]:.3f} | "
+                  f"Body slew {base_rate:g} deg/s; the wheels' torque is J x {att['slew_accel_deg_s2']:g} deg/s^2. "
+                  "Mountings: the shipped one (the thrust line through the centre of mass at the nominal pose: joint "
+                  "3's lift leaves a lever), a boom 1.5 m off the centre of mass, and no lever at all (the wrist on "
+                  "the centre of mass). Fuel saving: xenon + attitude against the quadrilateral at the same inertia.",
+                  "", "| mounting | inertia kg m^2 | largest eq. (8) N m | days | xenon kg | attitude kg | "
+                  "torque beyond the wheels, days | eq. (8) impulse N m s | held by thrusters instead, kg | "
+                  "time / fuel saving | status |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"]
+        for k, (layout, geometry, inertia) in enumerate(torque_rows):
+            quad = torque_rows.index(("quadrilateral", None, inertia))
+            cell = (f"{saving_cell(q, 'transfer_days', k, quad)} / {saving_cell(q, 'total_propellant_kg', k, quad)}"
+                    if layout == "boom" else "")
+            lines.append(f"| {geometry or layout} | {inertia:.0e} | {q['max_coupling_torque_nm'][k]:.3f} | "
                          f"{q['transfer_days'][k]:.1f} | {q['propellant_kg'][k]:.1f} | "
                          f"{q['attitude_propellant_kg'][k]:.1f} | {q['torque_overpowered_days'][k]:.1f} | "
-                         f"{q['torque_impulse_nms'][k]:.3g} | {q['torque_hold_propellant_kg'][k]:.1f} | "
+                         f"{q['torque_impulse_nms'][k]:.3g} | {q['torque_hold_propellant_kg'][k]:.1f} | {cell} | "
                          f"{int(q['status'][k])} |")
         lines.append("")
     if args.mc:
