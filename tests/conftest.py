@@ -4,7 +4,8 @@ The tests that run ``geojax`` in subprocesses (kill -9 and resume, Ray workers, 
 same programs again in every process.  One persistent JAX compilation cache for the session, in a temporary
 folder removed at its end, lets each later process load them instead (a cache hit is the same executable, so
 bit-for-bit comparisons are unaffected); it halves ``test_kill.py``.  The variables are set before JAX is
-imported, and subprocesses inherit them.
+imported, and subprocesses inherit them.  The suite runs in two processes (``-n 2`` in ``pyproject.toml``),
+each test file whole in one of them.
 """
 
 import atexit
@@ -18,5 +19,8 @@ if "JAX_COMPILATION_CACHE_DIR" not in os.environ:
     os.environ["JAX_COMPILATION_CACHE_DIR"] = _cache
     os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
     os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES", "0")
+
+# Two test processes (pytest-xdist) share a GPU: neither may take three quarters of its memory up front.
+os.environ.setdefault("XLA_PYTHON_CLIENT_PREALLOCATE", "false")
 
 import geojax  # noqa: E402,F401  (turns on float64 before any test builds arrays)
