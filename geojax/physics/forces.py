@@ -47,6 +47,9 @@ class ForceModel(NamedTuple):
     # The Earth's field to degree and order N (``physics.geopotential``), replacing the J2 and C22/S22 terms
     # (their switches are then not read); None: the papers' J2 (and C22/S22) model.  Static structure.
     gravity: Geopotential | None = None
+    # The Moon as a second occulting body of the Sun (conical, penumbra included; ``sunlit_fraction_xyz``):
+    # its radius in m; None: the Earth's shadow only.  Static structure.
+    moon_radius_m: float | None = None
 
 
 class Environment(NamedTuple):
@@ -215,14 +218,28 @@ def perturbing_xyz(x, y, z, mass_kg, env: Environment, fm: ForceModel, boundarie
         (fm.moon_on, third_body_xyz(x, y, z, env.r_moon_eci_m, fm.mu_moon_m3_s2)),
     ]:
         ax, ay, az = ax + switch * term[0], ay + switch * term[1], az + switch * term[2]
-    if boundaries:
-        sunlit = skipped_where_idle(shadow_fraction_xyz, near_shadow_cone, _sunlit, x, y, z, env.r_sun_eci_m,
-                                    fm.r_earth_m)
-    else:
-        sunlit = shadow_fraction_xyz(x, y, z, env.r_sun_eci_m, fm.r_earth_m)
-    light = 1.0 - fm.shadow_on * (1.0 - sunlit)
+    light = sunlit_fraction_xyz(x, y, z, env, fm, boundaries)
     sx, sy, sz = srp_xyz(x, y, z, env.r_sun_eci_m, mass_kg, fm, light)
     return ax + fm.srp_on * sx, ay + fm.srp_on * sy, az + fm.srp_on * sz
+
+
+def sunlit_fraction_xyz(x, y, z, env: Environment, fm: ForceModel, boundaries: bool = False):
+    """Visible fraction of the solar disc at ECI (x, y, z): the Earth's shadow (where ``fm.shadow_on``) and,
+    where ``fm.moon_radius_m`` is set, the Moon's (the same conical model with the Moon as the occulting body,
+    Montenbruck & Gill Sec. 3.4.2; the two occulted areas add, as they cannot overlap the Sun together seen
+    from an Earth orbit but in a configuration that lasts seconds).  With ``boundaries`` each shadow
+    function is evaluated for a batch only when some sample is near its cone (``perturbing_xyz``)."""
+    def fraction(x, y, z, sun, radius_m):
+        if boundaries:
+            return skipped_where_idle(shadow_fraction_xyz, near_shadow_cone, _sunlit, x, y, z, sun, radius_m)
+        return shadow_fraction_xyz(x, y, z, sun, radius_m)
+
+    light = 1.0 - fm.shadow_on * (1.0 - fraction(x, y, z, env.r_sun_eci_m, fm.r_earth_m))
+    if fm.moon_radius_m is None:
+        return light
+    mx, my, mz = _xyz(env.r_moon_eci_m)
+    moon = fraction(x - mx, y - my, z - mz, env.r_sun_eci_m - env.r_moon_eci_m, fm.moon_radius_m)
+    return jnp.clip(light - (1.0 - moon), 0.0, 1.0)
 
 
 # Array forms: position [..., 3] in, acceleration [..., 3] out.
