@@ -16,12 +16,14 @@ computed once per scenario (DESIGN.md, "Ephemerides are batch-invariant").
 
 from __future__ import annotations
 
+from functools import partial
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 
 from geojax.physics import constants as c
-from geojax.physics.fusion import skipped_where_idle
+from geojax.physics.fusion import materialized, skipped_where_idle
 from geojax.physics.geopotential import Geopotential, geopotential_xyz
 
 
@@ -240,6 +242,24 @@ def sunlit_fraction_xyz(x, y, z, env: Environment, fm: ForceModel, boundaries: b
     mx, my, mz = _xyz(env.r_moon_eci_m)
     moon = fraction(x - mx, y - my, z - mz, env.r_sun_eci_m - env.r_moon_eci_m, fm.moon_radius_m)
     return jnp.clip(light - (1.0 - moon), 0.0, 1.0)
+
+
+def perturbing_behind_boundary(x, y, z, mass_kg, env: Environment, fm: ForceModel, boundaries: bool = False):
+    """``perturbing_xyz`` behind a fusion boundary (``fusion.materialized``, where ``boundaries``) for the
+    equations of motion.  With the field to degree N, (a_x, a_y) cross the boundary as one complex number:
+    XLA's CPU compiler makes one kernel per output of the boundary and copies the whole recursion into each,
+    so two outputs instead of three evaluate it twice instead of three times (the degree-8 step at batch 1024:
+    ``benchmarks/results/core_field.md``).  The papers' model keeps its three real outputs."""
+    if fm.gravity is None:
+        return materialized(partial(perturbing_xyz, boundaries=boundaries), x, y, z, mass_kg, env, fm,
+                            anchor=env.earth_angle_rad, enabled=boundaries)
+
+    def packed(*args):
+        ax, ay, az = perturbing_xyz(*args, boundaries=boundaries)
+        return jax.lax.complex(ax, ay), az
+
+    axy, az = materialized(packed, x, y, z, mass_kg, env, fm, anchor=env.earth_angle_rad, enabled=boundaries)
+    return jnp.real(axy), jnp.imag(axy), az
 
 
 # Array forms: position [..., 3] in, acceleration [..., 3] out.
