@@ -9,14 +9,14 @@ of Holmes & Featherstone's 2002 scaling; to degree 20 nothing comes near an over
 The recursion is non-singular at the poles and uses only x, y, z, r^-2: no trigonometric function.
 
 Static structure, traced values: the degree and order are the shape of the coefficient arrays, so the
-recursion is unrolled at trace time (a Python loop over the (N + 2)(N + 3) / 2 terms, the same for every
-sample); the coefficients are array leaves that a sweep can vary and a gradient reach.  The constants of
-the recursion are exact ratios of factorials computed in Python once per shape.
+recursion's form is fixed at trace time (unrolled term by term to degree 8, a ``lax.scan`` over degrees
+beyond: ``geopotential_ecef_xyz``); the coefficients are array leaves that a sweep can vary and a gradient
+reach.  The constants of the recursion are exact ratios of factorials computed in Python once per shape.
 
 EGM2008 (Pavlis et al., J. Geophys. Res. 117 (2012) B04406), tide-free, to degree 20, ships as
 ``data/egm2008_n20.txt`` (written by ``data/make_egm2008.py``).  Its reference GM = 3.986004415e14 m^3/s^2
 differs from the IERS value the engine uses (``constants.MU_EARTH_M3_S2``) by 7.5e-10 relative; the field
-is scaled by the engine's mu, which moves the harmonic terms by that fraction (GEO: 2e-14 m/s^2).
+is scaled by the engine's mu, which moves the harmonic terms by that fraction (at GEO below 1e-14 m/s^2).
 """
 
 from __future__ import annotations
