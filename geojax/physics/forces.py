@@ -1,5 +1,5 @@
 """Force models: Earth point mass, J2, C22/S22 or the field to degree N, Sun, Moon, solar radiation pressure
-with Earth shadow.
+with the Earth's (and optionally the Moon's) shadow.
 
 Each term is a small pure function of the ECI position's components ``(x, y, z)``
 (``*_xyz``), written so that a step compiles to a few elementwise loops: no
@@ -228,9 +228,9 @@ def perturbing_xyz(x, y, z, mass_kg, env: Environment, fm: ForceModel, boundarie
 def sunlit_fraction_xyz(x, y, z, env: Environment, fm: ForceModel, boundaries: bool = False):
     """Visible fraction of the solar disc at ECI (x, y, z): the Earth's shadow (where ``fm.shadow_on``) and,
     where ``fm.moon_radius_m`` is set, the Moon's (the same conical model with the Moon as the occulting body,
-    Montenbruck & Gill Sec. 3.4.2; the two occulted areas add, as they cannot overlap the Sun together seen
-    from an Earth orbit but in a configuration that lasts seconds).  With ``boundaries`` each shadow
-    function is evaluated for a batch only when some sample is near its cone (``perturbing_xyz``)."""
+    Montenbruck & Gill Sec. 3.4.2).  The occulted fractions add, clipped at no light: the overlap of the two
+    discs over the Sun's, a double eclipse, is not modelled.  With ``boundaries`` each shadow function is
+    evaluated for a batch only when some sample is near its cone (``perturbing_xyz``)."""
     def fraction(x, y, z, sun, radius_m):
         if boundaries:
             return skipped_where_idle(shadow_fraction_xyz, near_shadow_cone, _sunlit, x, y, z, sun, radius_m)
