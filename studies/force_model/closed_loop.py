@@ -1,5 +1,5 @@
-"""What the paper models miss: closed-loop runs of the papers' scenarios with their own force model and with
-EGM2008 8x8 (which replaces J2 and C22/S22; Sun, Moon, SRP unchanged).
+"""What the paper models miss: closed-loop runs of the papers' scenarios with their own force model, with the
+degree-2 field (J2 + C22/S22) and with EGM2008 8x8 (which replaces J2 and C22/S22; Sun, Moon, SRP unchanged).
 
     python studies/force_model/closed_loop.py [--days 365.25] [--scenarios li2022-qffc katz2025-discrete ...]
 
@@ -22,7 +22,7 @@ import geojax
 from geojax.loop.metrics import cycle_table
 
 HERE = Path(__file__).resolve().parent
-MODELS = {"paper": {}, "EGM2008 8x8": {"forces.gravity_degree": 8}}
+MODELS = {"paper": {}, "J2 + C22/S22": {"forces.c22_s22": True}, "EGM2008 8x8": {"forces.gravity_degree": 8}}
 
 
 def run(name: str, days: float, overrides: dict) -> dict:

@@ -1,7 +1,7 @@
 """The field against heyoka's ``model.egm2008_acc`` (Taylor-integrator library, its own EGM2008 evaluation),
 a second independent check beside ``tests/test_geopotential.py``'s spherical-gradient reference.
 
-    python studies/force_model/heyoka_check.py   (needs heyoka >= 7.3: the ``bench`` extra)
+    python studies/force_model/heyoka_check.py   (needs heyoka, the ``bench`` extra)
 
 300 random points from 6,600 to 50,000 km, Earth-fixed, degree = order = 2, 4, 8, 12, 16, 20, both with
 heyoka's GM and radius.  heyoka returns the total acceleration (central term included); the difference is
