@@ -108,7 +108,8 @@ def _same(a, b) -> bool:
 STATIC_KEYS = {"integration.step_s": lambda sc: steps_per_cycle(sc.step_s), "duration.days": lambda sc: cycle_count(sc.days),
                "integration.dynamics": lambda sc: sc.dynamics, "epoch.utc": lambda sc: sc.epoch_tt_s,
                "epoch.ut1_minus_utc_s": lambda sc: sc.tt_minus_ut1_s,
-               "forces.gravity_degree": lambda sc: (sc.config["forces"]["gravity_degree"], sc.config["forces"]["gravity_order"]),
+               "forces.gravity_degree": lambda sc: (sc.config["forces"]["gravity_degree"],
+                                                    sc.config["forces"]["gravity_order"]),
                "forces.moon_shadow": lambda sc: sc.config["forces"]["moon_shadow"],
                "forces.ephemeris": lambda sc: sc.config["forces"]["ephemeris"]}
 

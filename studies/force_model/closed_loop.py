@@ -55,7 +55,8 @@ def main():
              f"`{results['command']}`: {args.days:g} days, no errors, seed 0.  ΔV per year (north-south part "
              "where the planner records its burns), largest |Δλ| and |φ| over the run, status.  The papers' "
              "models: li2022 and ye2022 J2 only (no C22/S22), katz2025 J2 + C22/S22; all with Sun, Moon, SRP.", "",
-             "| scenario | model | ΔV (m/s/yr) | north-south | in plane (total − north-south) | max abs dlon (deg) | max abs dlat (deg) | status |",
+             "| scenario | model | ΔV (m/s/yr) | north-south | in plane (total − north-south) | max abs dlon (deg) "
+             "| max abs dlat (deg) | status |",
              "|---|---|---:|---:|---:|---:|---:|---:|"]
     for name, models in results["runs"].items():
         for model, r in models.items():
