@@ -120,7 +120,13 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "sun": Field(bool, True),
         "moon": Field(bool, True),
         "srp": Field(bool, True),
+        # The Earth's shadow ("conical": umbra and penumbra, Montenbruck & Gill Sec. 3.4.2); moon_shadow adds the
+        # Moon as an occulting body (same model): both cut SRP and the thrusters' sunlit windows.
         "shadow": Field(str, "conical", choices=("conical", "none")),
+        "moon_shadow": Field(bool, False),
+        # Sun and Moon: "meeus" (analytic series, geojax.physics.ephemeris) or "de421" (JPL DE421 through
+        # jplephem), evaluated once per scenario on the environment grid.
+        "ephemeris": Field(str, "meeus", choices=("meeus", "de421")),
         "srp_pressure_n_m2": Field(_NUMBER, 4.5605e-6, lower=0.0, lower_inclusive=True, upper=1e-2),
         # The Earth's field to degree and order N (EGM2008, tide-free, shipped to degree 20): replaces `j2` and
         # `c22_s22` where given (those stay for the papers' models).  Order: default the degree, 0 <= M <= N.
@@ -375,6 +381,7 @@ def _force_model(config: dict) -> ForceModel:
         reflectivity=craft["reflectivity"],
         srp_area_m2=craft["srp_area_m2"],
         shadow_on=on(forces["shadow"] == "conical"),
+        moon_radius_m=c.R_MOON_M if forces.get("moon_shadow") else None,
         gravity=None if forces.get("gravity_degree") is None else egm2008(forces["gravity_degree"],
                                                                          forces.get("gravity_order")),
     )

@@ -59,9 +59,8 @@ def propagate_scenario(scenario: Scenario, progress: bool | None = None) -> Prop
     with Progress(n_cycles, "cycles", enabled=progress) as bar:
         for b in range(n_blocks):
             block_epoch = scenario.epoch_tt_s + b * block * SIDEREAL_DAY_S
-            env = environment_grid(
-                block_epoch, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, block, n_steps
-            )
+            env = environment_grid(block_epoch, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, block, n_steps,
+                                   scenario.config["forces"]["ephemeris"])
             state, records = _block(params, Shared(env, None), key, step_s=step_s, dynamics=dynamics)
             params = params._replace(initial=state)
             means = records.cycles.means._replace(t_s=records.cycles.means.t_s + b * block * SIDEREAL_DAY_S)

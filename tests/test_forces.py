@@ -6,11 +6,13 @@ import pytest
 
 from geojax.physics import constants as c
 from geojax.physics.forces import (
+    Environment,
     ForceModel,
     c22_s22_acceleration,
     j2_acceleration,
     shadow_fraction,
     solar_radiation_pressure,
+    sunlit_fraction_xyz,
     third_body,
 )
 
@@ -134,3 +136,32 @@ def test_shadow_skipped_for_a_sunlit_batch_gives_the_same_numbers_and_derivative
     assert float(jnp.max(jnp.abs(dz))) > 0
     fwd = jax.jacfwd(lambda d: jax.vmap(gated)(x, y, d).sum())(z)
     np.testing.assert_allclose(fwd, dz, rtol=1e-7, atol=1e-18)
+
+
+def _on_axis_behind_moon(distance_m, offset_m=0.0):
+    """Sun, Moon and a satellite on one line (the satellite ``distance_m`` behind the Moon, displaced
+    ``offset_m`` sideways), as an Environment and ECI components."""
+    sun, moon = np.array([c.AU_M, 0.0, 0.0]), np.array([3.8e8, 0.0, 0.0])
+    r = moon - np.array([distance_m, -offset_m, 0.0])
+    env = Environment(jnp.asarray(sun), jnp.asarray(moon), jnp.asarray(0.0), jnp.asarray(1.0), jnp.asarray(0.0))
+    return env, tuple(jnp.asarray(v) for v in r)
+
+
+def test_moon_shadow_umbra_annulus_and_daylight():
+    # Closed forms of two concentric discs: behind the Moon where its apparent radius exceeds the Sun's, no
+    # light; where it is smaller (annular eclipse), 1 - (a_moon / a_sun)^2 of the disc; far off the axis, 1.
+    fm = ForceModel(shadow_on=0.0, moon_radius_m=c.R_MOON_M)
+    env, r = _on_axis_behind_moon(3.42e8)  # a GEO satellite: 342,000 km behind the Moon
+    assert float(sunlit_fraction_xyz(*r, env, fm)) == 0.0
+    env, r = _on_axis_behind_moon(3.8e8 - 4.0e7)  # nearer the Moon's umbra tip: still umbra
+    assert float(sunlit_fraction_xyz(*r, env, fm)) == 0.0
+    distance = 4.2e8  # beyond the umbra's tip (about 3.74e8 m): annular
+    env, r = _on_axis_behind_moon(distance)
+    a_sun = np.arcsin(c.R_SUN_M / (c.AU_M - 3.8e8 + distance))
+    a_moon = np.arcsin(c.R_MOON_M / distance)
+    assert float(sunlit_fraction_xyz(*r, env, fm)) == pytest.approx(1 - (a_moon / a_sun) ** 2, rel=1e-9)
+    env, r = _on_axis_behind_moon(3.42e8, offset_m=1e7)
+    assert float(sunlit_fraction_xyz(*r, env, fm)) == 1.0
+    # Without moon_radius_m the Moon casts no shadow.
+    env, r = _on_axis_behind_moon(3.42e8)
+    assert float(sunlit_fraction_xyz(*r, env, ForceModel(shadow_on=0.0))) == 1.0

@@ -65,6 +65,8 @@ def test_overrides_and_path(tmp_path):
         ({"forces.gravity_degree": 4, "forces.gravity_order": 5},
          "forces.gravity_order: must be <= forces.gravity_degree = 4, got 5"),
         ({"forces.gravity_order": 3}, "forces.gravity_order: needs forces.gravity_degree"),
+        ({"forces.moon_shadow": "yes"}, "forces.moon_shadow: must be true or false, got str 'yes'"),
+        ({"forces.ephemeris": "de430"}, "forces.ephemeris: must be one of 'meeus', 'de421', got 'de430'"),
         ({"epoch.utc": "yesterday"}, "epoch.utc: 'yesterday' is not an ISO 8601 date-time"),
         ({"bogus.x": 1}, "bogus.x: not a scenario key; write it as TABLE.KEY"),
         ({"days": 5.0}, "days: not a scenario key"),

@@ -30,8 +30,7 @@ import jax.numpy as jnp
 
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_matrix
 from geojax.physics.dynamics import Thrust
-from geojax.physics.forces import near_shadow_cone, shadow_fraction_xyz
-from geojax.physics.fusion import skipped_where_idle
+from geojax.physics.forces import sunlit_fraction_xyz
 from geojax.physics.propulsion import delta_v_direction_rsw, firing_fraction, sunlit_clock
 from geojax.physics.trig import sincos
 
@@ -116,7 +115,6 @@ def sunlit_fraction(env_steps, station_lon_rad, fm):
     x, y, z = R_SYNC_M * cos_angle, R_SYNC_M * sin_angle, jnp.zeros_like(cos_angle)
     # A batch evaluates the shadow function (an arcsine and three arccosines per step) only in cycles where
     # some sample's station meets the shadow cone (``physics.fusion.skipped_where_idle``): a few weeks
-    # around each equinox; elsewhere it is exactly 1.
-    lit = skipped_where_idle(shadow_fraction_xyz, near_shadow_cone, lambda x, *_: jnp.ones_like(x), x, y, z,
-                             env_steps.r_sun_eci_m[:, 1], fm.r_earth_m)
-    return 1.0 - fm.shadow_on * (1.0 - lit)
+    # around each equinox; elsewhere it is exactly 1.  The Moon's shadow too, where the scenario has it.
+    mid = jax.tree_util.tree_map(lambda a: a[:, 1], env_steps)
+    return sunlit_fraction_xyz(x, y, z, mid, fm, boundaries=True)

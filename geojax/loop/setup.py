@@ -110,7 +110,8 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     segment_cycles = min(segment_cycles, n_cycles)
     n_segments = -(-n_cycles // segment_cycles)
     n_env = max(n_cycles, n_segments * segment_cycles + width - 1) if width else n_cycles
-    env = environment_grid(first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s, step_s, n_env, n_steps)
+    env = environment_grid(first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s, step_s, n_env, n_steps,
+                           first.config["forces"]["ephemeris"])
     cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
     per_sample = width > 0 and _references_differ(params)
     segments = reference_segments(env, n_cycles, width, segment_cycles) if width else None
@@ -155,7 +156,10 @@ def _same(a, b) -> bool:
 STATIC_KEYS = {"integration.step_s": lambda sc: steps_per_cycle(sc.step_s), "duration.days": lambda sc: cycle_count(sc.days),
                "integration.dynamics": lambda sc: sc.dynamics, "epoch.utc": lambda sc: sc.epoch_tt_s,
                "epoch.ut1_minus_utc_s": lambda sc: sc.tt_minus_ut1_s,
-               "forces.gravity_degree": lambda sc: None if sc.force_model.gravity is None else sc.force_model.gravity.c_nm.shape}
+               "forces.gravity_degree": lambda sc: (sc.config["forces"]["gravity_degree"],
+                                                    sc.config["forces"]["gravity_order"]),
+               "forces.moon_shadow": lambda sc: sc.config["forces"]["moon_shadow"],
+               "forces.ephemeris": lambda sc: sc.config["forces"]["ephemeris"]}
 
 
 def _check_static(scenarios: list[Scenario], controller: Controller) -> None:

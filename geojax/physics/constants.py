@@ -18,6 +18,7 @@ MU_SUN_M3_S2 = 1.32712440041e20
 MU_MOON_M3_S2 = 4.902800066e12
 AU_M = 1.495978707e11
 R_SUN_M = 6.957e8
+R_MOON_M = 1.7374e6  # mean radius (IAU WG on Cartographic Coordinates, Archinal et al. 2011)
 
 G0_MPS2 = 9.80665
 SIDEREAL_DAY_S = 86164.0905

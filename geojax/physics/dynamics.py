@@ -10,14 +10,13 @@ integrated with the orbit and is exact for any burn window (see
 
 from __future__ import annotations
 
-from functools import partial
 from typing import NamedTuple
 
 import jax.numpy as jnp
 
 from geojax.physics.constants import G0_MPS2
 from geojax.physics.elements import mee_rsw_rows
-from geojax.physics.forces import Environment, ForceModel, perturbing_xyz, point_mass_xyz
+from geojax.physics.forces import Environment, ForceModel, perturbing_behind_boundary, point_mass_xyz
 from geojax.physics.frames import rsw_to_eci_xyz
 from geojax.physics.fusion import materialized
 from geojax.physics.trig import sincos
@@ -104,8 +103,8 @@ def mee_rhs(state: SpacecraftState, env: Environment, fm: ForceModel, thrust: Th
     cos_l, sin_l = sincos(true_lon)  # plain arithmetic (``physics.trig``): cheaper recomputed than stored
     rows = mee_rsw_rows(h, k, cos_l, sin_l)
     r = p / (1 + f * cos_l + g * sin_l)
-    a_eci = materialized(partial(perturbing_xyz, boundaries=boundaries), r * rows[0][0], r * rows[0][1],
-                         r * rows[0][2], state.mass_kg, env, fm, anchor=anchor, enabled=boundaries)
+    a_eci = perturbing_behind_boundary(r * rows[0][0], r * rows[0][1], r * rows[0][2], state.mass_kg, env, fm,
+                                       boundaries)
     accel, mass_rate = _thrust_rates(state, thrust)
     d = thrust.direction_rsw
     a_r, a_t, a_n = (sum(row[j] * a_eci[j] for j in range(3)) + accel * d[..., i] for i, row in enumerate(rows))
@@ -120,8 +119,7 @@ def cartesian_rhs(state: SpacecraftState, env: Environment, fm: ForceModel, thru
     x, y, z, vx, vy, vz = _components(state.orbit)
     accel, mass_rate = _thrust_rates(state, thrust)
     gx, gy, gz = point_mass_xyz(x, y, z, fm.mu_m3_s2)
-    px, py, pz = materialized(partial(perturbing_xyz, boundaries=boundaries), x, y, z, state.mass_kg, env, fm,
-                              anchor=env.earth_angle_rad, enabled=boundaries)
+    px, py, pz = perturbing_behind_boundary(x, y, z, state.mass_kg, env, fm, boundaries)
     tx, ty, tz = (accel * c for c in rsw_to_eci_xyz(_xyz_of(thrust.direction_rsw), (x, y, z), (vx, vy, vz)))
     return SpacecraftState(_like(state.orbit, (vx, vy, vz, gx + px + tx, gy + py + ty, gz + pz + tz)),
                            mass_rate, accel)

@@ -27,7 +27,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.physics.constants import AU_M
+from geojax.physics.constants import AU_M, DAYS_PER_JULIAN_CENTURY, JD_J2000, SECONDS_PER_DAY
 from geojax.physics.time import julian_centuries_tt
 
 # Meeus Table 47.A: multiples of (D, M, M', F), then sum_l [1e-6 deg] and
@@ -194,3 +194,41 @@ def moon_position_eci_m(t_tt_s, frame_epoch_tt_s):
     t = julian_centuries_tt(jnp.asarray(t_tt_s, dtype=jnp.float64))
     longitude, latitude, distance_m = moon_ecliptic_of_date(t)
     return ecliptic_of_date_to_eci(longitude, latitude, distance_m, t, julian_centuries_tt(frame_epoch_tt_s))
+
+
+# JPL DE421 (Folkner, Williams & Boggs, IPN Progress Report 42-178, 2009), read by jplephem from the `de421`
+# package (offline; jplephem's ``ephem`` reader of that package, Chebyshev series of positions in km, ICRF).
+def de421_sun_moon_eci_m(t_tt_s, frame_epoch_tt_s):
+    """Geocentric Sun and Moon positions [..., 3] (m), ECI of ``frame_epoch_tt_s``, from JPL DE421 (NumPy).
+
+    TDB is taken as TT (they differ by < 2 ms).  ICRF (= mean equator and equinox of J2000.0 to 0.02") is
+    turned to the mean equator and equinox of the frame epoch by the IAU 1976 precession angles zeta, z,
+    theta (Lieske et al. 1977; Meeus eqs. (21.2)-(21.4)).
+    """
+    import de421
+    from jplephem.ephem import Ephemeris
+
+    ephemeris = Ephemeris(de421)
+    jd = JD_J2000 + np.asarray(t_tt_s, dtype=np.float64) / SECONDS_PER_DAY
+    moon = ephemeris.position("moon", jd)  # geocentric, km [3, ...]
+    earth = ephemeris.position("earthmoon", jd) - moon * ephemeris.earth_share
+    sun = ephemeris.position("sun", jd) - earth
+    rotation = precession_from_j2000(float(frame_epoch_tt_s))
+    shape = np.shape(t_tt_s) + (3,)  # jplephem gives [3, 1] for a scalar time
+    return tuple(np.moveaxis(np.einsum("ij,j...->i...", rotation, body), 0, -1).reshape(shape) * 1e3
+                 for body in (sun, moon))
+
+
+def precession_from_j2000(t_tt_s: float) -> np.ndarray:
+    """[3, 3]: J2000 mean-equator vector -> mean equator and equinox of ``t_tt_s``, R3(-z) R2(theta) R3(-zeta)."""
+    t = t_tt_s / SECONDS_PER_DAY / DAYS_PER_JULIAN_CENTURY
+    arcsec = np.pi / 180 / 3600
+    zeta = (2306.2181 * t + 0.30188 * t**2 + 0.017998 * t**3) * arcsec
+    z = (2306.2181 * t + 1.09468 * t**2 + 0.018203 * t**3) * arcsec
+    theta = (2004.3109 * t - 0.42665 * t**2 - 0.041833 * t**3) * arcsec
+
+    def r3(a):
+        return np.array([[np.cos(a), np.sin(a), 0.0], [-np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+
+    r2 = np.array([[np.cos(theta), 0.0, -np.sin(theta)], [0.0, 1.0, 0.0], [np.sin(theta), 0.0, np.cos(theta)]])
+    return r3(-z) @ r2 @ r3(-zeta)

@@ -9,14 +9,14 @@ of Holmes & Featherstone's 2002 scaling; to degree 20 nothing comes near an over
 The recursion is non-singular at the poles and uses only x, y, z, r^-2: no trigonometric function.
 
 Static structure, traced values: the degree and order are the shape of the coefficient arrays, so the
-recursion is unrolled at trace time (a Python loop over the (N + 2)(N + 3) / 2 terms, the same for every
-sample); the coefficients are array leaves that a sweep can vary and a gradient reach.  The constants of
-the recursion are exact ratios of factorials computed in Python once per shape.
+recursion's form is fixed at trace time (unrolled term by term to degree 12, a ``lax.scan`` over degrees
+beyond: ``geopotential_ecef_xyz``); the coefficients are array leaves that a sweep can vary and a gradient
+reach.  The constants of the recursion are exact ratios of factorials computed in Python once per shape.
 
 EGM2008 (Pavlis et al., J. Geophys. Res. 117 (2012) B04406), tide-free, to degree 20, ships as
 ``data/egm2008_n20.txt`` (written by ``data/make_egm2008.py``).  Its reference GM = 3.986004415e14 m^3/s^2
 differs from the IERS value the engine uses (``constants.MU_EARTH_M3_S2``) by 7.5e-10 relative; the field
-is scaled by the engine's mu, which moves the harmonic terms by that fraction (GEO: 2e-14 m/s^2).
+is scaled by the engine's mu, which moves the harmonic terms by that fraction (at GEO below 1e-14 m/s^2).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 
 MAX_DEGREE = 20  # the shipped table (data/egm2008_n20.txt)
-UNROLLED_MAX_DEGREE = 8  # see geopotential_ecef_xyz
+UNROLLED_MAX_DEGREE = 12  # see geopotential_ecef_xyz
 
 
 class Geopotential(NamedTuple):
@@ -88,12 +88,14 @@ def geopotential_ecef_xyz(x, y, z, mu, r_earth_m, field: Geopotential):
     """Earth-fixed acceleration of the degrees 2..N at Earth-fixed (x, y, z): M&G eqs. (3.30)-(3.33), normalised.
 
     Two evaluations of the same recursion, chosen by the degree (static).  To ``UNROLLED_MAX_DEGREE`` the
-    terms are unrolled one by one: XLA fuses them into a few kernels over the lanes (degree 8 in the MEE step
-    at batch 1024: about 3x the degree-2 step, against 9x with the scan; ``benchmarks/core.py``).  Beyond,
-    one ``lax.scan`` step per degree: XLA's CPU compiler copies each elementwise producer into every
-    consumer, and with the two-term recursion unrolled the work and the compilation grew as about 1.6^N (the
-    paths through the recursion): degree 12 ran 5x slower than degree 8 and degree 16 ran out of 20 GB while
-    compiling.  The scan stores each row once and compiles in about a second at any degree.
+    terms are unrolled one by one and XLA fuses them into a few kernels over the lanes.  Beyond, one
+    ``lax.scan`` step per degree: unrolled, the two-term recursion is a graph whose paths grow as about 1.6^N,
+    and XLA's CPU compilation grew with it (alone, the field at degree 16 ran out of 20 GB while compiling).
+    Measured in the MEE step at batch 1024, one core, both forms in one process, fastest of 10 (ns per
+    right-hand side per sample, compile s; the J2 + C22/S22 step beside it, the machine shared): degree 10
+    unrolled 336 (27.5 s) against the scan's 1866 (14.0 s), step 102; degree 12: 438 (37.4 s) against 2503
+    (9.2 s), step 65; degree 14: 507 (70.6 s, 0.85 GB) against 3125 (15.4 s), step 94.  The unrolled form
+    stops at 12, where its compilation is still under a minute.
     """
     if field.degree <= UNROLLED_MAX_DEGREE:
         return _unrolled(x, y, z, mu, r_earth_m, field)

@@ -12,11 +12,12 @@ from typing import Callable, NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.physics.dynamics import cartesian_rhs, mee_rhs
 from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, mee_to_rv_xyz, wrap_angle
-from geojax.physics.ephemeris import moon_position_eci_m, sun_position_eci_m
+from geojax.physics.ephemeris import de421_sun_moon_eci_m, moon_position_eci_m, sun_position_eci_m
 from geojax.physics.forces import Environment
 from geojax.physics.frames import earth_rotation_angle_rad, latitude_rad
 
@@ -98,16 +99,39 @@ def environment_at(t_tt_s, frame_epoch_tt_s, tt_minus_ut1_s) -> Environment:
     )
 
 
-@partial(jax.jit, static_argnums=(4, 5))
-def environment_grid(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cycles: int, n_steps: int) -> Environment:
+EPHEMERIDES = ("meeus", "de421")
+
+
+def environment_grid(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cycles: int, n_steps: int,
+                     ephemeris: str = "meeus") -> Environment:
     """Environment at the RK4 stage times of every step from ``start_tt_s``: leaves [n_cycles, n_steps, 3, ...].
 
-    Evaluated once per scenario (and per step size), shared by every sample of a batch.
+    Evaluated once per scenario (and per step size), shared by every sample of a batch.  ``ephemeris``: the
+    Sun and Moon from the analytic series ("meeus") or from JPL DE421 ("de421", NumPy, outside the step).
     """
+    env = _environment_grid(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cycles, n_steps)
+    if ephemeris == "meeus":
+        return env
+    if ephemeris != "de421":
+        raise ValueError(f"forces.ephemeris: must be one of {', '.join(map(repr, EPHEMERIDES))}, got {ephemeris!r}")
+    half_steps = float(start_tt_s) + np.arange(2 * n_cycles * n_steps + 1) * (float(step_s) / 2)
+    sun, moon = de421_sun_moon_eci_m(half_steps, float(frame_epoch_tt_s))
+    return env._replace(r_sun_eci_m=_on_stages(jnp.asarray(sun), n_cycles, n_steps),
+                        r_moon_eci_m=_on_stages(jnp.asarray(moon), n_cycles, n_steps))
+
+
+@partial(jax.jit, static_argnums=(4, 5))
+def _environment_grid(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cycles: int, n_steps: int):
     half_steps = jnp.arange(2 * n_cycles * n_steps + 1)
     env = environment_at(start_tt_s + half_steps * (step_s / 2), frame_epoch_tt_s, tt_minus_ut1_s)
+    return jax.tree_util.tree_map(lambda x: _on_stages(x, n_cycles, n_steps), env)
+
+
+def _on_stages(half_step_values, n_cycles: int, n_steps: int):
+    """Values at the half steps [2 n_cycles n_steps + 1, ...] -> at each step's three RK4 stage times
+    [n_cycles, n_steps, 3, ...]."""
     index = 2 * jnp.arange(n_cycles * n_steps)[:, None] + jnp.arange(3)[None, :]
-    return jax.tree_util.tree_map(lambda x: x[index].reshape((n_cycles, n_steps, 3) + x.shape[1:]), env)
+    return half_step_values[index].reshape((n_cycles, n_steps, 3) + half_step_values.shape[1:])
 
 
 def cycle_means(fghk_mean, a_mean_m, lon_rad, tan_lat, cycle_s, t_mid_s) -> CycleMeans:

@@ -37,7 +37,7 @@ def static_for(sc: TransferScenario, days: float | None = None, record_every_s: 
 def env_grid(sc: TransferScenario, static: Static):
     """Sun, Moon and Earth angle at every RK4 stage, shared by every transfer of a batch (same epoch)."""
     return environment_grid(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s, static.step_s, static.n_records,
-                            static.steps_per_record)
+                            static.steps_per_record, sc.config["forces"]["ephemeris"])
 
 
 def run(sc: TransferScenario, days: float | None = None, record_every_s: float = SECONDS_PER_DAY) -> TransferResult:

@@ -5,7 +5,8 @@ published ones (stable 75.1 deg E and 105.3 deg W, unstable 11.5 deg W and 161.9
     python studies/force_model/drift_atlas.py
 
 The published values are quoted from the literature as issue 33 gives them (Soop, *Handbook of Geostationary
-Orbits*, 1994, Sec. 3.4, discusses the equilibria: near 75 E and 105 W stable), not computed here.  Results: ``results/drift_atlas.json`` and ``.md``.
+Orbits*, 1994, Sec. 3.4, discusses the equilibria: near 75 E and 105 W stable), not computed here.
+Results: ``results/drift_atlas.json`` and ``.md``.
 """
 
 from __future__ import annotations
@@ -63,7 +64,8 @@ def main():
              "| N | stable | unstable | largest |longitude acceleration| (deg/day^2) |", "|---:|---|---|---:|"]
     for degree, row in results["degrees"].items():
         lines.append(f"| {degree} | {', '.join(f'{x:.2f}' for x in row['stable_deg'])} | "
-                     f"{', '.join(f'{x:.2f}' for x in row['unstable_deg'])} | {row['max_abs_accel_deg_per_day2']:.2e} |")
+                     f"{', '.join(f'{x:.2f}' for x in row['unstable_deg'])} | "
+                     f"{row['max_abs_accel_deg_per_day2']:.2e} |")
     (HERE / "results").mkdir(exist_ok=True)
     (HERE / "results" / "drift_atlas.json").write_text(json.dumps(results, indent=1))
     (HERE / "results" / "drift_atlas.md").write_text("\n".join(lines) + "\n")
