@@ -210,6 +210,19 @@ def load(name_or_path: str | Path, overrides: dict | None = None, controller=Non
     return from_dict(with_overrides(raw, overrides), controller)
 
 
+def started_at(name_or_path: str | Path, utc: str, overrides: dict | None = None) -> Scenario:
+    """Scenario ``name_or_path`` (with ``overrides``) started at ``utc`` instead of its epoch, from the same
+    orbit relative to the Earth: its initial MEE, the true longitude moved by the Earth's rotation between the
+    two epochs (the same geographic longitude; ``orbit.elements = "mee"``).  A fresh run of a later year."""
+    base = load(name_or_path, overrides)
+    if base.config["orbit"]["elements"] != "mee":
+        raise ValueError(f"orbit.elements: started_at moves an MEE initial state, got {base.config['orbit']['elements']!r}")
+    moved = load(name_or_path, {**(overrides or {}), "epoch.utc": utc})
+    angle = lambda sc: float(earth_rotation_angle_rad(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s))  # noqa: E731
+    l_rad = math.remainder(float(base.initial_mee[5]) + angle(moved) - angle(base), 2 * math.pi)
+    return load(name_or_path, {**(overrides or {}), "epoch.utc": utc, "orbit.L_rad": l_rad})
+
+
 def with_overrides(raw: dict, overrides: dict | None) -> dict:
     """``raw`` with dotted keys set (``{"thrusters.thrust_n": 0.3}``); a key must name a table and a field."""
     raw = {k: dict(v) if isinstance(v, dict) else v for k, v in raw.items()}

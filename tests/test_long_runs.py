@@ -98,3 +98,18 @@ def test_yearly_delta_v_per_year_and_the_steady_state_without_the_first():
     assert out["dv_year2_mps"] == pytest.approx(73.2 * per_year, rel=1e-12)
     assert out["dv_steady_per_year_mps"] == pytest.approx((73.2 + 109.8) / 2 * per_year, rel=1e-12)
     assert yearly_dv(jnp.ones(365), SIDEREAL_DAY_S) == {}
+
+
+def test_a_scenario_started_later_is_at_the_same_place_relative_to_the_earth():
+    """Invariant: li2022 started two years later (``scenario.started_at``) has the same mean longitude over the
+    Greenwich meridian (``predictor.boundary_elements`` at each epoch's Earth angle) and the same other elements."""
+    from geojax.control.predictor import boundary_elements
+    from geojax.physics.frames import earth_rotation_angle_rad
+
+    base = scenario.load("li2022")
+    later = scenario.started_at("li2022", "2021-12-31T12:01:54")
+    assert later.epoch_tt_s - base.epoch_tt_s == pytest.approx(732 * SIDEREAL_DAY_S, abs=1.0)
+    at = [np.asarray(boundary_elements(jnp.asarray(sc.initial_mee), earth_rotation_angle_rad(
+        sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s))) for sc in (base, later)]
+    # (the true longitude is what moves: the mean longitude's eccentricity term 2 e dL differs by ~1e-9 rad)
+    np.testing.assert_allclose(at[1], at[0], rtol=1e-12, atol=1e-8)

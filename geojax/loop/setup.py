@@ -39,8 +39,9 @@ from geojax.scenario import SCHEMA, Scenario, controller_fields
 # Cycles between re-starts of the predictor's reference from the station's nominal state (``control.predictor``).
 # Measured (studies/longrun/results/predictor_reference.md, segment_length.md): never re-started, the third year
 # of a QFFC run from 2020 costs 6.8 % more than the same year flown fresh (FOMPC 7.9 %); re-started every 30
-# cycles, within 0.1 %, and the reference's inclination stays within 0.1 deg of the station's.  Shorter segments
-# change nothing measurable; a year-long one leaves the within-year drift (2022 flown fresh costs 3 % more).
+# cycles, within 0.1 %, and the reference's inclination stays within 0.1 deg of the station's.  Every 10 cycles
+# gives the same within 0.6 %; every 91 or 366 leaves some of the within-year drift (2022 flown fresh costs 3 %
+# more at 366).
 REFERENCE_SEGMENT_CYCLES = 30
 
 

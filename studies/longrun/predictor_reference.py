@@ -15,7 +15,7 @@ seed 0) and each segment length (0: never re-started, the reference of before is
   started on 2020-01-01 12:00 UTC, its steady state (``dv_steady_per_year_mps``), and the Delta-V of a
   fresh one-year run started at the station on the day the long run's last year starts (the same initial
   orbital elements, its true longitude moved with the Earth angle so that the geographic longitude is the
-  same: ``at_station``); the check of issue 32 is the last year within 2 % of the fresh run.  Beside them,
+  same: ``scenario.started_at``); the check of issue 32 is the last year within 2 % of the fresh run.  Beside them,
   the "i window term" of each compared year (``window_dv_mps``): a fresh run starts at the centre of its
   inclination window and may end the year at the edge, which a year in steady state cannot; for the MPC's
   wide window (3.3e-4) that is worth a few per cent, so it also runs at the FOMPC's (``mpc@8e-5``);
@@ -51,23 +51,11 @@ from geojax.loop.setup import prepare, unstack
 from geojax.loop.simulate import propagate
 from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.physics.dynamics import SpacecraftState
-from geojax.physics.elements import wrap_angle
-from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.physics.propagate import CARTESIAN
 
 HERE = Path(__file__).resolve().parent
 START_UTC = dt.datetime(2020, 1, 1, 12)
 EVERY = 10  # cycles between the drift checks
-
-
-def at_station(name: str, start: dt.datetime, overrides: dict):
-    """Scenario ``name`` started at ``start`` with the same initial elements, its true longitude moved with the
-    Earth angle (the same geographic longitude) -- a fresh run started at the station on that day."""
-    base = scenario.load(name, overrides)
-    moved = scenario.load(name, {**overrides, "epoch.utc": start.isoformat(timespec="seconds")})
-    angle = lambda sc: float(earth_rotation_angle_rad(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s))  # noqa: E731
-    l_rad = float(wrap_angle(base.initial_mee[5] + angle(moved) - angle(base)))
-    return scenario.load(name, {**overrides, "epoch.utc": start.isoformat(timespec="seconds"), "orbit.L_rad": l_rad})
 
 
 def run(sc, segment_cycles: int):
@@ -134,7 +122,7 @@ def measure(controller: str, years: int, segment_cycles: int) -> dict:
     batch, params, records, metrics, wall_s = run(long, segment_cycles)
     per_year = [metrics[f"dv_year{y + 1}_mps"] for y in range(years)]
     last_start = START_UTC + dt.timedelta(seconds=(years - 1) * YEAR_CYCLES * SIDEREAL_DAY_S)
-    fresh_sc = at_station(name, last_start, {**overrides, "duration.days": 365.25})
+    fresh_sc = scenario.started_at(name, last_start.isoformat(timespec="seconds"), {**overrides, "duration.days": 365.25})
     _, _, fresh_records, fresh_metrics, fresh_wall_s = run(fresh_sc, segment_cycles)
     fresh = fresh_metrics["dv_year1_mps"]
     beta_max = float(long.config["thrusters"]["beta_max_deg"])
