@@ -43,19 +43,6 @@ SIZES = {"gpu": {"qffc": (131_072, 365.25), "fompc": (8192, 30.0), "mpc": (2048,
          "cpu": {"qffc": (1024, 30.0), "fompc": (128, 10.0), "mpc": (16, 4.0)}}
 STEP_BATCHES = {"gpu": [4096, 16_384, 65_536, 131_072], "cpu": [256, 1024]}
 
-SWEEP = """
-name = "accelerator"
-scenario = "li2022-{controller}"
-controllers = ["{controller}"]
-repetitions = {samples}
-seed = 7
-[set]
-"duration.days" = {days}
-"errors.h_rv" = 1.0
-"errors.h_att" = 1.0
-[grid]
-"thrusters.beta_max_deg" = [70.0]
-"""
 
 
 def main() -> None:
@@ -130,11 +117,14 @@ def _compiled_rollouts(sc, n: int, keys=None):
 def measure_sweep(controller: str, samples: int, days: float) -> dict:
     import jax
 
+    sys.path.insert(0, str(HERE))
+    import sweep as sweep_benchmark  # its sweep file: li2022-<controller>, H_rv = H_att = 1, beta_max 70 deg
+
     from geojax import store, sweep
 
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "s.toml"
-        path.write_text(SWEEP.format(controller=controller, samples=samples, days=days))
+        path.write_text(sweep_benchmark.SWEEP.format(controller=controller, batch=samples, days=days))
         spec = sweep.load(path)
         width = sweep.lane_plan(spec, controller)
         start = time.perf_counter()
