@@ -6,7 +6,7 @@ for uncommitted changes, to ``geojax/_revision.txt`` in the built package.  Outs
 sdist) nothing is written and files say "unknown".
 """
 
-import subprocess
+import importlib.util
 from pathlib import Path
 
 from setuptools import setup
@@ -14,14 +14,11 @@ from setuptools.command.build_py import build_py
 
 
 def git_revision(root: Path) -> str | None:
-    try:
-        head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
-                              timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no"],
-                               capture_output=True, text=True, timeout=10).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return (head + ("+dirty" if dirty else "")) if head else None
+    """``geojax/_git.py``'s revision, loaded by path (the package's dependencies are not there at build time)."""
+    spec = importlib.util.spec_from_file_location("geojax_git", root / "geojax" / "_git.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.revision(root)
 
 
 class BuildWithRevision(build_py):

@@ -34,20 +34,13 @@ def device_description() -> str:
 def source_revision() -> str:
     """The git commit geojax runs from (``+dirty`` with uncommitted changes): the checkout's, else the one
     ``setup.py`` recorded when this copy was built (``geojax/_revision.txt``), else "unknown"."""
-    import subprocess
+    from geojax._git import revision
 
     root = Path(geojax.__file__).resolve().parent.parent
     if not (root / ".git").exists():
         recorded = Path(geojax.__file__).resolve().parent / "_revision.txt"
         return recorded.read_text().strip() if recorded.is_file() else "unknown"
-    try:
-        head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
-                              timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no"],
-                               capture_output=True, text=True, timeout=10).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
-    return (head + ("+dirty" if dirty else "")) if head else "unknown"
+    return revision(root) or "unknown"
 
 
 def write_h5(path: str | Path, groups: dict[str, dict[str, np.ndarray]], config_toml: str, wall_s: float, attrs=None,
