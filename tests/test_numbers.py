@@ -15,7 +15,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 NUMBER = re.compile(r"(?<![\w.])[−+-]?\d+(?:\.\d+)?(?:e[−+-]?\d+)?")
-THEIRS = re.compile(r"paper|claim|agree|cause|note|Li 2022|Katz|Ye 2022|Gazzino|Ma &|figure|what", re.I)
+THEIRS = re.compile(r"paper|claim|published|expected|agree|cause|note|Li 2022|Katz|Ye 2022|Gazzino|Ma &|figure|what", re.I)
 PAGES = [ROOT / "studies" / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
 
