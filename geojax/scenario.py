@@ -91,10 +91,10 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "thrust_n": Field(_NUMBER, REQUIRED, lower=0.0, upper=1e5, si="thrust_n", transform=LOG),
         "isp_s": Field(_NUMBER, REQUIRED, lower=0.0, upper=1e6, si="isp_s", transform=LOG),
         # Robotic-arm limits, Li 2022 eq. (1); defaults: the "normal" level of Table 1.
-        "beta_max_deg": Field(_NUMBER, 70.0, si="beta_max_rad", to_si=degrees),
-        "beta_min_deg": Field(_NUMBER, 0.0, si="beta_min_rad", to_si=degrees),
-        "alpha_max_deg": Field(_NUMBER, 60.0, si="alpha_max_rad", to_si=degrees),
-        "alpha_min_deg": Field(_NUMBER, 30.0, si="alpha_min_rad", to_si=degrees),
+        "beta_max_deg": Field(_NUMBER, 70.0, si="beta_max_rad", to_si=degrees, symbol="β_max"),
+        "beta_min_deg": Field(_NUMBER, 0.0, si="beta_min_rad", to_si=degrees, symbol="β_min"),
+        "alpha_max_deg": Field(_NUMBER, 60.0, si="alpha_max_rad", to_si=degrees, symbol="α_max"),
+        "alpha_min_deg": Field(_NUMBER, 30.0, si="alpha_min_rad", to_si=degrees, symbol="α_min"),
         "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True, upper=c.SIDEREAL_DAY_S, si="min_burn_s"),
         # The thruster geometry the fuel bound uses (geojax.bound.directions): Li's two arms, Katz's gimbal,
         # Gazzino's four fixed NE/NW/SE/SW thrusters (cant_deg from the north-south axis); unset: from the
@@ -106,8 +106,8 @@ SCHEMA: dict[str, dict[str, Field]] = {
     "controller": {"kind": Field(str, "none")},
     # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors (0.3 m, 5e-5 m/s, 0.05 deg).
     "errors": {
-        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_rv"),
-        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_att"),
+        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_rv", symbol="H_rv"),
+        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_att", symbol="H_att"),
         # How the attitude error enters (control.burns; studies/ablation/li_attitude_error.py): its yaw and pitch
         # parts scaled (1: eq. (47) as printed), one draw shared by a cycle's two burns instead of one each, and
         # the burns' magnitudes re-fitted to the directions flown (the plan knows the error) instead of kept.
