@@ -126,7 +126,7 @@ def geometry_of(config: dict, name: str | None = None) -> Geometry:
     if name is None:
         name = "gimbal" if config["controller"]["kind"] in ("lyapunov", "zone_nssk") else "arms"
     if name not in GEOMETRIES:
-        raise ValueError(f"--thrusters: must be one of {', '.join(GEOMETRIES)}, got {name!r}")
+        raise ValueError(f"bound.thrusters: must be one of {', '.join(GEOMETRIES)}, got {name!r}")
     if name == "arms":
         t = config["thrusters"]
         return arms(*(math.radians(float(t[k])) for k in ("beta_max_deg", "beta_min_deg", "alpha_max_deg",

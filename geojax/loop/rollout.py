@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import time
+from pathlib import Path
 from typing import NamedTuple
 
 import jax
@@ -21,7 +22,7 @@ from geojax.control.base import Controller
 from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
 from geojax.control import none
-from geojax.loop.setup import Batch, prepare, reference, uncontrolled_boundaries, unstack
+from geojax.loop.setup import Batch, controller_of, prepare, reference, uncontrolled_boundaries, unstack
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
 from geojax.physics.propagate import Dynamics, environment_grid, for_lanes, steps_per_cycle
@@ -33,7 +34,9 @@ class Result(NamedTuple):
 
     ``metrics`` maps the names of ``loop.metrics.summarize`` (units in the names) to values,
     ``status`` is the status code (``loop.metrics.STATUS_MEANINGS``), ``records`` the per-cycle (and, if
-    kept, per-step) records, ``params`` the parameters the rollout ran with (SI).
+    kept, per-step) records, ``params`` the parameters the rollout ran with (SI).  A single rollout
+    (``simulate``) also carries its ``scenario`` and ``seed``, what its file records (``save``); a batch's
+    are None: plain references, so the vmapped result stays its arrays.
     """
 
     metrics: dict
@@ -44,10 +47,30 @@ class Result(NamedTuple):
     step_s: float
     wall_s: float  # compilation included
     compile_s: float = float("nan")  # measured where ``on_compiled`` was given
+    scenario: Scenario | None = None  # a single rollout's
+    seed: int | None = None  # a single rollout's, None where it was given a key
 
     def cycles(self) -> dict[str, np.ndarray]:
         """The per-cycle records in edge units (``/cycles``) of a single rollout."""
         return cycle_table(self.records)
+
+    def save(self, path) -> Path:
+        """Write the file ``geojax simulate --out`` writes (``loop.report``); returns its path."""
+        from geojax.loop import report
+
+        return report.save(self, path)
+
+    def summary(self, paper: bool = True) -> list[str]:
+        """The lines ``geojax simulate`` prints: status and metrics, with ``paper`` beside a paper's numbers."""
+        from geojax.loop import report
+
+        return report.summary(self, paper)
+
+    def plot(self, folder) -> list[Path]:
+        """Draw the figures ``geojax simulate --plots`` draws into ``folder``; returns their paths."""
+        from geojax.loop import report
+
+        return report.plot(self, folder)
 
 
 def rollout(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,
@@ -88,19 +111,23 @@ def _batched(params, keys, shared, reference_env, controller, step_s, dynamics, 
     return jax.vmap(one, in_axes=(0, 0, None, None))(params, keys, shared, reference_env)
 
 
-def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None = None, keep_steps: bool = False,
-             key=None, on_compiled=None) -> Result:
+def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None = None,
+             keep_steps: bool | None = None, key=None, on_compiled=None) -> Result:
     """One closed-loop rollout of ``scenario`` (its registered controller, or ``controller``).
 
     ``seed`` (or a ``jax.random`` ``key``) draws the orbit-determination and attitude errors
     and any randomness of the controller; same seed, same result.  ``keep_steps`` also returns
-    the per-step records (``records.steps``, leaves [n_cycles, n_steps, ...]).
+    the per-step records (``records.steps``, leaves [n_cycles, n_steps, ...]); by default a feedback law's are
+    kept (no reference run: its figures are drawn per step) and a planner's are not.
     """
+    if keep_steps is None:
+        keep_steps = (controller_of([scenario]) if controller is None else controller).reference_cycles == 0
     result = simulate_batch([scenario], seeds=[seed], controller=controller, keep_steps=keep_steps,
                             keys=None if key is None else jnp.stack([key]), on_compiled=on_compiled)
     first = lambda tree: jax.tree_util.tree_map(lambda x: x[0], tree)  # noqa: E731
     return result._replace(metrics=first(result.metrics), status=result.status[0], records=first(result.records),
-                           final=first(result.final), params=first(result.params))
+                           final=first(result.final), params=first(result.params), scenario=scenario,
+                           seed=None if key is not None else seed)
 
 
 def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None = None, *, seeds=None, keys=None,
