@@ -75,7 +75,8 @@ def parser() -> argparse.ArgumentParser:
     swp.add_argument("--out", required=True, help="results file (HDF5); chunks are kept in FILE.h5.parts/ until done")
     swp.add_argument("--resume", action="store_true", help="continue an interrupted sweep into the same --out")
     swp.add_argument("--chunk", type=int, help="samples per saved chunk (default: one compiled batch of the widest "
-                     "controller on every device; a resumed sweep keeps its cut)")
+                     "controller on every local device, or with --ray on a cluster with GPUs an even share per GPU "
+                     "worker, at most one GPU batch; a resumed sweep keeps its cut)")
     swp.add_argument("--lanes", type=int, help="samples per device in one compiled call (default: the platform's, "
                      "128 QFFC / 32 FOMPC / 8 MPC per CPU core, on a GPU the widest batch its memory holds, up to "
                      "65536); the results do not depend on it; one that cannot fit is refused")
