@@ -5,7 +5,7 @@
 The file (``kind = "simulate"``): ``/metrics`` (``loop.metrics.summarize``'s, ``cpu_s_per_orbit`` and
 ``status``), ``/cycles`` (``loop.metrics.cycle_table``), then for a feedback law, which has no reference run, the
 per-step ``/steps`` (``loop.metrics.step_table``), else the uncontrolled ``/reference`` and the station's
-``/target`` (``rollout.reference_and_target``); attributes ``kind``, ``scenario``, ``epoch_tt_s``, ``seed``,
+``/target`` (``reference_and_target``); attributes ``kind``, ``scenario``, ``epoch_tt_s``, ``seed``,
 ``compile_s`` and ``status_codes`` beside ``store.write_h5``'s.
 """
 
@@ -14,14 +14,19 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import jax
 import numpy as np
+
+from geojax.control import none
+from geojax.loop.metrics import STATUS_MEANINGS, STATUS_TEXT, step_table
+from geojax.loop.setup import cycle_count, prepare, uncontrolled_boundaries, unstack
+from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
+from geojax.physics.propagate import environment_grid, steps_per_cycle
+from geojax.scenario import Scenario
 
 
 def groups(result) -> dict[str, dict]:
     """The datasets of the run's file, ``{group: {name: value}}``."""
-    from geojax.loop.metrics import step_table
-    from geojax.loop.rollout import reference_and_target
-
     sc = scenario_of(result)
     out = {"metrics": {**metrics(result), "status": int(result.status)}, "cycles": result.cycles()}
     if result.records.steps is not None:
@@ -34,7 +39,6 @@ def groups(result) -> dict[str, dict]:
 def save(result, path: str | Path) -> Path:
     """Write the run's file to ``path`` (atomically); returns the path."""
     from geojax import store
-    from geojax.loop.metrics import STATUS_TEXT
     from geojax.scenario import to_toml
 
     sc = scenario_of(result)
@@ -61,7 +65,6 @@ def summary(result, paper: bool = True) -> list[str]:
     published number of a shipped scenario's paper (``geojax.papers``) with ``paper``, and a note where this run
     differs from the paper's."""
     from geojax import papers, scenario
-    from geojax.loop.metrics import STATUS_MEANINGS
 
     sc = scenario_of(result)
     values = metrics(result)
@@ -111,11 +114,28 @@ def draw(groups: dict, box_half_width_deg: float, stem: Path, title: str, fmt: s
     return figures
 
 
+def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]:
+    """The uncontrolled run from the initial state (not re-started: the path the satellite would take without
+    control), its mean elements at the first ``n_cycles + 1`` cycle boundaries (``/reference``: t_s, lon_deg, ex,
+    ey, ix, iy), and the station's targets (``/target``), for figures beside a closed loop."""
+    batch = prepare([scenario], none.CONTROLLER)
+    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, batch.step_s,
+                           n_cycles + 1, steps_per_cycle(scenario.step_s))
+    _, ref = _uncontrolled_jit(unstack(batch.params, 0), env, step_s=batch.step_s, dynamics=batch.dynamics)
+    ref = np.asarray(ref)
+    uncontrolled = {"t_s": np.arange(len(ref)) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
+                    "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}
+    station = scenario.config["station"]
+    goals = {"lon_deg": float(station["lon_deg"]), "drift_deg_per_day": 0.0,
+             **{k: float(station[k]) for k in ("ex", "ey", "ix", "iy")}}
+    return uncontrolled, goals
+
+
+_uncontrolled_jit = jax.jit(uncontrolled_boundaries, static_argnames=("step_s", "dynamics"))
+
+
 def flown_days(days: float) -> str:
     """``days`` as a run flies them: whole sidereal-day cycles, named when the rounding is more than 2 %."""
-    from geojax.loop.setup import cycle_count
-    from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
-
     n = cycle_count(days)
     flown = n * SIDEREAL_DAY_S / SECONDS_PER_DAY
     if abs(flown - days) <= 0.02 * days:

@@ -17,15 +17,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.control.base import Controller
 from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
-from geojax.control import none
-from geojax.loop.setup import Batch, controller_of, prepare, reference, uncontrolled_boundaries, unstack
+from geojax.loop import report
+from geojax.loop.setup import Batch, controller_of, prepare, reference, unstack
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
-from geojax.physics.propagate import Dynamics, environment_grid, for_lanes, steps_per_cycle
+from geojax.physics.propagate import Dynamics, for_lanes
 from geojax.scenario import Scenario
 
 
@@ -56,20 +55,14 @@ class Result(NamedTuple):
 
     def save(self, path) -> Path:
         """Write the file ``geojax simulate --out`` writes (``loop.report``); returns its path."""
-        from geojax.loop import report
-
         return report.save(self, path)
 
     def summary(self, paper: bool = True) -> list[str]:
         """The lines ``geojax simulate`` prints: status and metrics, with ``paper`` beside a paper's numbers."""
-        from geojax.loop import report
-
         return report.summary(self, paper)
 
     def plot(self, folder) -> list[Path]:
         """Draw the figures ``geojax simulate --plots`` draws into ``folder``; returns their paths."""
-        from geojax.loop import report
-
         return report.plot(self, folder)
 
 
@@ -185,23 +178,3 @@ def prepare_params(scenario: Scenario, n: int, controller: Controller | None = N
     """``n`` copies of a scenario's ``Params`` (leading axis n), to edit leaves per sample."""
     params = unstack(prepare([scenario], controller).params, 0)
     return jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (n, *jnp.shape(x))), params)
-
-
-_uncontrolled_jit = jax.jit(uncontrolled_boundaries, static_argnames=("step_s", "dynamics"))
-
-
-def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]:
-    """The uncontrolled run from the initial state (not re-started: the path the satellite would take without
-    control), its mean elements at the first ``n_cycles + 1`` cycle boundaries (``/reference``: t_s, lon_deg, ex,
-    ey, ix, iy), and the station's targets (``/target``), for figures beside a closed loop."""
-    batch = prepare([scenario], none.CONTROLLER)
-    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, batch.step_s,
-                           n_cycles + 1, steps_per_cycle(scenario.step_s))
-    _, ref = _uncontrolled_jit(unstack(batch.params, 0), env, step_s=batch.step_s, dynamics=batch.dynamics)
-    ref = np.asarray(ref)
-    uncontrolled = {"t_s": np.arange(len(ref)) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
-                    "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}
-    station = scenario.config["station"]
-    goals = {"lon_deg": float(station["lon_deg"]), "drift_deg_per_day": 0.0,
-             **{k: float(station[k]) for k in ("ex", "ey", "ix", "iy")}}
-    return uncontrolled, goals
