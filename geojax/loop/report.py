@@ -3,9 +3,9 @@
 ``simulate`` or ``propagate`` file (``draw``).
 
 The file (``kind = "simulate"``): ``/metrics`` (``loop.metrics.summarize``'s, ``cpu_s_per_orbit`` and
-``status``), ``/cycles`` (``loop.metrics.cycle_table``), then for a feedback law, which has no reference run, the
-per-step ``/steps`` (``loop.metrics.step_table``), else the uncontrolled ``/reference`` and the station's
-``/target`` (``reference_and_target``); attributes ``kind``, ``scenario``, ``epoch_tt_s``, ``seed``,
+``status``), ``/cycles`` (``loop.metrics.cycle_table``), then where the run kept its steps (a feedback law's, by
+default: it has no reference run) the per-step ``/steps`` (``loop.metrics.step_table``), else the uncontrolled
+``/reference`` and the station's ``/target`` (``reference_and_target``); attributes ``kind``, ``scenario``, ``epoch_tt_s``, ``seed``,
 ``compile_s`` and ``status_codes`` beside ``store.write_h5``'s.
 """
 
@@ -88,12 +88,12 @@ def summary(result, paper: bool = True) -> list[str]:
 
 
 def plot(result, folder: str | Path) -> list[Path]:
-    """The run's figures in ``folder``, named after the scenario: a feedback law's ground track and thrust
-    (``NAME-ground-track.png``, ``NAME-thrust.png``), a planner's cycles and station keeping (``NAME.png``,
-    ``NAME-station-keeping.png``)."""
+    """The run's figures in ``folder``, named after the scenario: from its steps (a feedback law's), the ground
+    track and thrust (``NAME-ground-track.png``, ``NAME-thrust.png``), else its cycles and station keeping
+    (``NAME.png``, ``NAME-station-keeping.png``)."""
     sc = scenario_of(result)
-    feedback = result.records.steps is not None
-    title = f"{sc.name}, {sc.config['controller']['thrust_mode']} thrust" if feedback else f"{sc.name}, {sc.controller}"
+    mode = sc.config["controller"].get("thrust_mode")  # Katz 2025's laws name theirs
+    title = f"{sc.name}, {mode} thrust" if result.records.steps is not None and mode else f"{sc.name}, {sc.controller}"
     return draw(groups(result), sc.config["station"]["box_half_width_deg"], Path(folder) / sc.name, title)
 
 
