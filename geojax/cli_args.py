@@ -86,7 +86,7 @@ def parser() -> argparse.ArgumentParser:
     swp.add_argument("--workers", type=int, help="with --ray: worker processes (default one per GPU of a GPU node "
                      "and one per CPU node, each using its share of the node's cores)")
 
-    plot = command("plot", help="draw the figures of a results file (simulate, propagate, sweep, tune)")
+    plot = command("plot", help="draw the figures of a results file (simulate, propagate, sweep, tune, bound, transfer)")
     plot.add_argument("file", help="an HDF5 file written by geojax")
     plot.add_argument("--out", help="folder for the figures (default: next to the file)")
     plot.add_argument("--format", choices=("png", "pdf", "svg"), default="png", help="figure format (default png)")

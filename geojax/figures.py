@@ -1,5 +1,5 @@
-"""The figures of a results file, by what it holds (``geojax plot``): a sweep's, a tuning's convergence, or a
-single run's (``loop.report.draw``: per step, per cycle, the station keeping)."""
+"""The figures of a results file, by what it holds (``geojax plot``): a sweep's, a tuning's convergence, a bound's
+plan, a transfer's orbit, or a single run's (``loop.report.draw``: per step, per cycle, the station keeping)."""
 
 from __future__ import annotations
 
@@ -31,11 +31,17 @@ def plot_file(path: str | Path, out: str | Path | None = None, fmt: str = "png",
             raise ValueError(f"file {str(path)!r}: a tuning file without /iterations (stopped before its first)")
         return [plots.plot_tuning(groups, out / f"{path.stem}-convergence.{fmt}",
                                   title=f"{title}: tuning {attrs.get('parameters', '')}", dpi=dpi)]
+    if kind == "bound":
+        return [plots.plot_bound(groups["slots"], box_half_width_deg(attrs), out / f"{path.stem}.{fmt}",
+                                 title=f"{title}: the least Delta-V", dpi=dpi)]
+    if kind == "transfer":
+        return [plots.plot_transfer(groups["records"], out / f"{path.stem}.{fmt}", title=title, dpi=dpi)]
     if "steps" in groups or "cycles" in groups:
         drawn_box = "steps" in groups or {"reference", "target"} <= set(groups)
         box = box_half_width_deg(attrs) if drawn_box else 0.0
         return draw(groups, box, out / path.stem, title, fmt=fmt, dpi=dpi)
-    raise ValueError(f"file {str(path)!r}: nothing geojax can plot (no /cycles, /steps, sweep or tuning data)")
+    raise ValueError(f"file {str(path)!r}: nothing geojax can plot "
+                     f"(no /cycles, /steps, sweep, tuning, bound or transfer data)")
 
 
 def box_half_width_deg(attrs) -> float:

@@ -96,6 +96,10 @@ def test_bound_save_is_the_command_s_file(tmp_path, capsys):
     with h5py.File(library) as f:
         assert f["metrics/free_end"][()] == 1 and f["slots/dlon_deg"].dims[1].label == "step"
     assert all(line in printed for line in result.summary())
+    figure, = result.plot(tmp_path)
+    assert figure == tmp_path / "li2022-qffc-bound.png" and figure.stat().st_size > 10_000
+    assert cli.main(["plot", str(command), "--out", str(tmp_path / "again")]) == 0  # the same figure from the file
+    assert (tmp_path / "again" / "command.png").stat().st_size > 10_000
 
 
 def test_transfer_save_is_the_command_s_file(tmp_path, capsys):
@@ -106,6 +110,10 @@ def test_transfer_save_is_the_command_s_file(tmp_path, capsys):
     result.save(library)
     assert_same_file(command, library)
     assert result.summary() == printed[:len(result.summary())]
+    figure, = result.plot(tmp_path)
+    assert figure == tmp_path / "ma2023-quadrilateral.png" and figure.stat().st_size > 10_000
+    assert cli.main(["plot", str(command), "--out", str(tmp_path / "again")]) == 0
+    assert (tmp_path / "again" / "command.png").stat().st_size > 10_000
     assert "(Ma 2023: 0.95)" in "\n".join(result.summary()) and "(Ma 2023:" not in "\n".join(result.summary(paper=False))
 
 

@@ -1,5 +1,5 @@
-"""The file and the summary of a fuel bound: what ``BoundResult.save`` and ``BoundResult.summary`` give
-(``geojax bound --out`` calls them).
+"""The file, the summary and the figure of a fuel bound: what ``BoundResult.save``, ``summary`` and ``plot`` give
+(``geojax bound --out`` calls them; ``geojax plot`` draws the figure of the file).
 
 The file (``kind = "bound"``): ``/metrics`` (the bound, the plan and the re-simulation per year, their gap, the
 re-simulation's box and status, the linear model's error, the acquisition and end condition), ``/rounds`` (one
@@ -45,6 +45,16 @@ def save(r, path: str | Path) -> Path:
     return store.write_h5(path, groups(r), r.config_toml, r.wall_s, dims=DIMS,
                           attrs={"kind": "bound", "scenario": r.scenario, "geometry": r.geometry,
                                  "epoch_tt_s": r.epoch_tt_s, "slot_s": r.slot_s})
+
+
+def plot(r, folder: str | Path) -> list[Path]:
+    """The plan's Delta-V per slot and the flown box, ``FOLDER/NAME-bound.png``; returns its path in a list."""
+    from geojax import plots
+    from geojax.scenario import tomllib
+
+    box = tomllib.loads(r.config_toml)["station"]["box_half_width_deg"]
+    return [plots.plot_bound(groups(r)["slots"], box, Path(folder) / f"{r.scenario}-bound.png",
+                             title=f"{r.scenario}: the least Delta-V ({r.geometry} thrusters, {r.days:.2f} days)")]
 
 
 def summary(r) -> list[str]:

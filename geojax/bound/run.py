@@ -91,6 +91,12 @@ class BoundResult(NamedTuple):
 
         return report.summary(self)
 
+    def plot(self, folder) -> list[Path]:
+        """Draw the plan (Delta-V per slot) and the flown box into ``folder``; returns the figure's path in a list."""
+        from geojax.bound import report
+
+        return report.plot(self, folder)
+
 
 def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, acquisition_days: float = 0.0,
           iterations: int = 4, rounds: int = 8, rtol: float = 1e-3, free_end: bool = False,
@@ -206,8 +212,8 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
         {k: float(v) for k, v in result.metrics.items()}, int(result.status), history[-1]["linear_error_deg"],
         history[-1]["max_abs_box_deg"],
         history, (np.arange(n_slots) + 0.5) * slot_s, u, per_thruster, np.degrees(model.y[..., 0]),
-        np.degrees(model.y[..., 1]), time.perf_counter() - start, float(acquisition_days), bool(free_end), to_toml(sc.config),
-        sc.epoch_tt_s)
+        np.degrees(model.y[..., 1]), time.perf_counter() - start, float(acquisition_days), bool(free_end),
+        to_toml(sc.config), sc.epoch_tt_s)
 
 
 def _head(model: SlotModel, horizon: int) -> SlotModel:

@@ -5,8 +5,8 @@
 The file (``kind = "simulate"``): ``/metrics`` (``loop.metrics.summarize``'s, ``cpu_s_per_orbit`` and
 ``status``), ``/cycles`` (``loop.metrics.cycle_table``), then where the run kept its steps (a feedback law's, by
 default: it has no reference run) the per-step ``/steps`` (``loop.metrics.step_table``), else the uncontrolled
-``/reference`` and the station's ``/target`` (``reference_and_target``); attributes ``kind``, ``scenario``, ``epoch_tt_s``, ``seed``,
-``compile_s`` and ``status_codes`` beside ``store.write_h5``'s.
+``/reference`` and the station's ``/target`` (``reference_and_target``); attributes ``kind``, ``scenario``,
+``epoch_tt_s``, ``seed``, ``compile_s`` and ``status_codes`` beside ``store.write_h5``'s.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""The file and the summary of one transfer: what ``TransferResult.save`` and ``TransferResult.summary`` give
-(``geojax transfer --out`` calls them).
+"""The file, the summary and the figure of one transfer: what ``TransferResult.save``, ``summary`` and ``plot``
+give (``geojax transfer --out`` calls them; ``geojax plot`` draws the figure of the file).
 
 The file (``kind = "transfer"``): ``/metrics`` (``run.metrics``, units in the names) and ``/records`` (per
 record interval, ``run.record_table``); attributes ``scenario``, ``layout``, ``epoch_tt_s`` and ``step_s`` beside
@@ -40,6 +40,14 @@ def summary(result, paper: bool = True) -> list[str]:
             beside = f"   (Ma 2023: {published[name]})" if name in published else ""
             lines.append(f"  {name:24s} {float(value):12.4f}{beside}")
     return lines
+
+
+def plot(result, folder: str | Path) -> list[Path]:
+    """The orbit and mass against time, ``FOLDER/NAME.png``; returns its path in a list."""
+    from geojax import plots
+
+    sc = scenario_of(result)
+    return [plots.plot_transfer(result.records, Path(folder) / f"{sc.name}.png", title=f"{sc.name}, {sc.layout}")]
 
 
 def scenario_of(result):

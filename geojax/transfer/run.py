@@ -35,6 +35,12 @@ class TransferResult(NamedTuple):
 
         return report.summary(self, paper)
 
+    def plot(self, folder) -> list[Path]:
+        """Draw the orbit and mass against time into ``folder``; returns the figure's path in a list."""
+        from geojax.transfer import report
+
+        return report.plot(self, folder)
+
 
 def static_for(sc: TransferScenario, days: float | None = None, record_every_s: float = SECONDS_PER_DAY) -> Static:
     """The loop's shape: the time limit (``days``, default the scenario's) in steps, grouped into records (the
