@@ -244,6 +244,44 @@ def plot_feedback(steps, box_half_width_deg: float, path_stem: str | Path, title
 
 
 @styled
+def plot_transfer(records, path: str | Path, title: str = "", dpi: int = 150) -> Path:
+    """A transfer's orbit and mass against time (``/records`` of ``geojax transfer --out``: t_days, a_km, e,
+    i_deg, mass_kg, one row per record interval)."""
+    days = np.asarray(records["t_days"])
+    fig, axes = plt.subplots(2, 2, figsize=(7.2, 4.6), constrained_layout=True)
+    ax = axes.ravel()
+    for a, (key, name, unit) in zip(ax, [("a_km", "semi-major axis", "km"), ("e", "eccentricity", ""),
+                                          ("i_deg", "inclination", "deg"), ("mass_kg", "mass", "kg")]):
+        a.plot(days, records[key], "o-" if len(days) < 30 else "-", ms=3)  # a short transfer: its few records seen
+        a.set(xlabel="days", ylabel=_label(name, unit))
+        a.xaxis.set_major_locator(MaxNLocator(5))
+    return _save(fig, ax, title, path, dpi)
+
+
+@styled
+def plot_bound(slots, box_half_width_deg: float, path: str | Path, title: str = "", dpi: int = 150) -> Path:
+    """A fuel bound's plan: the Delta-V of each slot in R, S, W, and the flown longitude offset and latitude at
+    every step start inside the ±box (``/slots`` of ``geojax bound --out``)."""
+    t_s = np.asarray(slots["t_s"])
+    slot_s = 2 * t_s[0]  # slot mid-times: (k + 1/2) slot_s
+    steps = np.asarray(slots["dlon_deg"]).shape[1]
+    step_days = ((t_s[:, None] - slot_s / 2) + np.arange(steps) * slot_s / steps).ravel() / DAY_S
+    fig, ax = plt.subplots(2, 1, figsize=(7.2, 4.6), sharex=True, constrained_layout=True)
+    for key, name in (("dv_r_mps", "R"), ("dv_s_mps", "S"), ("dv_w_mps", "W")):
+        ax[0].step(t_s / DAY_S, slots[key], where="mid", label=name)
+    ax[0].set(ylabel="ΔV per slot (m/s)")
+    _legend_above(ax[0])
+    for key, name in (("dlon_deg", "δλ"), ("lat_deg", "δφ")):
+        ax[1].plot(step_days, np.asarray(slots[key]).ravel(), label=name)
+    box = box_half_width_deg
+    ax[1].plot(step_days[[0, -1]], [box, box], "k--", lw=0.8, label=f"box ±{box:g}°")
+    ax[1].plot(step_days[[0, -1]], [-box, -box], "k--", lw=0.8)
+    ax[1].set(xlabel="days", ylabel="flown (deg)")
+    _legend_above(ax[1])
+    return _save(fig, ax, title, path, dpi)
+
+
+@styled
 def plot_tuning(groups, path: str | Path, title: str = "", dpi: int = 150) -> Path:
     """The convergence of a ``geojax tune`` results file against iteration: the exact-law ΔV of every start (thin
     lines; a diverged start's iterations are left out) with the best feasible ΔV so far (thick steps) and the best

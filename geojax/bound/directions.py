@@ -128,7 +128,7 @@ def geometry_of(config: dict, name: str | None = None) -> Geometry:
 
         name = lookup(config["controller"]["kind"]).make([config["controller"]]).bound_geometry
     if name not in GEOMETRIES:
-        raise ValueError(f"--thrusters: must be one of {', '.join(GEOMETRIES)}, got {name!r}")
+        raise ValueError(f"bound.thrusters: must be one of {', '.join(GEOMETRIES)}, got {name!r}")
     if name == "arms":
         t = config["thrusters"]
         return arms(*(math.radians(float(t[k])) for k in ("beta_max_deg", "beta_min_deg", "alpha_max_deg",
