@@ -45,3 +45,14 @@ def facts() -> dict:
     return {"cpu_model": cpu_model(), "cpu_count": os.cpu_count(), "os": platform.platform(), "python": platform.python_version(), "numpy": numpy.__version__,
             "jax": jax.__version__, "jaxlib": jaxlib.__version__, "platform": jax.devices()[0].platform,
             "device": device_description(), "geojax": geojax.__version__, "source_revision": source_revision()}
+
+
+def peak_memory_bytes(device=None) -> float:
+    """The peak memory of this process so far: an accelerator's allocator peak for ``device`` where it keeps
+    one, else the process's peak resident set (Python, JAX, XLA, the compiled programs)."""
+    import resource
+
+    stats = device.memory_stats() if device is not None and device.platform != "cpu" else None
+    if stats and "peak_bytes_in_use" in stats:
+        return float(stats["peak_bytes_in_use"])
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024.0  # Linux: kB

@@ -92,3 +92,9 @@ def ratio_table(table_of_ratios: dict[str, dict[str, float]], corner: str, digit
     peers = list(next(iter(table_of_ratios.values())))
     return table([corner, *(f"/ {p}" for p in peers)],
                  [[name, *(f"{row[p]:{digits}}" for p in peers)] for name, row in table_of_ratios.items()])
+
+
+def add_arguments(parser, out: Path = RESULTS_DIR) -> None:
+    """The flags every benchmark takes: ``--out`` (the results folder) and ``--platform``."""
+    parser.add_argument("--out", type=Path, default=out, help=f"folder for the results files (default {out})")
+    parser.add_argument("--platform", help="JAX platform to run on (cpu, cuda, ...; default: JAX's choice)")
