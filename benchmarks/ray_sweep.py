@@ -21,7 +21,7 @@ import argparse
 import json
 
 import harness
-from sweep import run_sweep_file  # the same samples as benchmarks/sweep.py
+from sweep import run_sweep_file, sweep_spec  # the same samples as benchmarks/sweep.py
 
 NAME = "ray_sweep"
 
@@ -64,7 +64,7 @@ def main() -> None:
 
 
 def measure(batch: int, days: float, chunk: int | None, workers: int) -> dict:
-    done = run_sweep_file("qffc", batch, days, chunk=chunk, ray="local" if workers else None,
+    done = run_sweep_file(sweep_spec("qffc", batch, days), chunk=chunk, ray="local" if workers else None,
                           workers=workers or None)
     years = batch * days / 365.25
     wall_s, file_wall_s, compile_s = done["wall_s"], float(done["attrs"]["wall_s"]), float(done["attrs"]["compile_s"])

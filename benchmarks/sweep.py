@@ -78,16 +78,24 @@ def main() -> None:
                                              "rows": rows}, markdown(rows, loop)))
 
 
-def run_sweep_file(controller: str, batch: int, days: float, **options) -> dict:
-    """``geojax.sweep.run_sweep`` of ``SWEEP`` in a temporary folder: its wall time (Python's), the file's
-    attributes and its metrics.  ``options`` go to ``run_sweep`` (``chunk``, ``ray``, ``workers``)."""
+def sweep_spec(controller: str, batch: int, days: float):
+    """``SWEEP`` for ``controller``, ``batch`` repetitions of ``days``, as ``geojax.sweep.load`` reads it."""
+    from geojax import sweep
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "bench.toml"
+        path.write_text(SWEEP.format(controller=controller, batch=batch, days=days))
+        return sweep.load(path)
+
+
+def run_sweep_file(spec, **options) -> dict:
+    """``geojax.sweep.run_sweep`` of ``spec`` into a temporary file: its wall time (the caller's), the file's
+    attributes, metrics and status.  ``options`` go to ``run_sweep`` (``chunk``, ``ray``, ``workers``)."""
     from geojax import store, sweep
 
     with tempfile.TemporaryDirectory() as tmp:
-        spec_path = Path(tmp) / "bench.toml"
-        spec_path.write_text(SWEEP.format(controller=controller, batch=batch, days=days))
         start = time.perf_counter()
-        out = sweep.run_sweep(sweep.load(spec_path), Path(tmp) / "bench.h5", progress=False, **options)
+        out = sweep.run_sweep(spec, Path(tmp) / "bench.h5", progress=False, **options)
         wall_s = time.perf_counter() - start
         groups, attrs = store.read_h5(out)
     return {"wall_s": wall_s, "attrs": attrs, "metrics": groups["metrics"], "status": groups["status"]}
@@ -96,7 +104,7 @@ def run_sweep_file(controller: str, batch: int, days: float, **options) -> dict:
 def measure_sweep(controller: str, days: float, batch: int) -> dict:
     import jax
 
-    done = run_sweep_file(controller, batch, days)
+    done = run_sweep_file(sweep_spec(controller, batch, days))
     dv = done["metrics"]["dv_per_year_mps"].ravel()
     years = batch * days / 365.25
     wall_s, compile_s = done["wall_s"], float(done["attrs"]["compile_s"])

@@ -89,15 +89,17 @@ def timed(fn: Callable, *args, **kwargs) -> tuple[object, Call]:
     return result, Call(time.perf_counter() - wall, time.process_time() - cpu, busy_end - busy, steal_end - steal)
 
 
-def measure(fn: Callable, *args, repeats: int = 1, warmup: int = 0, compile_s: float = 0.0) -> tuple[object, Timing]:
-    """(result of the best call, Timing) of ``repeats`` calls of ``fn(*args)`` after ``warmup`` untimed ones,
-    called again while every call so far was disturbed (see the module's docstring)."""
+def measure(fn: Callable, *args, repeats: int = 1, warmup: int = 0, compile_s: float = 0.0,
+            **kwargs) -> tuple[object, Timing]:
+    """(result of the best call, Timing) of ``repeats`` calls of ``fn(*args, **kwargs)`` after ``warmup``
+    untimed ones, called again while every call so far was disturbed (see the module's docstring);
+    ``compile_s`` (measured apart, ``compile_jitted``) is kept with the timing."""
     for _ in range(warmup):
-        _ready(fn(*args))
-    runs = [timed(fn, *args)]
+        _ready(fn(*args, **kwargs))
+    runs = [timed(fn, *args, **kwargs)]
     most = repeats + (1 if runs[0][1].wall_s > LONG_CALL_S else EXTRA_CALLS)
     while len(runs) < repeats or (len(runs) < most and all(call.disturbed for _, call in runs)):
-        runs.append(timed(fn, *args))
+        runs.append(timed(fn, *args, **kwargs))
     timing = Timing(tuple(call for _, call in runs), compile_s)
     return next(result for result, call in runs if call is timing.best), timing
 
