@@ -18,6 +18,9 @@ def run_json(args: list[str], devices: _devices.Devices = _devices.Devices(), cw
     if pythonpath is not None:
         env["PYTHONPATH"] = str(pythonpath)
     cores = devices.cores
+    # A child inherits its parent's cores: pin it apart only where they differ (a function run between fork
+    # and exec, which a parent running JAX's threads warns about).
+    repin = cores is not None and tuple(sorted(cores)) != _devices.usable_cores()
     out = subprocess.run([sys.executable, *args], check=True, stdout=subprocess.PIPE, text=True, env=env, cwd=cwd,
-                         preexec_fn=(lambda: _devices.pin(cores)) if cores is not None else None).stdout
+                         preexec_fn=(lambda: _devices.pin(cores)) if repin else None).stdout
     return json.loads(out.strip().splitlines()[-1])
