@@ -16,7 +16,8 @@ closed loop (li2022-qffc and li2022-fompc, H = 1 errors, batch 256): simulated y
 * ``minimal``: Cartesian RK4 written straight in jax.numpy on component arrays: point mass, J2, Sun and
   Moon (from the same environment grid), SRP without shadow; no C22, no records, no cycle means.
 
-Every implementation runs on one device pinned to one core (``XLA_FLAGS`` unset, ``sched_setaffinity``):
+Every implementation runs on one device pinned to one core (``harness.Devices``: one XLA CPU device, the
+user's other ``XLA_FLAGS`` kept, the process pinned to the lowest core it may use):
 the comparison is per core, not how well each shards or how far XLA spreads one kernel over idle cores (on
 one unpinned device the issue's baseline, whose kernels are few and large, drew a second core that the
 fused step's many small kernels do not; and a second core shared with other work made every number move).

@@ -656,7 +656,7 @@ def notes_markdown(results: dict) -> list[str]:
         "wall time (both from /proc/stat, near 0 = undisturbed). When their sum exceeds "
         f"{DISTURBED_CORES} the measurement is repeated (up to 2 extra attempts, 1 for calls over "
         f"{LONG_CALL_S:.0f} s) and the fastest undisturbed call is kept, else the fastest. geojax splits the CPU into one XLA device per core "
-        "(`XLA_FLAGS=--xla_force_host_platform_device_count`, set by this script) and runs batches that split "
+        "(`XLA_FLAGS=--xla_force_host_platform_device_count`, set by the harness) and runs batches that split "
         "evenly over them as one single-device program per device on its share (`geojax.parallel.per_device`, "
         "as `geojax sweep` does; a jit sharded over the devices ran 2.8x slower: 87 against 242 orbit-years/s, "
         "120 days at batch 1024); batch 1 runs on one device; heyoka runs the SIMD batch integrator on one thread per core; SciPy is "

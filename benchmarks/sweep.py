@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import json
 import tempfile
-import time
 from pathlib import Path
 
 import harness
@@ -94,11 +93,9 @@ def run_sweep_file(spec, **options) -> dict:
     from geojax import store, sweep
 
     with tempfile.TemporaryDirectory() as tmp:
-        start = time.perf_counter()
-        out = sweep.run_sweep(spec, Path(tmp) / "bench.h5", progress=False, **options)
-        wall_s = time.perf_counter() - start
+        out, call = harness.timed(sweep.run_sweep, spec, Path(tmp) / "bench.h5", progress=False, **options)
         groups, attrs = store.read_h5(out)
-    return {"wall_s": wall_s, "attrs": attrs, "metrics": groups["metrics"], "status": groups["status"]}
+    return {"wall_s": call.wall_s, "attrs": attrs, "metrics": groups["metrics"], "status": groups["status"]}
 
 
 def measure_sweep(controller: str, days: float, batch: int) -> dict:

@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+from pathlib import Path
 
 import jax
 import numpy as np
@@ -56,14 +57,16 @@ FD_STEP = 1e-2  # SLSQP's finite-difference step in log-gain
 PARAMETERS = {"continuous-clipped": ["k_h", "k_e", "lambda_b"], "discrete": ["k_h", "k_e"], "constant": ["k_h", "k_e"]}
 
 MEMORY_PROBE = """
-import resource, sys, jax, numpy as np
+import sys, jax, numpy as np
+sys.path.insert(0, sys.argv[1])  # benchmarks/
+import harness
 from geojax import scenario, tune
 sc = scenario.load("katz2025-continuous", {"controller.thrust_mode": "continuous-clipped"})
 p = tune.Problem(sc, ["k_h", "k_e"], gradient="reverse")
 c = tune.to_theta(p.base, p.entries)
 out = p.surrogate_grad(np.tile(c, (16, 1)) + np.linspace(-0.1, 0.1, 16)[:, None], 0.05)
 jax.block_until_ready(out)
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20)
+print(harness.peak_memory_bytes() / 2**30)
 """
 
 
@@ -148,7 +151,8 @@ def slsqp(problem: tune.Problem, starts: np.ndarray, center: np.ndarray, max_ite
 
 def memory_probe(devices: harness.Devices) -> float:
     """Peak resident memory (GiB) of one reverse-mode gradient of a one-year rollout at batch 16, one device."""
-    return harness.run_json(["-c", MEMORY_PROBE], devices._replace(host_device_count=1, replace_count=True))
+    one_device = devices._replace(host_device_count=1, replace_count=True)
+    return harness.run_json(["-c", MEMORY_PROBE, str(Path(__file__).resolve().parent)], one_device)
 
 
 def write(stem, run: harness.Run, rows, memory_gib, quick: bool) -> str:
