@@ -231,8 +231,8 @@ def _in_subprocess(tree: Path, what: str, args, loop: bool = True) -> dict:
 
 def markdown(results: dict) -> list[str]:
     impls = list(results["step"])
-    lines = ["One device pinned to one core per implementation, li2022 force model (C22/S22 and conical shadow on; the minimal kernel without "
-             "C22 and shadow), 96 steps per sidereal day, "
+    lines = ["One device pinned to one core per implementation, li2022 force model (C22/S22 and conical shadow on; "
+             "the minimal kernel without C22 and shadow), 96 steps per sidereal day, "
              f"{results['cycles']} cycles, the fastest of {results.get('rounds', 1)} alternating rounds. ns per "
              "right-hand side per sample (4 per RK4 step), orbit-years/s, fusions (and conditionals) of the "
              "compiled step.", "",

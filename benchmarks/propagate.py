@@ -598,13 +598,15 @@ def ratios(rows: list[dict], batch: int) -> dict:
 
 
 def throughput_markdown(results: dict) -> list[str]:
-    rows = [[r["implementation"], r["setting"], "any (1 at a time)" if r["implementation"] == "numpy+scipy" else r["batch"],
+    rows = [[r["implementation"], r["setting"],
+             "any (1 at a time)" if r["implementation"] == "numpy+scipy" else r["batch"],
              f"{r['compile_s']:.1f}", f"{r['run_s']:.2f}", f"{r['orbits_per_s']:.3g}", f"{r['cores_busy']:.2f}",
              f"{r['other_load_cores']:.2f}", f"{r['steal_cores']:.2f}"] for r in results["throughput"]]
     return ["## Throughput", "",
             *harness.table(["implementation", "setting", "batch", "compile s", "run s", "orbits/s", "cores busy",
                             "other load", "steal"], rows, align="llrrrrrrr"),
-            "", f"Ratios at batch {results['config']['ratio_batch']}: orbits/s of geojax over the peer's (same run).", "",
+            "", f"Ratios at batch {results['config']['ratio_batch']}: orbits/s of geojax over the peer's "
+            "(same run).", "",
             *harness.ratio_table(results["ratios"], "geojax")]
 
 

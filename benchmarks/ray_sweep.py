@@ -69,7 +69,8 @@ def measure(batch: int, days: float, chunk: int | None, workers: int) -> dict:
     years = batch * days / 365.25
     wall_s, file_wall_s, compile_s = done["wall_s"], float(done["attrs"]["wall_s"]), float(done["attrs"]["compile_s"])
     return {"batch": batch, "days": days, "workers": workers, "wall_s": wall_s, "compile_s": compile_s,
-            "connect_s": wall_s - file_wall_s, "run_s": file_wall_s - compile_s,  # the chunks, after the longest compilation
+            "connect_s": wall_s - file_wall_s,
+            "run_s": file_wall_s - compile_s,  # the chunks, after the longest compilation
             "sample_years_per_s": years / wall_s, "run_sample_years_per_s": years / (wall_s - compile_s),
             "peak_rss_mb": harness.peak_memory_bytes() / 2**20,
             "dv_mean": float(done["metrics"]["dv_per_year_mps"].mean())}

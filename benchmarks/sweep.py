@@ -59,8 +59,8 @@ def main() -> None:
         return
     devices = harness.Devices(platform=args.platform)
     run = harness.start(devices)
-    child = lambda flags: harness.run_json([__file__, "--controller", args.controller, "--days", str(args.days),  # noqa: E731
-                                            *flags], devices)
+    common = [__file__, "--controller", args.controller, "--days", str(args.days)]
+    child = lambda flags: harness.run_json([*common, *flags], devices)  # noqa: E731
     loop = child(["--baseline", str(args.loop)])
     rows = []
     for batch in args.batches:
@@ -136,7 +136,8 @@ def markdown(rows: list[dict], loop: dict) -> list[str]:
         f"after a {loop['compile_s']:.1f} s compilation: {loop['sample_years_per_s']:.3g} sample-years/s).",
         "",
         *harness.table(["batch B", "sweep wall s", "of which compile s", "sample-years/s", "/ Python loop",
-                        "after compilation: sample-years/s", "/ Python loop", "peak memory MB", "ΔV mean ± std (m/s/yr)"],
+                        "after compilation: sample-years/s", "/ Python loop", "peak memory MB",
+                        "ΔV mean ± std (m/s/yr)"],
                        [[r["batch"], f"{r['wall_s']:.1f}", f"{r['compile_s']:.1f}", f"{r['sample_years_per_s']:.3g}",
                          f"{r['speedup']:.1f}x", f"{r['run_sample_years_per_s']:.3g}", f"{r['run_speedup']:.1f}x",
                          f"{r['peak_rss_mb']:.0f}", f"{r['dv_mean']:.2f} ± {r['dv_std']:.2f}"] for r in rows],

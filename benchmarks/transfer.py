@@ -29,7 +29,8 @@ def dispersed(batch: int, seed: int = 0):
     params = []
     for j in range(batch):
         overrides = {"orbit.perigee_alt_km": 964.0 + rng.uniform(-50, 50),
-                     "orbit.apogee_alt_km": 35741.0 + rng.uniform(-200, 200), "orbit.i_deg": 20.8 + rng.uniform(-0.5, 0.5)}
+                     "orbit.apogee_alt_km": 35741.0 + rng.uniform(-200, 200),
+                     "orbit.i_deg": 20.8 + rng.uniform(-0.5, 0.5)}
         params.append(transfer.load(f"ma2023-{'boom' if j % 2 == 0 else 'quadrilateral'}", overrides).params)
     return params
 

@@ -62,7 +62,7 @@ sys.path.insert(0, sys.argv[1])  # benchmarks/
 import harness
 from geojax import scenario, tune
 sc = scenario.load("katz2025-continuous", {"controller.thrust_mode": "continuous-clipped"})
-p = tune.Problem(sc, ["k_h", "k_e"], gradient="reverse")
+p = tune.Problem(sc, ["controller.k_h_per_km2_s", "controller.k_e_km2_per_s3"], gradient="reverse")
 c = tune.to_theta(p.base, p.entries)
 out = p.surrogate_grad(np.tile(c, (16, 1)) + np.linspace(-0.1, 0.1, 16)[:, None], 0.05)
 jax.block_until_ready(out)
@@ -170,14 +170,15 @@ def write(stem, run: harness.Run, rows, memory_gib, quick: bool) -> str:
         "ΔV in m/s/yr, exact law, full horizon; a result counts only if it keeps the ±0.05° box.",
         "",
         *harness.table(
-            ["mode", "tuned", "Katz ΔV", "ours at Katz's gains (box)", "geojax tuned ΔV", "geojax wall s", "SLSQP ΔV",
-             "SLSQP wall s (evals)", "SLSQP / geojax wall", "geojax s to SLSQP's ΔV", "SLSQP wall / that"],
+            ["mode", "tuned", "Katz ΔV", "ours at Katz's gains (box)", "geojax tuned ΔV", "geojax wall s",
+             "SLSQP ΔV", "SLSQP wall s (evals)", "SLSQP / geojax wall", "geojax s to SLSQP's ΔV", "SLSQP wall / that"],
             [[r["mode"], ", ".join(r["parameters"]), r["paper_dv_per_year_mps"],
               f"{fmt(r['paper_gains_dv_per_year_mps'])} ({'kept' if r['paper_gains_box_ok'] else 'left'})",
               fmt(r["geojax_dv_per_year_mps"]), fmt(r["geojax_wall_s"], "{:.0f}"), fmt(r["slsqp_best_dv_per_year_mps"]),
               f"{fmt(r['slsqp_wall_s'], '{:.0f}')} ({r['slsqp_evaluations']})",
               fmt(r["wall_ratio_slsqp_over_geojax"], "{:.2f}"), fmt(r["geojax_s_to_slsqp_result"], "{:.0f}"),
-              fmt(r.get("wall_ratio_slsqp_over_geojax_to_slsqp_result"), "{:.1f}")] for r in rows], align="ll" + "r" * 9),
+              fmt(r.get("wall_ratio_slsqp_over_geojax_to_slsqp_result"), "{:.1f}")] for r in rows],
+            align="ll" + "r" * 9),
         "", "Tuned gains (k_h in 1/(km² s), k_e in km²/s³, λ_b in degrees):", "",
         *harness.table(["mode", "geojax k_h", "geojax k_e", "geojax λ_b", "SLSQP k_h", "SLSQP k_e", "SLSQP λ_b"],
                        [[r["mode"], *(gain(r[f"{who}_{name}"]) for who in ("geojax", "slsqp")

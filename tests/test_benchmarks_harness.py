@@ -78,7 +78,8 @@ def test_results_files_round_trip(tmp_path):
 
 def test_ratios_divide_each_rate_by_each_peers():
     table = harness.ratios({"geojax 900 s": 300.0, "geojax 1800 s": 600.0}, {"heyoka": 60.0, "scipy": 0.2})
-    assert table == {"geojax 900 s": {"heyoka": 5.0, "scipy": 1500.0}, "geojax 1800 s": {"heyoka": 10.0, "scipy": 3000.0}}
+    assert table == {"geojax 900 s": {"heyoka": 5.0, "scipy": 1500.0},
+                     "geojax 1800 s": {"heyoka": 10.0, "scipy": 3000.0}}
     assert harness.ratio_table(table, "geojax")[2] == "| geojax 900 s | 5 | 1.5e+03 |"
 
 
@@ -103,8 +104,8 @@ def test_devices_are_not_set_up_once_jax_has_started():
 
 @pytest.mark.filterwarnings("ignore:os.fork:RuntimeWarning")  # JAX's threads here; the child only pins and execs
 def test_a_child_gets_its_devices_and_its_core():
-    code = ("import json, os; print('noise'); "
-            "print(json.dumps([os.environ['XLA_FLAGS'], os.environ['JAX_PLATFORMS'], sorted(os.sched_getaffinity(0))]))")
+    code = ("import json, os; print('noise'); print(json.dumps([os.environ['XLA_FLAGS'], "
+            "os.environ['JAX_PLATFORMS'], sorted(os.sched_getaffinity(0))]))")
     core = harness.usable_cores()[-1]
     flags, platform, cores = harness.run_json(
         ["-c", code], harness.Devices(host_device_count=1, replace_count=True, platform="cpu", cores=(core,)))

@@ -20,6 +20,6 @@ from harness.machine import command_line, facts, peak_memory_bytes
 from harness.results import RESULTS_DIR, Run, add_arguments, ratio_table, ratios, read, start, table, write
 from harness.timing import Call, Timing, compile_jitted, measure, timed, total
 
-__all__ = ["Call", "Devices", "RESULTS_DIR", "Run", "Timing", "add_arguments", "command_line", "compile_jitted", "compose_xla_flags",
-           "facts", "measure", "peak_memory_bytes", "pin", "ratio_table", "ratios", "read", "run_json", "start", "table", "timed",
-           "total", "usable_cores", "write"]
+__all__ = ["Call", "Devices", "RESULTS_DIR", "Run", "Timing", "add_arguments", "command_line", "compile_jitted",
+           "compose_xla_flags", "facts", "measure", "peak_memory_bytes", "pin", "ratio_table", "ratios", "read",
+           "run_json", "start", "table", "timed", "total", "usable_cores", "write"]

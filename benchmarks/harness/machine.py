@@ -42,7 +42,8 @@ def facts() -> dict:
     import geojax
     from geojax.store import device_description, source_revision
 
-    return {"cpu_model": cpu_model(), "cpu_count": os.cpu_count(), "os": platform.platform(), "python": platform.python_version(), "numpy": numpy.__version__,
+    return {"cpu_model": cpu_model(), "cpu_count": os.cpu_count(), "os": platform.platform(),
+            "python": platform.python_version(), "numpy": numpy.__version__,
             "jax": jax.__version__, "jaxlib": jaxlib.__version__, "platform": jax.devices()[0].platform,
             "device": device_description(), "geojax": geojax.__version__, "source_revision": source_revision()}
 
