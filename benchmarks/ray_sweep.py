@@ -39,11 +39,16 @@ def main() -> None:
         batch, days, chunk, workers = args.one
         print(json.dumps(measure(int(batch), float(days), int(chunk) or None, int(workers))))
         return
+    if args.render:  # the tables again from the last results (after a change of wording), with their facts
+        meta, saved = harness.read(args.out / NAME)
+        if not meta:
+            raise SystemExit(f"--render: {args.out / NAME}.json was not written by the harness (no meta)")
+        first = saved["rows"][0]
+        print(harness.save(args.out / NAME, meta, title(first["batch"], first["days"]), saved,
+                           markdown(saved["rows"], saved["overhead"])))
+        return
     devices = harness.Devices(platform=args.platform)
     run = harness.start(devices)
-    if args.render:  # the tables again from the last results (after a change of wording)
-        _, saved = harness.read(args.out / NAME)
-        return write(args, run, saved["rows"], saved["overhead"])
     child = lambda batch, days, chunk, workers: harness.run_json(  # noqa: E731
         [__file__, "--one", str(batch), str(days), str(chunk), str(workers)], devices)
     rows = []
@@ -60,7 +65,12 @@ def main() -> None:
                 "ray_run_s": remote["run_s"], "ray_connect_s": remote["connect_s"],
                 "per_chunk_s": (remote["run_s"] - local["run_s"]) / args.overhead_chunks}
     print(f"overhead per chunk: {overhead['per_chunk_s']:.3f} s", flush=True)
-    write(args, run, rows, overhead)
+    print(harness.write(args.out / NAME, run, title(args.batch, args.days), {"rows": rows, "overhead": overhead},
+                        markdown(rows, overhead)))
+
+
+def title(batch: int, days: float) -> str:
+    return f"Sweeps on Ray: li2022-qffc, {batch} samples of {days} days, H_rv = H_att = 1"
 
 
 def measure(batch: int, days: float, chunk: int | None, workers: int) -> dict:
@@ -76,9 +86,9 @@ def measure(batch: int, days: float, chunk: int | None, workers: int) -> dict:
             "dv_mean": float(done["metrics"]["dv_per_year_mps"].mean())}
 
 
-def write(args, run: harness.Run, rows: list[dict], overhead: dict) -> None:
+def markdown(rows: list[dict], overhead: dict) -> list[str]:
     local = rows[0]["sample_years_per_s"]
-    body = ["Each row is a fresh process; the Ray rows start a local Ray instance (`--ray`) whose workers compile "
+    return ["Each row is a fresh process; the Ray rows start a local Ray instance (`--ray`) whose workers compile "
             "for themselves. Wall time counts everything from the call of `run_sweep` (Ray's start, the workers' "
             "start and compilation included); 'chunks only' leaves out Ray's start and the longest compilation.", "",
             *harness.table(["run", "wall s", "Ray start s", "compile s", "sample-years/s", "/ local", "chunks only",
@@ -92,8 +102,6 @@ def write(args, run: harness.Run, rows: list[dict], overhead: dict) -> None:
             f"{overhead['ray_run_s']:.2f} s after compilation, the local run's {overhead['local_run_s']:.2f} s; "
             f"Ray's own start {overhead['ray_connect_s']:.1f} s is apart). It includes the worker's process "
             "start and the transfer of each chunk's results to the driver, which writes it."]
-    print(harness.write(args.out / NAME, run, f"Sweeps on Ray: li2022-qffc, {args.batch} samples of {args.days} days, "
-                        "H_rv = H_att = 1", {"rows": rows, "overhead": overhead}, body))
 
 
 if __name__ == "__main__":

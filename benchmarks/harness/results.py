@@ -38,7 +38,7 @@ def start(devices: _devices.Devices = _devices.Devices(), argv: list[str] | None
 
 
 def write(stem: Path, run: Run, title: str, data: dict, body: Sequence[str], facts: dict | None = None) -> str:
-    """Write ``stem.json`` and ``stem.md``; return the Markdown.
+    """Write ``stem.json`` and ``stem.md`` of a run that ends now; return the Markdown.
 
     ``data``: the measurements (JSON-ready); ``body``: the Markdown under the header line; ``facts``: the
     script's own facts for ``meta`` (a peer's version, whether the run was quick).
@@ -46,6 +46,12 @@ def write(stem: Path, run: Run, title: str, data: dict, body: Sequence[str], fac
     meta = {"command": run.command, "date_utc": run.started_utc, "wall_s": time.perf_counter() - run.start_s,
             "load_average": {"start": run.load_average_start, "end": machine.load_average()},
             **run.devices, **machine.facts(), **(facts or {})}
+    return save(stem, meta, title, data, body)
+
+
+def save(stem: Path, meta: dict, title: str, data: dict, body: Sequence[str]) -> str:
+    """Write ``stem.json`` and ``stem.md`` with ``meta`` as ``write`` made it (the tables of an earlier run
+    written again keep the facts of that run); return the Markdown."""
     text = "\n".join([f"# {title}", "", header(meta), "", *body]).rstrip("\n") + "\n"
     stem.parent.mkdir(parents=True, exist_ok=True)
     stem.with_suffix(".json").write_text(json.dumps({"meta": meta, **data}, indent=1) + "\n")
