@@ -18,7 +18,7 @@ sys.path.append(str(BENCHMARKS))
 import harness  # noqa: E402
 from harness import devices  # noqa: E402
 
-COUNT = devices.DEVICE_COUNT_FLAG
+from geojax.parallel import DEVICE_COUNT_FLAG as COUNT  # noqa: E402
 
 
 def test_timing_a_jitted_function_reports_its_compilation_apart_and_the_fastest_call():
@@ -84,13 +84,17 @@ def test_ratios_divide_each_rate_by_each_peers():
 
 
 def test_xla_flags_keep_the_users_flags():
+    def flags(user: str, devices_: harness.Devices) -> str:
+        return harness.environment(devices_, base={"XLA_FLAGS": user})["XLA_FLAGS"]
+
     user = "--xla_cpu_enable_xprof_traceme --xla_cpu_parallel_codegen_split_count=4"
-    assert harness.compose_xla_flags(user, 2) == f"{user} {COUNT}=2"
-    assert harness.compose_xla_flags("", 2) == f"{COUNT}=2"
+    assert flags(user, harness.Devices(host_device_count=2)) == f"{user} {COUNT}=2"
+    assert flags("", harness.Devices(host_device_count=2)) == f"{COUNT}=2"
+    assert flags("", harness.Devices(cores=(0,))) == f"{COUNT}=1"  # by default one device per core
     # a device count the user gave wins, unless the measurement needs exactly its own
-    assert harness.compose_xla_flags(f"--a {COUNT}=8 --b", 2) == f"--a {COUNT}=8 --b"
-    assert harness.compose_xla_flags(f"--a {COUNT}=8 --b", 1, replace_count=True) == f"--a --b {COUNT}=1"
-    env = devices.environment(harness.Devices(host_device_count=3, platform="cpu"), base={"XLA_FLAGS": "--a", "X": "y"})
+    assert flags(f"--a {COUNT}=8 --b", harness.Devices(host_device_count=2)) == f"--a {COUNT}=8 --b"
+    assert flags(f"--a {COUNT}=8 --b", harness.Devices(1, replace_count=True)) == f"--a --b {COUNT}=1"
+    env = harness.environment(harness.Devices(host_device_count=3, platform="cpu"), base={"XLA_FLAGS": "--a", "X": "y"})
     assert env == {"XLA_FLAGS": f"--a {COUNT}=3", "JAX_PLATFORMS": "cpu", "X": "y"}
 
 

@@ -3,7 +3,7 @@
 XLA reads ``XLA_FLAGS`` (and JAX its platforms) when JAX starts its first backend, not when ``jax`` is
 imported, so ``set_up`` may run after ``import jax`` but must run before the first array or
 ``jax.devices()``; it refuses to run later, where the flags would silently change nothing.  Nothing here
-imports JAX.
+imports JAX at import time.
 """
 
 from __future__ import annotations
@@ -11,8 +11,6 @@ from __future__ import annotations
 import os
 import sys
 from typing import NamedTuple
-
-DEVICE_COUNT_FLAG = "--xla_force_host_platform_device_count"
 
 
 class Devices(NamedTuple):
@@ -22,20 +20,6 @@ class Devices(NamedTuple):
     replace_count: bool = False  # True: replace a device count the user's XLA_FLAGS gives (else it wins)
     platform: str | None = None  # JAX_PLATFORMS ("cpu", "cuda", ...); None: the user's or JAX's choice
     cores: tuple[int, ...] | None = None  # pin the process to these cores; None: the cores it was started on
-
-
-def compose_xla_flags(user_flags: str, host_device_count: int, replace_count: bool = False) -> str:
-    """``user_flags`` with ``--xla_force_host_platform_device_count=host_device_count`` added.
-
-    The user's other flags are kept, in their order; a device count the user gave is kept unless
-    ``replace_count`` (a measurement that must run on exactly that many devices).
-    """
-    flags = user_flags.split()
-    given = [f for f in flags if f.split("=", 1)[0] == DEVICE_COUNT_FLAG]
-    if given and not replace_count:
-        return " ".join(flags)
-    kept = [f for f in flags if f.split("=", 1)[0] != DEVICE_COUNT_FLAG]
-    return " ".join(kept + [f"{DEVICE_COUNT_FLAG}={host_device_count}"])
 
 
 def usable_cores() -> tuple[int, ...]:
@@ -54,9 +38,11 @@ def pin(cores: tuple[int, ...]) -> None:
 def environment(devices: Devices, base: dict[str, str] | None = None) -> dict[str, str]:
     """``base`` (default: this process's environment) with ``XLA_FLAGS`` and ``JAX_PLATFORMS`` for ``devices``:
     what ``set_up`` sets here, or what a child process is given."""
+    from geojax.parallel import with_host_device_count  # the geojax command's composition (imports JAX)
+
     env = dict(os.environ if base is None else base)
     count = devices.host_device_count or len(devices.cores or usable_cores())
-    env["XLA_FLAGS"] = compose_xla_flags(env.get("XLA_FLAGS", ""), count, devices.replace_count)
+    env["XLA_FLAGS"] = with_host_device_count(env.get("XLA_FLAGS", ""), count, devices.replace_count)
     if devices.platform:
         env["JAX_PLATFORMS"] = devices.platform
     return env
