@@ -102,5 +102,6 @@ def ratio_table(table_of_ratios: dict[str, dict[str, float]], corner: str, digit
 
 def add_arguments(parser, out: Path = RESULTS_DIR) -> None:
     """The flags every benchmark takes: ``--out`` (the results folder) and ``--platform``."""
-    parser.add_argument("--out", type=Path, default=out, help=f"folder for the results files (default {out})")
+    shown = out.relative_to(RESULTS_DIR.parents[1]) if out.is_relative_to(RESULTS_DIR.parents[1]) else out
+    parser.add_argument("--out", type=Path, default=out, help=f"folder for the results files (default: {shown})")
     parser.add_argument("--platform", help="JAX platform to run on (cpu, cuda, ...; default: JAX's choice)")
