@@ -271,11 +271,12 @@ def _simulate(args) -> int:
     _check_outputs(args)
     say, detail = _say(args), _detail(args)
     say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; compiling...", flush=True)
+    from geojax.control.base import keeps_steps
     from geojax.loop.setup import controller_of
 
-    # A feedback law (no plan, no predictor reference: Katz's laws, a user's) keeps its per-step records for
-    # the ground-track figures; a planner gets the reference and targets beside its cycles instead.
-    feedback = controller_of([sc]).reference_cycles == 0
+    # A feedback law (Katz's laws, a user's that says so) keeps its per-step records for the ground-track
+    # figures; a planner gets the reference and targets beside its cycles instead.
+    feedback = keeps_steps(controller_of([sc]))
     result = simulate(sc, args.seed, keep_steps=feedback,
                       on_compiled=lambda s: say(f"compiled in {s:.1f} s; running...", flush=True))
     cycles = result.cycles()

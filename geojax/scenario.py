@@ -82,7 +82,9 @@ SCHEMA: dict[str, dict[str, Field]] = {
         # The mass without propellant: the thrusters stop when it is reached (status 5).  0: no limit set.
         "dry_mass_kg": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=MAX_MASS_KG, si="dry_mass_kg"),
         "srp_area_m2": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6),
-        "reflectivity": Field(_NUMBER, 0.0, lower=0.0, upper=1.0 + 1e-12, lower_inclusive=True),
+        # The SRP model's reflectivity eta (Li 2022 eq. (4)); the default is the force model's (Li's 0.6).
+        "reflectivity": Field(_NUMBER, ForceModel._field_defaults["reflectivity"], lower=0.0, upper=1.0 + 1e-12,
+                              lower_inclusive=True),
     },
     "thrusters": {
         "count": Field(int, 2, lower=1, upper=65, lower_inclusive=True),
@@ -127,7 +129,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         # Sun and Moon: "meeus" (analytic series, geojax.physics.ephemeris) or "de421" (JPL DE421 through
         # jplephem), evaluated once per scenario on the environment grid.
         "ephemeris": Field(str, "meeus", choices=("meeus", "de421")),
-        "srp_pressure_n_m2": Field(_NUMBER, 4.5605e-6, lower=0.0, lower_inclusive=True, upper=1e-2),
+        "srp_pressure_n_m2": Field(_NUMBER, ForceModel._field_defaults["srp_pressure_1au_n_m2"], lower=0.0, lower_inclusive=True, upper=1e-2),
         # The Earth's field to degree and order N (EGM2008, tide-free, shipped to degree 20): replaces `j2` and
         # `c22_s22` where given (those stay for the papers' models).  Order: default the degree, 0 <= M <= N.
         "gravity_degree": Field(int, None, lower=2, upper=MAX_GRAVITY_DEGREE + 1, lower_inclusive=True),

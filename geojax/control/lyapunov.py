@@ -133,7 +133,8 @@ def controller(mode: str, smooth: bool = False) -> Controller:
         return Thrust(u_rsw / u_norm, u_norm * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
 
     surrogate = None if smooth or mode == "continuous-clipped" else controller(mode, smooth=True)
-    return Controller(stateless_init, no_plan, thrust, FIELDS, surrogate=surrogate)
+    return Controller(stateless_init, no_plan, thrust, FIELDS, surrogate=surrogate,
+                      bound_geometry="gimbal")
 
 
 def gains(controller: dict) -> "LyapunovGains":
