@@ -35,7 +35,8 @@ def main() -> None:
     parser.add_argument("--one", nargs=4, help=argparse.SUPPRESS)  # internal: batch days chunk workers (0: local)
     harness.add_arguments(parser)
     args = parser.parse_args()
-    if args.one:
+    if args.one:  # the parent's devices, or this process's where it runs alone
+        harness.set_up(harness.Devices(platform=args.platform))
         batch, days, chunk, workers = args.one
         print(json.dumps(measure(int(batch), float(days), int(chunk) or None, int(workers))))
         return

@@ -51,6 +51,8 @@ def main() -> None:
     parser.add_argument("--baseline", type=int, help=argparse.SUPPRESS)
     harness.add_arguments(parser)
     args = parser.parse_args()
+    if args.one is not None or args.baseline is not None:  # the parent's devices, or this process's alone
+        harness.set_up(harness.Devices(platform=args.platform))
     if args.one is not None:
         print(json.dumps(measure_sweep(args.controller, args.days, args.one)))
         return

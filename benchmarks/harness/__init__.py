@@ -15,11 +15,11 @@ geojax at import time, so a script measuring an older geojax (``core.py --baseli
 """
 
 from harness.child import run_json
-from harness.devices import Devices, environment, pin, usable_cores
+from harness.devices import Devices, environment, pin, set_up, usable_cores
 from harness.machine import command_line, facts, peak_memory_bytes
 from harness.results import RESULTS_DIR, Run, add_arguments, ratio_table, ratios, read, save, start, table, write
 from harness.timing import Call, Timing, compile_jitted, measure, timed, total
 
 __all__ = ["Call", "Devices", "RESULTS_DIR", "Run", "Timing", "add_arguments", "command_line", "compile_jitted",
            "environment", "facts", "measure", "peak_memory_bytes", "pin", "ratio_table", "ratios", "read",
-           "run_json", "save", "start", "table", "timed", "total", "usable_cores", "write"]
+           "run_json", "save", "set_up", "start", "table", "timed", "total", "usable_cores", "write"]
