@@ -25,17 +25,9 @@ run's).  On a CPU the sizes are small (a few minutes on 2 cores); ``--quick`` sm
 from __future__ import annotations
 
 import argparse
-import datetime
-import json
-import os
-import resource
-import sys
-import tempfile
-import time
-from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
+import harness
+
 SIDEREAL_YEAR_FRACTION = 86164.0905 / (365.25 * 86400)  # years per cycle
 
 # (samples, days) per controller: the issue's GPU sizes, and what 2 CPU cores finish in minutes.
@@ -44,39 +36,32 @@ SIZES = {"gpu": {"qffc": (131_072, 365.25), "fompc": (8192, 30.0), "mpc": (2048,
 STEP_BATCHES = {"gpu": [4096, 16_384, 65_536, 131_072], "cpu": [256, 1024]}
 
 
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="a tenth of the samples (a check that it runs)")
     parser.add_argument("--batches", type=int, nargs="+", help="step batches (default: the platform's)")
     parser.add_argument("--controllers", nargs="+", default=["qffc", "fompc", "mpc"])
+    harness.add_arguments(parser)
     args = parser.parse_args()
-
-    from geojax.parallel import use_host_cores
-
-    use_host_cores()  # one XLA CPU device per core, as the geojax command does (no effect on a GPU)
+    run = harness.start(harness.Devices(platform=args.platform))  # one XLA CPU device per core (no effect on a GPU)
     import jax
 
-    device = jax.devices()[0]
-    platform = "cpu" if device.platform == "cpu" else "gpu"
+    platform = "cpu" if jax.devices()[0].platform == "cpu" else "gpu"
     scale = 10 if args.quick else 1
     sizes = {c: (max(16, n // scale), days) for c, (n, days) in SIZES[platform].items() if c in args.controllers}
     batches = args.batches or [max(16, b // scale) for b in STEP_BATCHES[platform]]
-    results = {"platform": device.platform, "device": f"{jax.device_count()} x {device.device_kind}",
-               "date_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d"),
-               "git": _git(), "jax": jax.__version__, "cpus": os.cpu_count(), "command": " ".join(sys.argv)}
-    results["step"] = measure_step(batches)
+    results = {"step": measure_step(batches)}
     results["sweeps"] = {c: measure_sweep(c, *sizes[c]) for c in sizes}
     if "qffc" in sizes:
         results["engine_qffc"] = measure_engine("qffc", *sizes["qffc"])
     results["host_keys"] = measure_host_keys(10_000 if args.quick else 100_000)
-    write(results, platform)
+    print(harness.write(args.out / f"accelerator_{platform}", run, f"geojax on {harness.facts()['device']}",
+                        results, markdown(results)))
 
 
 def measure_step(batches) -> dict:
     """Orbit-years/s of the minimal kernel and of geojax's uncontrolled rollout (controller ``none``, the
     compiled batch of ``simulate_batch`` run alone, records and metrics included), per batch."""
-    sys.path.insert(0, str(HERE))
     import core
 
     from geojax import scenario
@@ -87,12 +72,12 @@ def measure_step(batches) -> dict:
         minimal = core.measure_minimal([batch], n_cycles)["step"][batch]
         sc = scenario.load("li2022-qffc", {"controller.kind": "none", "duration.days": n_cycles})
         compiled, args = _compiled_rollouts(sc, batch)
-        best = min(_timed(lambda: compiled(*args)) for _ in range(3))
+        _, timing = harness.measure(compiled, *args, repeats=3, warmup=1)
         years = batch * n_cycles * SIDEREAL_YEAR_FRACTION
         rows[batch] = {"minimal_orbit_years_per_s": minimal["orbit_years_per_s"],
-                       "geojax_orbit_years_per_s": years / best,
-                       "ratio_to_minimal": years / best / minimal["orbit_years_per_s"]}
-        print(f"step, batch {batch}: geojax {years / best:.4g} orbit-years/s, minimal "
+                       "geojax_orbit_years_per_s": years / timing.best_s,
+                       "ratio_to_minimal": years / timing.best_s / minimal["orbit_years_per_s"]}
+        print(f"step, batch {batch}: geojax {years / timing.best_s:.4g} orbit-years/s, minimal "
               f"{minimal['orbit_years_per_s']:.4g} ({rows[batch]['ratio_to_minimal']:.2f}x)", flush=True)
     return rows
 
@@ -109,36 +94,28 @@ def _compiled_rollouts(sc, n: int, keys=None):
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=rollout.for_lanes(batch.dynamics, n),
                   keep_steps=False)
     args = (params, keys, batch.shared, rollout._reference_env(batch))
-    compiled = rollout._batched.lower(*args, **static).compile()
-    jax.block_until_ready(compiled(*args))  # warm
+    compiled, _ = harness.compile_jitted(rollout._batched, *args, **static)
     return compiled, args
 
 
 def measure_sweep(controller: str, samples: int, days: float) -> dict:
     import jax
 
-    sys.path.insert(0, str(HERE))
     import sweep as sweep_benchmark  # its sweep file: li2022-<controller>, H_rv = H_att = 1, beta_max 70 deg
 
-    from geojax import store, sweep
+    from geojax import sweep
 
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "s.toml"
-        path.write_text(sweep_benchmark.SWEEP.format(controller=controller, batch=samples, days=days))
-        spec = sweep.load(path)
-        width = sweep.lane_plan(spec, controller)
-        start = time.perf_counter()
-        out = sweep.run_sweep(spec, Path(tmp) / "s.h5", progress=False)
-        wall_s = time.perf_counter() - start
-        groups, attrs = store.read_h5(out)
+    spec = sweep_benchmark.sweep_spec(controller, samples, days)
+    width = sweep.lane_plan(spec, controller)
+    done = sweep_benchmark.run_sweep_file(spec)
     years = samples * round(days * 86400 / 86164.0905) * SIDEREAL_YEAR_FRACTION
-    compile_s = float(attrs["compile_s"])
+    wall_s, compile_s = done["wall_s"], float(done["attrs"]["compile_s"])
     row = {"samples": samples, "days": days, "lanes_per_device": width.lanes, "lanes_source": width.source,
            "model_bytes_per_lane": width.bytes_per_lane, "wall_s": wall_s, "compile_s": compile_s,
            "sample_years_per_s": years / wall_s, "run_sample_years_per_s": years / (wall_s - compile_s),
-           "peak_memory_gb": _peak_memory_gb(jax.devices()[0]),
-           "mean_dv_per_year_mps": float(groups["metrics"]["dv_per_year_mps"].mean()),
-           "status_ok_fraction": float((groups["status"]["code"] == 0).mean())}
+           "peak_memory_gb": harness.peak_memory_bytes(jax.devices()[0]) / 1e9,
+           "mean_dv_per_year_mps": float(done["metrics"]["dv_per_year_mps"].mean()),
+           "status_ok_fraction": float((done["status"]["code"] == 0).mean())}
     print(f"sweep {controller}: {samples} x {days:g} days at {width.lanes} lanes: {row['sample_years_per_s']:.4g} "
           f"sample-years/s ({row['run_sample_years_per_s']:.4g} after compilation)", flush=True)
     return row
@@ -157,12 +134,10 @@ def measure_engine(controller: str, samples: int, days: float) -> dict:
     params = prepare_params(sc, samples)
     keys = jax.vmap(lambda j: jax.random.fold_in(jax.random.key(7), j))(jnp.arange(samples))
     compiled = []
-    start = time.perf_counter()
-    result = simulate_batch(sc, params, keys=keys, on_compiled=compiled.append)
-    wall_s = time.perf_counter() - start
+    result, call = harness.timed(simulate_batch, sc, params, keys=keys, on_compiled=compiled.append)
     years = samples * round(days * 86400 / 86164.0905) * SIDEREAL_YEAR_FRACTION
-    row = {"samples": samples, "days": days, "wall_s": wall_s, "compile_s": compiled[0],
-           "run_sample_years_per_s": years / (wall_s - compiled[0]),
+    row = {"samples": samples, "days": days, "wall_s": call.wall_s, "compile_s": compiled[0],
+           "run_sample_years_per_s": years / (call.wall_s - compiled[0]),
            "mean_dv_per_year_mps": float(result.metrics["dv_per_year_mps"].mean())}
     print(f"simulate_batch {controller}: {row['run_sample_years_per_s']:.4g} sample-years/s after compilation",
           flush=True)
@@ -176,35 +151,29 @@ def measure_host_keys(n: int) -> dict:
 
     sc = scenario.load("li2022-qffc", {"controller.kind": "none", "duration.days": 1})
     params = prepare_params(sc, n)
-    simulate_batch(sc, params, seeds=range(n))  # compile and warm
-    whole = min(_timed(lambda: simulate_batch(sc, params, seeds=range(n))) for _ in range(3))
+    _, whole = harness.measure(simulate_batch, sc, params, repeats=3, warmup=1, seeds=range(n))
     compiled, args = _compiled_rollouts(sc, n, keys_of(range(n)))
-    alone = min(_timed(lambda: compiled(*args)) for _ in range(3))
-    row = {"samples": n, "simulate_batch_s": whole, "compiled_call_s": alone, "outside_s": whole - alone}
-    print(f"simulate_batch(seeds=range({n})): {whole:.3f} s, of which {whole - alone:.3f} s outside the "
+    _, alone = harness.measure(compiled, *args, repeats=3, warmup=1)
+    row = {"samples": n, "simulate_batch_s": whole.best_s, "compiled_call_s": alone.best_s,
+           "outside_s": whole.best_s - alone.best_s}
+    print(f"simulate_batch(seeds=range({n})): {whole.best_s:.3f} s, of which {row['outside_s']:.3f} s outside the "
           f"compiled call", flush=True)
     return row
 
 
-def write(results: dict, platform: str) -> None:
-    RESULTS.mkdir(exist_ok=True)
-    stem = RESULTS / f"accelerator_{platform}"
-    stem.with_suffix(".json").write_text(json.dumps(results, indent=2) + "\n")
-    lines = [f"# geojax on {results['device']} ({results['platform']})", "",
-             f"`{results['command']}`, {results['date_utc']}, git {results['git']}, JAX {results['jax']}, "
-             f"{results['cpus']} CPU cores. li2022 scenarios, H_rv = H_att = 1 in the sweeps.", "",
+def markdown(results: dict) -> list[str]:
+    lines = ["li2022 scenarios, H_rv = H_att = 1 in the sweeps.", "",
              "## Uncontrolled step: geojax against the minimal kernel (orbit-years/s after compilation)", "",
-             "| batch | geojax | minimal kernel | geojax / minimal |", "|---:|---:|---:|---:|"]
-    for batch, r in results["step"].items():
-        lines.append(f"| {batch} | {r['geojax_orbit_years_per_s']:.4g} | {r['minimal_orbit_years_per_s']:.4g} | "
-                     f"{r['ratio_to_minimal']:.2f}x |")
-    lines += ["", "## `geojax sweep` at the automatic width", "",
-              "| controller | samples x days | lanes per device | sample-years/s | after compilation | compile s | "
-              "peak memory GB | mean ΔV m/s/yr | ok |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
-    for c, r in results["sweeps"].items():
-        lines.append(f"| {c} | {r['samples']} x {r['days']:g} | {r['lanes_per_device']} ({r['lanes_source']}) | "
-                     f"{r['sample_years_per_s']:.4g} | {r['run_sample_years_per_s']:.4g} | {r['compile_s']:.1f} | "
-                     f"{r['peak_memory_gb']:.2f} | {r['mean_dv_per_year_mps']:.3f} | {r['status_ok_fraction']:.0%} |")
+             *harness.table(["batch", "geojax", "minimal kernel", "geojax / minimal"],
+                            [[batch, f"{r['geojax_orbit_years_per_s']:.4g}", f"{r['minimal_orbit_years_per_s']:.4g}",
+                              f"{r['ratio_to_minimal']:.2f}x"] for batch, r in results["step"].items()], align="rrrr"),
+             "", "## `geojax sweep` at the automatic width", "",
+             *harness.table(["controller", "samples x days", "lanes per device", "sample-years/s", "after compilation",
+                             "compile s", "peak memory GB", "mean ΔV m/s/yr", "ok"],
+                            [[c, f"{r['samples']} x {r['days']:g}", f"{r['lanes_per_device']} ({r['lanes_source']})",
+                              f"{r['sample_years_per_s']:.4g}", f"{r['run_sample_years_per_s']:.4g}",
+                              f"{r['compile_s']:.1f}", f"{r['peak_memory_gb']:.2f}", f"{r['mean_dv_per_year_mps']:.3f}",
+                              f"{r['status_ok_fraction']:.0%}"] for c, r in results["sweeps"].items()], align="llrrrrrrr")]
     if "engine_qffc" in results:
         e, s = results["engine_qffc"], results["sweeps"]["qffc"]
         lines += ["", f"The same QFFC samples through `simulate_batch` in one call: {e['run_sample_years_per_s']:.4g} "
@@ -213,36 +182,7 @@ def write(results: dict, platform: str) -> None:
     h = results["host_keys"]
     lines += ["", f"`simulate_batch(..., seeds=range({h['samples']}))`, one cycle: {h['simulate_batch_s']:.3f} s, "
               f"of which {h['outside_s']:.3f} s outside the compiled call ({h['compiled_call_s']:.3f} s)."]
-    stem.with_suffix(".md").write_text("\n".join(lines) + "\n")
-    print("\n".join(lines))
-
-
-def _timed(fn) -> float:
-    import jax
-
-    start = time.perf_counter()
-    jax.block_until_ready(fn())
-    return time.perf_counter() - start
-
-
-def _peak_memory_gb(device) -> float:
-    stats = device.memory_stats() if device.platform != "cpu" else None
-    if stats and "peak_bytes_in_use" in stats:
-        return stats["peak_bytes_in_use"] / 1e9
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9  # Linux: kB
-
-
-def _git() -> str:
-    import subprocess
-
-    try:
-        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=True,
-                             cwd=HERE).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True,
-                               text=True, cwd=HERE).stdout
-        return rev + (" + uncommitted" if dirty.strip() else "")
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
+    return lines
 
 
 if __name__ == "__main__":

@@ -16,7 +16,8 @@ closed loop (li2022-qffc and li2022-fompc, H = 1 errors, batch 256): simulated y
 * ``minimal``: Cartesian RK4 written straight in jax.numpy on component arrays: point mass, J2, Sun and
   Moon (from the same environment grid), SRP without shadow; no C22, no records, no cycle means.
 
-Every implementation runs on one device pinned to one core (``XLA_FLAGS`` unset, ``sched_setaffinity``):
+Every implementation runs on one device pinned to one core (``harness.Devices``: one XLA CPU device, the
+user's other ``XLA_FLAGS`` kept, the process pinned to the lowest core it may use):
 the comparison is per core, not how well each shards or how far XLA spreads one kernel over idle cores (on
 one unpinned device the issue's baseline, whose kernels are few and large, drew a second core that the
 fused step's many small kernels do not; and a second core shared with other work made every number move).
@@ -27,17 +28,15 @@ A sweep runs one such device per core (``geojax.parallel.per_device``).  Results
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import re
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
+import harness
+
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 LOOP_ROUNDS = 3  # closed-loop runs per controller, the fastest kept
 DEFAULT_BASELINES = ("1c1acb7",  # main before the fused step: issue 13's baseline
                      "1ea0b52")  # main before cos L, sin L in plain arithmetic (physics.trig)
@@ -91,18 +90,10 @@ def measure_field(batches, n_cycles: int) -> dict:
 
 
 def _timed_step(fn, args, batch: int, n_steps_total: int, step_s: float) -> dict:
-    import jax
-
-    start = time.perf_counter()
-    compiled = fn.lower(*args).compile()
-    compile_s = time.perf_counter() - start
+    compiled, compile_s = harness.compile_jitted(fn, *args)
     text = compiled.as_text()
-    jax.block_until_ready(compiled(*args))  # warm
-    best = float("inf")
-    for _ in range(3):
-        start = time.perf_counter()
-        jax.block_until_ready(compiled(*args))
-        best = min(best, time.perf_counter() - start)
+    _, timing = harness.measure(compiled, *args, repeats=3, warmup=1)
+    best = timing.best_s
     return {"ns_per_rhs_per_sample": best / (4 * batch * n_steps_total) * 1e9,
             "orbit_years_per_s": batch * n_steps_total * step_s / 86400 / 365.25 / best,
             "compile_s": compile_s, **step_fusions(text)}
@@ -223,51 +214,49 @@ def _keep_fastest(rows: dict, measured: dict) -> None:
             rows[batch] = row
 
 
+def one_core(platform: str | None = None) -> harness.Devices:
+    """One device on one core (the lowest this process may use): what every implementation is measured on."""
+    return harness.Devices(host_device_count=1, replace_count=True, platform=platform,
+                           cores=harness.usable_cores()[:1])
+
+
 def _in_subprocess(tree: Path, what: str, args, loop: bool = True) -> dict:
     """Run one measurement in a fresh Python on ``tree``'s geojax (one device pinned to one core, nothing
     else loaded)."""
-    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
-    env["PYTHONPATH"] = str(tree)
-    core = min(os.sched_getaffinity(0))
-    with tempfile.NamedTemporaryFile(suffix=".json") as out:
-        code = (f"import json, sys; sys.path.insert(0, {str(HERE)!r}); import core; "
-                f"json.dump(core.{what}({args.batches!r}, {args.cycles}"
-                f"{', ' + repr(args.loop_days if loop else 0.0) if what == 'measure_engine' else ''}), "
-                f"open({out.name!r}, 'w'))")
-        subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=tree,
-                       preexec_fn=lambda: os.sched_setaffinity(0, {core}))
-        return json.load(open(out.name))
+    code = (f"import json, sys; sys.path.insert(0, {str(HERE)!r}); import core; "
+            f"print(json.dumps(core.{what}({args.batches!r}, {args.cycles}"
+            f"{', ' + repr(args.loop_days if loop else 0.0) if what == 'measure_engine' else ''})))")
+    return harness.run_json(["-c", code], one_core(args.platform), cwd=tree, pythonpath=tree)
 
 
-def markdown(results: dict) -> str:
+def markdown(results: dict) -> list[str]:
     impls = list(results["step"])
-    lines = ["# The integration step", "", f"`{results['command']}` on {results['machine']}, one device pinned "
-             "to one core per implementation, li2022 force model (C22/S22 and conical shadow on; the minimal kernel without "
-             "C22 and shadow), 96 steps per sidereal day, "
+    lines = ["One device pinned to one core per implementation, li2022 force model (C22/S22 and conical shadow on; "
+             "the minimal kernel without C22 and shadow), 96 steps per sidereal day, "
              f"{results['cycles']} cycles, the fastest of {results.get('rounds', 1)} alternating rounds. ns per "
              "right-hand side per sample (4 per RK4 step), orbit-years/s, fusions (and conditionals) of the "
              "compiled step.", "",
-             "| batch | " + " | ".join(impls) + " |", "|---:|" + "---:|" * len(impls)]
-    for batch in results["batches"]:
-        cells = []
-        for impl in impls:
-            row = results["step"][impl][str(batch)]
-            cells.append(f"{row['ns_per_rhs_per_sample']:.1f} ns, {row['orbit_years_per_s']:.0f} /s, "
-                         f"{row['fusions_per_step']} ({row['conditionals_per_step']})")
-        lines.append(f"| {batch} | " + " | ".join(cells) + " |")
+             *harness.table(["batch", *impls], [[batch, *(_cell(results["step"][impl][str(batch)]) for impl in impls)]
+                                               for batch in results["batches"]], align="r" * (1 + len(impls)))]
     lines += ["", "Cost per right-hand side relative to the minimal kernel: " + "; ".join(
         f"batch {batch}: " + ", ".join(f"{impl} {_relative(results, impl, batch):.2f}x" for impl in impls[:-1])
         for batch in results["batches"]) + "."]
+    looped = [k for k in impls if results["loop"].get(k)]
+    if not looped:  # --loop-days 0
+        return lines
     lines += ["", "Closed loop, batch 256, H = 1 errors, li2022 scenarios over "
               f"{_loop_days(results)} days: simulated years per second, the fastest of {LOOP_ROUNDS} runs "
-              "alternating the controllers (mean ΔV, m/s/yr).", "",
-              "| controller | " + " | ".join(k for k in impls if k in results["loop"]) + " |",
-              "|---|" + "---:|" * sum(k in results["loop"] for k in impls)]
-    for controller in ("qffc", "fompc"):
-        cells = [f"{results['loop'][k][controller]['years_per_s']:.2f} "
-                 f"({results['loop'][k][controller]['mean_dv_per_year_mps']:.3f})" for k in impls if k in results["loop"]]
-        lines.append(f"| {controller} | " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+              "alternating the controllers (mean ΔV, m/s/yr).", ""]
+    lines += harness.table(["controller", *looped],
+                           [[controller, *(f"{results['loop'][k][controller]['years_per_s']:.2f} "
+                                           f"({results['loop'][k][controller]['mean_dv_per_year_mps']:.3f})"
+                                           for k in looped)] for controller in ("qffc", "fompc")])
+    return lines
+
+
+def _cell(row: dict) -> str:
+    return (f"{row['ns_per_rhs_per_sample']:.1f} ns, {row['orbit_years_per_s']:.0f} /s, {row['fusions_per_step']} "
+            f"({row['conditionals_per_step']})")
 
 
 def _loop_days(results: dict) -> str:
@@ -288,18 +277,16 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=4, help="sidereal days per step measurement")
     parser.add_argument("--loop-days", type=float, default=20.0, help="days of the closed-loop measurement")
     parser.add_argument("--rounds", type=int, default=2, help="alternating rounds of the step measurement")
-    parser.add_argument("--out", type=Path, default=RESULTS)
     parser.add_argument("--field", action="store_true",
                         help="only the Earth's field: J2 + C22/S22, EGM2008 2x2, 8x8, 20x20 and the minimal kernel "
                              "(results/core_field.json and .md)")
+    harness.add_arguments(parser)
     args = parser.parse_args()
+    run = harness.start(one_core(args.platform))
     repo = HERE.parent
     if args.field:
-        return field_only(args, repo)
-    results = {"command": "python benchmarks/core.py " + " ".join(sys.argv[1:]), "batches": args.batches,
-               "rounds": args.rounds,
-               "cycles": args.cycles, "step": {}, "loop": {},
-               "machine": f"{os.cpu_count()} cores (load average {os.getloadavg()[0]:.1f} at the start"}
+        return field_only(args, run, repo)
+    results = {"batches": args.batches, "rounds": args.rounds, "cycles": args.cycles, "step": {}, "loop": {}}
     runs = [("geojax", repo)]
     with tempfile.TemporaryDirectory() as tmp:
         for rev in args.baseline:
@@ -323,26 +310,18 @@ def main() -> None:
     for round_ in range(args.rounds):
         print(f"minimal (round {round_ + 1}) ...", flush=True)
         _keep_fastest(results["step"].setdefault("minimal", {}), _in_subprocess(repo, "measure_minimal", args)["step"])
-    results["machine"] += f", {os.getloadavg()[0]:.1f} at the end)"
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "core.json").write_text(json.dumps(results, indent=1))
-    (args.out / "core.md").write_text(markdown(results))
-    print(markdown(results))
+    print(harness.write(args.out / "core", run, "The integration step", results, markdown(results)))
 
 
-def field_only(args, repo: Path) -> None:
+def field_only(args, run: harness.Run, repo: Path) -> None:
     """``--field``: the step with each of ``FIELD_MODELS`` and the minimal kernel, alternating rounds."""
-    results = {"command": "python benchmarks/core.py " + " ".join(sys.argv[1:]), "batches": args.batches,
-               "rounds": args.rounds, "cycles": args.cycles, "step": {},
-               "machine": f"{os.cpu_count()} cores (load average {os.getloadavg()[0]:.1f} at the start"}
+    results = {"batches": args.batches, "rounds": args.rounds, "cycles": args.cycles, "step": {}}
     for round_ in range(args.rounds):
         print(f"round {round_ + 1} ...", flush=True)
         for name, rows in _in_subprocess(repo, "measure_field", args)["step"].items():
             _keep_fastest(results["step"].setdefault(name, {}), rows)
         _keep_fastest(results["step"].setdefault("minimal", {}), _in_subprocess(repo, "measure_minimal", args)["step"])
-    results["machine"] += f", {os.getloadavg()[0]:.1f} at the end)"
-    lines = ["# The Earth's field in the step", "",
-             f"`{results['command']}` on {results['machine']}, one device pinned to one core, li2022 with each "
+    lines = ["One device pinned to one core, li2022 with each "
              "field (Sun, Moon, SRP and conical shadow on), MEE RK4, 96 steps per sidereal day, "
              f"{args.cycles} cycles, the fastest of {args.rounds} rounds.  ns per right-hand side per sample; "
              "in brackets: relative to J2 + C22/S22; compile s; fusions (conditionals) of the compiled step.", "",
@@ -353,10 +332,7 @@ def field_only(args, repo: Path) -> None:
                  f"{r[str(batch)]['compile_s']:.1f} s, {r[str(batch)]['fusions_per_step']} "
                  f"({r[str(batch)]['conditionals_per_step']})" for r in results["step"].values()]
         lines.append(f"| {batch} | " + " | ".join(cells) + " |")
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "core_field.json").write_text(json.dumps(results, indent=1))
-    (args.out / "core_field.md").write_text("\n".join(lines) + "\n")
-    print("\n".join(lines))
+    print(harness.write(args.out / "core_field", run, "The Earth's field in the step", results, lines))
 
 
 if __name__ == "__main__":

@@ -45,24 +45,10 @@ Run ``python benchmarks/propagate.py`` (full, about 15 minutes on 2 cores) or
 
 from __future__ import annotations
 
-import os
-
-# geojax runs one XLA CPU device per core, each running the one-device program on its share of the batch
-# (geojax.parallel.per_device, as geojax sweep does), as heyoka runs one thread per core; the flag must be set
-# before JAX is imported.
-os.environ.setdefault("XLA_FLAGS", f"--xla_force_host_platform_device_count={os.cpu_count() or 1}")
-
 import argparse
 import copy
-import json
-import os
-import platform
-import subprocess
-import sys
 import threading
-import time
-from pathlib import Path
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import heyoka as hy
 import jax
@@ -70,7 +56,7 @@ import jax.numpy as jnp
 import numpy as np
 import scipy
 
-import geojax
+import harness
 from geojax import scenario as scenario_module
 from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.physics.dynamics import SpacecraftState
@@ -81,17 +67,15 @@ from geojax.physics.propagate import MEE, environment_at, environment_grid, for_
 from geojax.parallel import per_device
 from geojax.uncontrolled import propagated_cycles, inclination_vector_deg
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from baselines import heyoka_model, numpy_model  # noqa: E402
+from baselines import heyoka_model, numpy_model
+from harness.timing import DISTURBED_CORES, LONG_CALL_S
 
-RESULTS_DIR = Path(__file__).resolve().parent / "results"
+NAME = "propagate"
 SAMPLES_PER_CYCLE = 96  # heyoka/SciPy sampling for the cycle means (96 + 1 points)
 HEYOKA_TOL = 1e-10
 HEYOKA_TIGHT_TOL = 1e-14  # accuracy reference (compact mode, scalar)
 SCIPY_RTOL, SCIPY_ATOL = 1e-10, 1e-6
 SHADOW_MAX_STEP_S = 20.0  # heyoka step cap in eclipse seasons, shadow-on reference
-DISTURBED_CORES = 0.2  # other processes' load + hypervisor steal above which a timing is repeated
-LONG_CALL_S = 60.0  # calls longer than this get at most one extra attempt
 GOAL_DEG = 1e-5
 
 
@@ -130,90 +114,14 @@ def log(message: str) -> None:
     print(message, flush=True)
 
 
-# --- Timing --------------------------------------------------------------------------------------
+# --- Rows ------------------------------------------------------------------------------------------
 
 
-class Timing(NamedTuple):
-    wall_s: float
-    cpu_s: float  # this process, all threads
-    system_busy_s: float  # the whole machine, all processes, hypervisor steal excluded (NaN if unknown)
-    steal_s: float  # CPU time taken from this virtual machine by the hypervisor (NaN if unknown)
-    attempts: int = 1
-
-    @property
-    def other_load_cores(self) -> float:
-        """CPU used by other processes meanwhile, in cores."""
-        return max(0.0, (self.system_busy_s - self.cpu_s) / self.wall_s)
-
-    @property
-    def steal_cores(self) -> float:
-        return self.steal_s / self.wall_s
-
-
-def _cpu_counters() -> tuple[float, float]:
-    """(busy, steal) CPU seconds of the machine since boot, from /proc/stat (NaN where unavailable).
-
-    busy = user + nice + system + irq + softirq; steal is counted apart (time
-    the hypervisor gave this virtual machine's CPUs to someone else).
-    """
-    try:
-        with open("/proc/stat") as f:
-            fields = [int(x) for x in f.readline().split()[1:]]
-        busy = fields[0] + fields[1] + fields[2] + fields[5] + fields[6]
-        steal = fields[7]
-    except (OSError, ValueError, IndexError):
-        return float("nan"), float("nan")
-    ticks = os.sysconf("SC_CLK_TCK")
-    return busy / ticks, steal / ticks
-
-
-def timed(fn: Callable, *args, **kwargs):
-    """(result, Timing) of one call."""
-    wall, cpu, (busy, steal) = time.perf_counter(), time.process_time(), _cpu_counters()
-    result = fn(*args, **kwargs)
-    busy_end, steal_end = _cpu_counters()
-    return result, Timing(time.perf_counter() - wall, time.process_time() - cpu, busy_end - busy, steal_end - steal)
-
-
-def disturbance_cores(timing: Timing) -> float:
-    """Other processes' load plus hypervisor steal during a measurement, in cores."""
-    return timing.other_load_cores + timing.steal_cores
-
-
-def measure(fn: Callable, *args, repeats: int = 1):
-    """(result, Timing) of the fastest of ``repeats`` calls, repeated while disturbed.
-
-    While every call so far was disturbed (``disturbance_cores`` above
-    ``DISTURBED_CORES``), call again: up to 2 extra calls, or 1 when a call
-    takes over ``LONG_CALL_S``.  The fastest undisturbed call is kept, else
-    the fastest call.
-    """
-    runs = [timed(fn, *args)]
-    max_attempts = repeats + (1 if runs[0][1].wall_s > LONG_CALL_S else 2)
-    while len(runs) < repeats or (
-        len(runs) < max_attempts and all(disturbance_cores(t) > DISTURBED_CORES for _, t in runs)
-    ):
-        runs.append(timed(fn, *args))
-    quiet = [r for r in runs if disturbance_cores(r[1]) <= DISTURBED_CORES] or runs
-    result, timing = min(quiet, key=lambda r: r[1].wall_s)
-    return result, timing._replace(attempts=len(runs))
-
-
-def throughput_row(implementation, setting, batch, compile_s, timing: Timing, **extra) -> dict:
+def throughput_row(implementation, setting, batch, timing: harness.Timing, **extra) -> dict:
     """One row of the throughput table; orbits/s = batch / steady-state wall time."""
-    return {
-        "implementation": implementation,
-        "setting": setting,
-        "batch": batch,
-        "compile_s": compile_s,
-        "run_s": timing.wall_s,
-        "orbits_per_s": batch / timing.wall_s,
-        "cores_busy": timing.cpu_s / timing.wall_s,
-        "other_load_cores": timing.other_load_cores,
-        "steal_cores": timing.steal_cores,
-        "attempts": timing.attempts,
-        **extra,
-    }
+    row = timing.row()
+    return {"implementation": implementation, "setting": setting, "batch": batch, **row,
+            "orbits_per_s": batch / row["run_s"], **extra}
 
 
 def log_row(row: dict) -> None:
@@ -246,41 +154,9 @@ def make_problem(days: float, max_batch: int, seed: int) -> Problem:
     )
 
 
-def _git_state() -> str:
-    """Commit of the checkout and whether geojax/ has uncommitted changes ("unknown" outside git)."""
-    root = Path(__file__).resolve().parent.parent
-    try:
-        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True,
-                                text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--", "geojax"], cwd=root, capture_output=True,
-                               text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-    return commit + (" + uncommitted changes in geojax/" if dirty else "")
-
-
-def machine_facts() -> dict:
-    cpu_model = platform.processor()
-    try:
-        with open("/proc/cpuinfo") as f:
-            cpu_model = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return {
-        "cpu_count": os.cpu_count(),
-        "cpu_model": cpu_model,
-        "platform": platform.platform(),
-        "python": platform.python_version(),
-        "jax": jax.__version__,
-        "jax_backend": jax.default_backend(),
-        "numpy": np.__version__,
-        "scipy": scipy.__version__,
-        "heyoka": hy.__version__,
-        "heyoka_simd_size": hy.recommended_simd_size(),
-        "geojax": geojax.__version__,
-        "geojax_git": _git_state(),
-        "load_average_at_start": os.getloadavg(),
-    }
+def peer_versions() -> dict:
+    """The versions of what geojax is compared with (the harness records the rest)."""
+    return {"scipy": scipy.__version__, "heyoka": hy.__version__, "heyoka_simd_size": hy.recommended_simd_size()}
 
 
 # --- Mean inclination vector (shared by all implementations) ---------------------------------
@@ -332,12 +208,10 @@ class GeojaxRunner:
         if n_steps not in self._env:
             step_s = SIDEREAL_DAY_S / n_steps
             s = self.problem.scenario
-            env, timing = timed(
-                lambda: jax.block_until_ready(
-                    environment_grid(s.epoch_tt_s, s.epoch_tt_s, s.tt_minus_ut1_s, step_s, self.problem.n_cycles, n_steps)
-                )
+            env, call = harness.timed(
+                environment_grid, s.epoch_tt_s, s.epoch_tt_s, s.tt_minus_ut1_s, step_s, self.problem.n_cycles, n_steps
             )
-            self._env[n_steps] = (n_steps, step_s, env, timing.wall_s)
+            self._env[n_steps] = (n_steps, step_s, env, call.wall_s)
         return self._env[n_steps]
 
     def states(self, batch: int) -> SpacecraftState:
@@ -384,11 +258,12 @@ def bench_geojax(runner: GeojaxRunner, config: Config) -> tuple[list[dict], dict
     for step_request, batch in cases:
         n_steps, step_s, _, env_s = runner.environment(step_request)
         _, compile_s = runner.compiled(step_request, batch)
-        (final, _), timing = measure(runner.run, step_request, batch, repeats=3 if batch == 1 else 1)
+        (final, _), timing = harness.measure(runner.run, step_request, batch, repeats=3 if batch == 1 else 1,
+                                             compile_s=compile_s)
         if batch == largest:
             finals[f"{step_s:.1f}"] = runner.final_positions(final)
         row = throughput_row(
-            "geojax", f"RK4 MEE, {step_s:.1f} s ({n_steps}/cycle)", batch, compile_s, timing,
+            "geojax", f"RK4 MEE, {step_s:.1f} s ({n_steps}/cycle)", batch, timing,
             step_s=step_s, steps_per_cycle=n_steps, environment_grid_s=env_s,
         )
         rows.append(row)
@@ -422,8 +297,8 @@ def build_heyoka(model: numpy_model.Model, batch: bool, tol: float = HEYOKA_TOL,
         make = lambda: hy.taylor_adaptive_batch(system, state, tol=tol, compact_mode=compact_mode)  # noqa: E731
     else:
         make = lambda: hy.taylor_adaptive(system, np.zeros(6), tol=tol, compact_mode=compact_mode)  # noqa: E731
-    ta, timing = timed(make)
-    return ta, timing.wall_s
+    ta, call = harness.timed(make)
+    return ta, call.wall_s
 
 
 def _check_outcomes(outcomes) -> None:
@@ -488,7 +363,7 @@ def bench_heyoka(problem: Problem, config: Config, scalar, batch_default) -> tup
     integrator on all cores; extra tolerances and compact mode at the largest
     batch only.  ``scalar`` and ``batch_default`` are (integrator, compile s).
     """
-    workers = os.cpu_count() or 1
+    workers = len(harness.usable_cores())
     width = hy.recommended_simd_size()
     largest = max(config.heyoka_batches)
     cases = [(b, HEYOKA_TOL, False) for b in config.heyoka_batches]
@@ -500,17 +375,19 @@ def bench_heyoka(problem: Problem, config: Config, scalar, batch_default) -> tup
         states = problem.cartesian[:batch]
         if batch == 1:
             (ta, compile_s), setting = scalar, f"Taylor tol {tol:g}, scalar, 1 thread"
-            (_, steps), timing = measure(heyoka_propagate_scalar, ta, states[0], problem.t_end_s, repeats=3)
+            (_, steps), timing = harness.measure(heyoka_propagate_scalar, ta, states[0], problem.t_end_s, repeats=3,
+                                                 compile_s=compile_s)
         else:
             if tol == HEYOKA_TOL and not compact:
                 ta, compile_s = batch_default
             else:
                 ta, compile_s = build_heyoka(problem.numpy_model, batch=True, tol=tol, compact_mode=compact)
             setting = f"Taylor tol {tol:g}, SIMD {width} x {workers} threads" + (", compact mode" if compact else "")
-            (final, steps), timing = measure(heyoka_propagate_batch, ta, states, problem.t_end_s, workers)
+            (final, steps), timing = harness.measure(heyoka_propagate_batch, ta, states, problem.t_end_s, workers,
+                                                     compile_s=compile_s)
             if batch == largest and tol == HEYOKA_TOL and not compact:
                 finals = final[:, :3]
-        row = throughput_row("heyoka", setting, batch, compile_s, timing, tol=tol, compact_mode=compact,
+        row = throughput_row("heyoka", setting, batch, timing, tol=tol, compact_mode=compact,
                              order=ta.order, taylor_steps_per_orbit=steps)
         rows.append(row)
         log_row(row)
@@ -547,24 +424,25 @@ def final_position_agreement(geojax_finals: dict[str, np.ndarray], heyoka_finals
 def bench_scipy(problem: Problem, config: Config) -> tuple[dict, Outcome]:
     """Throughput row (one orbit at a time, so batch-independent) and the outcome of the unperturbed state."""
     times = cycle_sample_times(problem.n_cycles)
-    total = Timing(0.0, 0.0, 0.0, 0.0, 0)
-    nfev = 0
+    calls, attempts, nfev = [], 0, 0
     outcome = None
     for j in range(config.scipy_orbits):
         t_eval = times.ravel() if j == 0 else None
-        sol, timing = measure(numpy_model.propagate, problem.cartesian[j], problem.t_end_s, problem.numpy_model,
+        sol, timing = harness.measure(numpy_model.propagate, problem.cartesian[j], problem.t_end_s, problem.numpy_model,
                               t_eval, SCIPY_RTOL, SCIPY_ATOL)
         if sol.status != 0:
             raise RuntimeError(f"solve_ivp failed: {sol.message}")
         if j == 0:
             samples = sol.y.T.reshape(2, -1, 6)
             outcome = Outcome(mean_inclination_change_deg(samples, problem.force_model.mu_m3_s2), samples[-1, -1, :3])
-        total = Timing(*(a + b for a, b in zip(total, timing)))
+        calls.append(timing.best)
+        attempts += timing.attempts
         nfev += sol.nfev
-        log(f"  scipy orbit {j + 1}/{config.scipy_orbits}: {timing.wall_s:.1f} s, {sol.nfev} RHS evaluations")
+        log(f"  scipy orbit {j + 1}/{config.scipy_orbits}: {timing.best_s:.1f} s, {sol.nfev} RHS evaluations")
     row = throughput_row(
         "numpy+scipy", f"DOP853 rtol {SCIPY_RTOL:g} atol {SCIPY_ATOL:g}, 1 orbit at a time",
-        config.scipy_orbits, 0.0, total, rhs_evaluations_per_orbit=nfev / config.scipy_orbits,
+        config.scipy_orbits, harness.Timing((harness.total(calls),)), attempts=attempts,
+        rhs_evaluations_per_orbit=nfev / config.scipy_orbits,
     )
     log_row(row)
     return row, outcome
@@ -687,8 +565,8 @@ def accuracy_with_shadow(problem: Problem, runner: GeojaxRunner, config: Config)
     model = numpy_model.from_scenario(problem.scenario, shadow=True)
     ta, compile_s = build_heyoka(model, batch=False, compact_mode=True, shadow=True)
     seasons = eclipse_season_cycles(problem)
-    (reference, ref_steps), ref_time = timed(heyoka_shadow_outcome, ta, problem, seasons, SHADOW_MAX_STEP_S)
-    (free, free_steps), free_time = timed(heyoka_shadow_outcome, ta, problem, seasons, None)
+    (reference, ref_steps), ref_time = harness.timed(heyoka_shadow_outcome, ta, problem, seasons, SHADOW_MAX_STEP_S)
+    (free, free_steps), free_time = harness.timed(heyoka_shadow_outcome, ta, problem, seasons, None)
     name = f"heyoka tol {HEYOKA_TOL:g}, select shadow, steps <= {SHADOW_MAX_STEP_S:g} s in eclipse seasons"
     rows = {
         name: _entry(reference, reference, taylor_steps=ref_steps, wall_s=ref_time.wall_s),
@@ -714,36 +592,22 @@ def ratios(rows: list[dict], batch: int) -> dict:
     """geojax orbits/s over each peer's, at ``batch`` (numbers from this run); SciPy is batch-independent."""
     peers = [r for r in rows if r["implementation"] == "heyoka" and r["batch"] == batch]
     peers += [r for r in rows if r["implementation"] == "numpy+scipy"]
-    return {
-        f"geojax {r['step_s']:.1f} s": {
-            f"{p['implementation']}, {p['setting']}": r["orbits_per_s"] / p["orbits_per_s"] for p in peers
-        }
-        for r in rows
-        if r["implementation"] == "geojax" and r["batch"] == batch
-    }
+    return harness.ratios({f"geojax {r['step_s']:.1f} s": r["orbits_per_s"] for r in rows
+                           if r["implementation"] == "geojax" and r["batch"] == batch},
+                          {f"{p['implementation']}, {p['setting']}": p["orbits_per_s"] for p in peers})
 
 
 def throughput_markdown(results: dict) -> list[str]:
-    lines = [
-        "## Throughput",
-        "",
-        "| implementation | setting | batch | compile s | run s | orbits/s | cores busy | other load | steal |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|",
-    ]
-    for r in results["throughput"]:
-        batch = "any (1 at a time)" if r["implementation"] == "numpy+scipy" else r["batch"]
-        lines.append(
-            f"| {r['implementation']} | {r['setting']} | {batch} | {r['compile_s']:.1f} | {r['run_s']:.2f} | "
-            f"{r['orbits_per_s']:.3g} | {r['cores_busy']:.2f} | {r['other_load_cores']:.2f} | {r['steal_cores']:.2f} |"
-        )
-    table = results["ratios"]
-    peers = list(next(iter(table.values())))
-    lines += ["", f"Ratios at batch {results['config']['ratio_batch']}: orbits/s of geojax over the peer's "
-              "(same run).", ""]
-    lines += ["| geojax | " + " | ".join(f"/ {p}" for p in peers) + " |", "|---|" + "---:|" * len(peers)]
-    for name, values in table.items():
-        lines.append(f"| {name} | " + " | ".join(f"{values[p]:.3g}" for p in peers) + " |")
-    return lines
+    rows = [[r["implementation"], r["setting"],
+             "any (1 at a time)" if r["implementation"] == "numpy+scipy" else r["batch"],
+             f"{r['compile_s']:.1f}", f"{r['run_s']:.2f}", f"{r['orbits_per_s']:.3g}", f"{r['cores_busy']:.2f}",
+             f"{r['other_load_cores']:.2f}", f"{r['steal_cores']:.2f}"] for r in results["throughput"]]
+    return ["## Throughput", "",
+            *harness.table(["implementation", "setting", "batch", "compile s", "run s", "orbits/s", "cores busy",
+                            "other load", "steal"], rows, align="llrrrrrrr"),
+            "", f"Ratios at batch {results['config']['ratio_batch']}: orbits/s of geojax over the peer's "
+            "(same run).", "",
+            *harness.ratio_table(results["ratios"], "geojax")]
 
 
 def accuracy_markdown(title: str, acc: dict) -> list[str]:
@@ -794,7 +658,7 @@ def notes_markdown(results: dict) -> list[str]:
         "wall time (both from /proc/stat, near 0 = undisturbed). When their sum exceeds "
         f"{DISTURBED_CORES} the measurement is repeated (up to 2 extra attempts, 1 for calls over "
         f"{LONG_CALL_S:.0f} s) and the fastest undisturbed call is kept, else the fastest. geojax splits the CPU into one XLA device per core "
-        "(`XLA_FLAGS=--xla_force_host_platform_device_count`, set by this script) and runs batches that split "
+        "(`XLA_FLAGS=--xla_force_host_platform_device_count`, set by the harness) and runs batches that split "
         "evenly over them as one single-device program per device on its share (`geojax.parallel.per_device`, "
         "as `geojax sweep` does; a jit sharded over the devices ran 2.8x slower: 87 against 242 orbit-years/s, "
         "120 days at batch 1024); batch 1 runs on one device; heyoka runs the SIMD batch integrator on one thread per core; SciPy is "
@@ -836,19 +700,10 @@ def notes_markdown(results: dict) -> list[str]:
     ]
 
 
-def markdown(results: dict) -> str:
-    m, c = results["machine"], results["config"]
+def markdown(results: dict, peers: dict) -> list[str]:
+    c = results["config"]
     lines = [
-        f"# GEO propagation throughput and accuracy, scenario li2022, {c['days']:g} days",
-        "",
-        f"Generated by `python benchmarks/propagate.py{' --quick' if c['quick'] else ''}` on "
-        f"{results['date_utc']}; total wall time {results['total_wall_s']:.0f} s.",
-        "",
-        f"Machine: {m['cpu_count']} CPUs ({m['cpu_model']}), {m['platform']}; Python {m['python']}, "
-        f"jax {m['jax']} ({m['jax_backend']}), heyoka {m['heyoka']} (SIMD width {m['heyoka_simd_size']}), "
-        f"NumPy {m['numpy']}, SciPy {m['scipy']}; load average at start {m['load_average_at_start'][0]:.2f}. "
-        f"geojax {m['geojax']} at git {m['geojax_git']}.",
-        "",
+        f"heyoka {peers['heyoka']} (SIMD width {peers['heyoka_simd_size']}), SciPy {peers['scipy']}. "
         f"Propagation: {c['n_cycles']} sidereal days (propagated_cycles({c['days']:g} d)), J2 + Sun + Moon + SRP "
         "(Li 2022, eq. (4)), **Earth shadow off in all three** (see Notes). Float64 everywhere.",
         "",
@@ -858,7 +713,7 @@ def markdown(results: dict) -> str:
     lines += accuracy_markdown("Accuracy, shadow on (supplementary): heyoka with steps capped in eclipse seasons "
                                "as the reference", results["accuracy_shadow_on"])
     lines += notes_markdown(results)
-    return "\n".join(lines)
+    return lines
 
 
 # --- Main ----------------------------------------------------------------------------------------
@@ -867,20 +722,21 @@ def markdown(results: dict) -> str:
 def parse_args(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="30-day smoke run with small batches")
-    parser.add_argument("--out", type=Path, default=RESULTS_DIR, help="folder for propagate.json/.md")
+    harness.add_arguments(parser)
     return parser.parse_args(argv)
 
 
 def main(argv=None) -> None:
     args = parse_args(argv)
     config = QUICK if args.quick else FULL
+    # geojax runs one XLA CPU device per core, each running the one-device program on its share of the batch
+    # (geojax.parallel.per_device, as geojax sweep does), as heyoka runs one thread per core.
+    run = harness.start(harness.Devices(platform=args.platform))
     # heyoka keeps compiled integrators in ~/.cache/heyoka; off, so compile times are cold.
     hy.llvm_state.set_diskcache_enabled(False)
-    start = time.perf_counter()
-    machine = machine_facts()
     max_batch = max(config.geojax_batches + config.heyoka_batches + (config.scipy_orbits,))
     problem = make_problem(config.days, max_batch, config.seed)
-    log(f"li2022, {problem.n_cycles} cycles ({config.days} d), shadow off; {os.cpu_count()} CPUs")
+    log(f"li2022, {problem.n_cycles} cycles ({config.days} d), shadow off; {len(harness.usable_cores())} cores")
 
     agreement = model_agreement(problem)
     log(f"model agreement: {agreement}")
@@ -911,8 +767,6 @@ def main(argv=None) -> None:
 
     ratio_batch = max(config.geojax_batches)
     results = {
-        "date_utc": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-        "machine": machine,
         "config": {**config._asdict(), "quick": args.quick, "n_cycles": problem.n_cycles,
                    "t_end_s": problem.t_end_s, "shadow": "off in all implementations (throughput, main accuracy)",
                    "heyoka_tol": HEYOKA_TOL, "heyoka_tight_tol": HEYOKA_TIGHT_TOL, "scipy_rtol": SCIPY_RTOL,
@@ -925,12 +779,9 @@ def main(argv=None) -> None:
         "model_agreement": agreement,
         "final_position_agreement": finals_agreement,
     }
-    results["total_wall_s"] = time.perf_counter() - start
-    results["machine"]["load_average_at_end"] = os.getloadavg()
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "propagate.json").write_text(json.dumps(results, indent=2) + "\n")
-    text = markdown(results)
-    (args.out / "propagate.md").write_text(text)
+    peers = peer_versions()
+    text = harness.write(args.out / NAME, run, f"GEO propagation throughput and accuracy, scenario li2022, "
+                         f"{config.days:g} days", results, markdown(results, peers), facts=peers)
     print()
     print(text)
 

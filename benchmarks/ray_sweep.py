@@ -19,16 +19,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import subprocess
-import sys
-import tempfile
-import time
-from pathlib import Path
 
-RESULTS = Path(__file__).resolve().parent / "results"
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from sweep import SWEEP, _peak_rss_mb  # noqa: E402  (the same samples as benchmarks/sweep.py)
+import harness
+from sweep import run_sweep_file, sweep_spec  # the same samples as benchmarks/sweep.py
+
+NAME = "ray_sweep"
 
 
 def main() -> None:
@@ -38,89 +33,76 @@ def main() -> None:
     parser.add_argument("--overhead-chunks", type=int, default=16)
     parser.add_argument("--render", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--one", nargs=4, help=argparse.SUPPRESS)  # internal: batch days chunk workers (0: local)
+    harness.add_arguments(parser)
     args = parser.parse_args()
-    if args.one:
+    if args.one:  # the parent's devices, or this process's where it runs alone
+        harness.set_up(harness.Devices(platform=args.platform))
         batch, days, chunk, workers = args.one
         print(json.dumps(measure(int(batch), float(days), int(chunk) or None, int(workers))))
         return
-    if args.render:  # the tables again from the last results (after a change of wording)
-        saved = json.loads((RESULTS / "ray_sweep.json").read_text())
-        write(saved["rows"], saved["overhead"], args)
+    if args.render:  # the tables again from the last results (after a change of wording), with their facts
+        meta, saved = harness.read(args.out / NAME)
+        if not meta:
+            raise SystemExit(f"--render: {args.out / NAME}.json was not written by the harness (no meta)")
+        first = saved["rows"][0]
+        print(harness.save(args.out / NAME, meta, title(first["batch"], first["days"]), saved,
+                           markdown(saved["rows"], saved["overhead"])))
         return
+    devices = harness.Devices(platform=args.platform)
+    run = harness.start(devices)
+    child = lambda batch, days, chunk, workers: harness.run_json(  # noqa: E731
+        [__file__, "--one", str(batch), str(days), str(chunk), str(workers)], devices)
     rows = []
     for label, workers in (("local process", 0), ("Ray, 1 worker", 1), ("Ray, 2 workers", 2)):
-        row = {"run": label, **_child(args.batch, args.days, 0, workers)}
+        row = {"run": label, **child(args.batch, args.days, 0, workers)}
         rows.append(row)
         print(f"{label}: {row['sample_years_per_s']:.3g} sample-years/s "
               f"({row['run_sample_years_per_s']:.3g} after compilation), wall {row['wall_s']:.1f} s", flush=True)
-    cores = os.cpu_count() or 1
-    width = 64 * cores  # one compiled QFFC batch on this machine: a chunk
+    width = 64 * len(harness.usable_cores())  # one compiled QFFC batch on this machine: a chunk
     n = args.overhead_chunks * width
-    local = _child(n, 1.0, width, 0)
-    remote = _child(n, 1.0, width, 1)
+    local = child(n, 1.0, width, 0)
+    remote = child(n, 1.0, width, 1)
     overhead = {"chunks": args.overhead_chunks, "samples": n, "local_run_s": local["run_s"],
                 "ray_run_s": remote["run_s"], "ray_connect_s": remote["connect_s"],
                 "per_chunk_s": (remote["run_s"] - local["run_s"]) / args.overhead_chunks}
     print(f"overhead per chunk: {overhead['per_chunk_s']:.3f} s", flush=True)
-    write(rows, overhead, args)
+    print(harness.write(args.out / NAME, run, title(args.batch, args.days), {"rows": rows, "overhead": overhead},
+                        markdown(rows, overhead)))
 
 
-def _child(batch: int, days: float, chunk: int, workers: int) -> dict:
-    cmd = [sys.executable, __file__, "--one", str(batch), str(days), str(chunk), str(workers)]
-    out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
+def title(batch: int, days: float) -> str:
+    return f"Sweeps on Ray: li2022-qffc, {batch} samples of {days} days, H_rv = H_att = 1"
 
 
 def measure(batch: int, days: float, chunk: int | None, workers: int) -> dict:
-    from geojax.parallel import use_host_cores
-
-    use_host_cores()
-    from geojax import store, sweep
-
-    with tempfile.TemporaryDirectory() as tmp:
-        spec_path = Path(tmp) / "bench.toml"
-        spec_path.write_text(SWEEP.format(controller="qffc", batch=batch, days=days))
-        spec = sweep.load(spec_path)
-        start = time.perf_counter()
-        out = sweep.run_sweep(spec, Path(tmp) / "bench.h5", chunk=chunk, progress=False,
-                              ray="local" if workers else None, workers=workers or None)
-        wall_s = time.perf_counter() - start
-        groups, attrs = store.read_h5(out)
+    done = run_sweep_file(sweep_spec("qffc", batch, days), chunk=chunk, ray="local" if workers else None,
+                          workers=workers or None)
     years = batch * days / 365.25
-    run_s = float(attrs["wall_s"]) - float(attrs["compile_s"])  # the chunks, after the longest compilation
-    return {"batch": batch, "days": days, "workers": workers, "wall_s": wall_s, "compile_s": float(attrs["compile_s"]),
-            "connect_s": wall_s - float(attrs["wall_s"]), "run_s": run_s,
-            "sample_years_per_s": years / wall_s, "run_sample_years_per_s": years / (wall_s - float(attrs["compile_s"])),
-            "peak_rss_mb": _peak_rss_mb(), "dv_mean": float(groups["metrics"]["dv_per_year_mps"].mean())}
+    wall_s, file_wall_s, compile_s = done["wall_s"], float(done["attrs"]["wall_s"]), float(done["attrs"]["compile_s"])
+    return {"batch": batch, "days": days, "workers": workers, "wall_s": wall_s, "compile_s": compile_s,
+            "connect_s": wall_s - file_wall_s,
+            "run_s": file_wall_s - compile_s,  # the chunks, after the longest compilation
+            "sample_years_per_s": years / wall_s, "run_sample_years_per_s": years / (wall_s - compile_s),
+            "peak_rss_mb": harness.peak_memory_bytes() / 2**20,
+            "dv_mean": float(done["metrics"]["dv_per_year_mps"].mean())}
 
 
-def write(rows: list[dict], overhead: dict, args) -> None:
-    RESULTS.mkdir(exist_ok=True)
-    revision = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                              cwd=Path(__file__).parent).stdout.strip()
-    dirty = subprocess.run(["git", "status", "--porcelain"], capture_output=True, text=True,
-                           cwd=Path(__file__).parent).stdout.strip()
-    (RESULTS / "ray_sweep.json").write_text(json.dumps({"rows": rows, "overhead": overhead}, indent=1))
+def markdown(rows: list[dict], overhead: dict) -> list[str]:
     local = rows[0]["sample_years_per_s"]
-    lines = [f"# Sweeps on Ray: li2022-qffc, {args.batch} samples of {args.days} days, H_rv = H_att = 1", "",
-             f"`python benchmarks/ray_sweep.py` on {os.cpu_count()} CPU cores, git {revision}"
-             f"{' + uncommitted' if dirty else ''}, {time.strftime('%Y-%m-%d')}. Each row is a fresh process; "
-             "the Ray rows start a local Ray instance (`--ray`) whose workers compile for themselves. "
-             "Wall time counts everything from the call of `run_sweep` (Ray's start, the workers' start and "
-             "compilation included); 'chunks only' leaves out Ray's start and the longest compilation.", "",
-             "| run | wall s | Ray start s | compile s | sample-years/s | / local | chunks only | ΔV mean |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|"]
-    for r in rows:
-        lines.append(f"| {r['run']} | {r['wall_s']:.1f} | {r['connect_s']:.1f} | {r['compile_s']:.1f} | "
-                     f"{r['sample_years_per_s']:.3g} | {r['sample_years_per_s'] / local:.2f}x | "
-                     f"{r['batch'] * r['days'] / 365.25 / r['run_s']:.3g} | {r['dv_mean']:.4f} |")
-    lines += ["", f"Overhead per chunk: {overhead['per_chunk_s'] * 1e3:.0f} ms ({overhead['chunks']} chunks of "
-              f"{overhead['samples'] // overhead['chunks']} one-day samples: the Ray run's chunks took "
-              f"{overhead['ray_run_s']:.2f} s after compilation, the local run's {overhead['local_run_s']:.2f} s; "
-              f"Ray's own start {overhead['ray_connect_s']:.1f} s is apart). It includes the worker's process "
-              "start and the transfer of each chunk's results to the driver, which writes it.", ""]
-    (RESULTS / "ray_sweep.md").write_text("\n".join(lines))
-    print("\n".join(lines))
+    return ["Each row is a fresh process; the Ray rows start a local Ray instance (`--ray`) whose workers compile "
+            "for themselves. Wall time counts everything from the call of `run_sweep` (Ray's start, the workers' "
+            "start and compilation included); 'chunks only' leaves out Ray's start and the longest compilation.", "",
+            *harness.table(["run", "wall s", "Ray start s", "compile s", "sample-years/s", "/ local", "chunks only",
+                            "ΔV mean"],
+                           [[r["run"], f"{r['wall_s']:.1f}", f"{r['connect_s']:.1f}", f"{r['compile_s']:.1f}",
+                             f"{r['sample_years_per_s']:.3g}", f"{r['sample_years_per_s'] / local:.2f}x",
+                             f"{r['batch'] * r['days'] / 365.25 / r['run_s']:.3g}", f"{r['dv_mean']:.4f}"]
+                            for r in rows]),
+            "", f"Overhead per chunk: {overhead['per_chunk_s'] * 1e3:.0f} ms ({overhead['chunks']} chunks of "
+            f"{overhead['samples'] // overhead['chunks']} one-day samples: the Ray run's chunks took "
+            f"{overhead['ray_run_s']:.2f} s after compilation, the local run's {overhead['local_run_s']:.2f} s; "
+            f"Ray's own start {overhead['ray_connect_s']:.1f} s is apart). It includes the worker's process "
+            "start and the transfer of each chunk's results to the driver, which writes it."]
 
 
 if __name__ == "__main__":

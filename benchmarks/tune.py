@@ -33,25 +33,19 @@ Results: ``benchmarks/results/tune.json`` and ``.md``.
 
 from __future__ import annotations
 
-import os
+import argparse
+import dataclasses
+import json
+from pathlib import Path
 
-os.environ.setdefault("XLA_FLAGS", f"--xla_force_host_platform_device_count={os.cpu_count() or 1}")
+import jax
+import numpy as np
+from scipy.optimize import minimize
 
-import argparse  # noqa: E402
-import dataclasses  # noqa: E402
-import json  # noqa: E402
-import subprocess  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
+import harness
+from geojax import scenario, tune
 
-import jax  # noqa: E402
-import numpy as np  # noqa: E402
-from scipy.optimize import minimize  # noqa: E402
-
-from geojax import scenario, tune  # noqa: E402
-
-RESULTS = Path(__file__).resolve().parent / "results"
+NAME = "tune"
 FD_STEP = 1e-2  # SLSQP's finite-difference step in log-gain
 # The paper tunes (k_h, k_e).  For the continuous law at its printed lambda_b = -0.056 deg the loop settles
 # 0.04 deg west of the station and overshoots to 0.08 deg during acquisition: (k_h, k_e) alone keep the box
@@ -63,14 +57,16 @@ FD_STEP = 1e-2  # SLSQP's finite-difference step in log-gain
 PARAMETERS = {"continuous-clipped": ["k_h", "k_e", "lambda_b"], "discrete": ["k_h", "k_e"], "constant": ["k_h", "k_e"]}
 
 MEMORY_PROBE = """
-import resource, sys, jax, numpy as np
+import sys, jax, numpy as np
+sys.path.insert(0, sys.argv[1])  # benchmarks/
+import harness
 from geojax import scenario, tune
 sc = scenario.load("katz2025-continuous", {"controller.thrust_mode": "continuous-clipped"})
-p = tune.Problem(sc, ["k_h", "k_e"], gradient="reverse")
+p = tune.Problem(sc, ["controller.k_h_per_km2_s", "controller.k_e_km2_per_s3"], gradient="reverse")
 c = tune.to_theta(p.base, p.entries)
 out = p.surrogate_grad(np.tile(c, (16, 1)) + np.linspace(-0.1, 0.1, 16)[:, None], 0.05)
 jax.block_until_ready(out)
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20)
+print(harness.peak_memory_bytes() / 2**30)
 """
 
 
@@ -78,7 +74,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--modes", nargs="+", default=list(PARAMETERS))
+    harness.add_arguments(parser)
     args = parser.parse_args()
+    devices = harness.Devices(platform=args.platform)
+    run = harness.start(devices)
     starts, iterations, slsqp_iterations = (4, 6, 6) if args.quick else (16, tune.FIELDS["iterations"].default, 20)
     rows = []
     for mode in args.modes:
@@ -113,8 +112,8 @@ def main() -> None:
         row["wall_ratio_slsqp_over_geojax_to_slsqp_result"] = None if t_reach is None else reference["wall_s"] / t_reach
         rows.append(row)
         print(json.dumps(row, indent=1), flush=True)
-    memory = None if args.quick else memory_probe()
-    write(rows, memory, args.quick)
+    memory = None if args.quick else memory_probe(devices)
+    print(write(args.out / NAME, run, rows, memory, args.quick))
 
 
 def slsqp(problem: tune.Problem, starts: np.ndarray, center: np.ndarray, max_iterations: int) -> dict:
@@ -137,12 +136,11 @@ def slsqp(problem: tune.Problem, starts: np.ndarray, center: np.ndarray, max_ite
     bounds = list(zip(center - tune.LOG_BOUND, center + tune.LOG_BOUND))
     evaluate(starts[0])  # compile outside the timing, as the tuner's Problem is shared
     evaluations, cache = 0, {}
-    start = time.perf_counter()
-    for x0 in starts:
-        minimize(lambda x: evaluate(x)[0], x0, method="SLSQP", bounds=bounds,
-                 constraints=[{"type": "ineq", "fun": lambda x: -evaluate(x)[1]}],
-                 options={"maxiter": max_iterations, "ftol": 1e-4, "eps": FD_STEP})
-    wall = time.perf_counter() - start
+    _, call = harness.timed(lambda: [minimize(lambda x: evaluate(x)[0], x0, method="SLSQP", bounds=bounds,
+                                              constraints=[{"type": "ineq", "fun": lambda x: -evaluate(x)[1]}],
+                                              options={"maxiter": max_iterations, "ftol": 1e-4, "eps": FD_STEP})
+                                     for x0 in starts])
+    wall = call.wall_s
     gains = {}
     if best["theta"] is not None:
         gains = tune.paper_units(tune.from_theta(best["theta"], problem.base, problem.entries))
@@ -151,58 +149,47 @@ def slsqp(problem: tune.Problem, starts: np.ndarray, center: np.ndarray, max_ite
             "lambda_b_deg": gains.get("lambda_b_deg")}
 
 
-def memory_probe() -> float:
-    """Peak resident memory (GiB) of one reverse-mode gradient of a one-year rollout at batch 16."""
-    env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=1"}
-    out = subprocess.run([sys.executable, "-c", MEMORY_PROBE], capture_output=True, text=True, env=env, check=True)
-    return float(out.stdout.strip().splitlines()[-1])
+def memory_probe(devices: harness.Devices) -> float:
+    """Peak resident memory (GiB) of one reverse-mode gradient of a one-year rollout at batch 16, one device."""
+    one_device = devices._replace(host_device_count=1, replace_count=True)
+    return harness.run_json(["-c", MEMORY_PROBE, str(Path(__file__).resolve().parent)], one_device)
 
 
-def write(rows, memory_gib, quick: bool) -> None:
+def write(stem, run: harness.Run, rows, memory_gib, quick: bool) -> str:
     """Results files; a full run of some modes replaces those rows of an earlier full run and keeps the rest."""
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    previous = RESULTS / "tune.json"
-    if not quick and previous.exists():
-        old = json.loads(previous.read_text())
-        if not old["meta"].get("quick"):
+    if not quick and stem.with_suffix(".json").exists():
+        old_meta, old = harness.read(stem)
+        if not old_meta.get("quick"):
             fresh = {r["mode"] for r in rows}
             rows = sorted([r for r in old["rows"] if r["mode"] not in fresh] + rows,
                           key=lambda r: list(PARAMETERS).index(r["mode"]) if r["mode"] in PARAMETERS else 99)
-    meta = {"device": f"{jax.device_count()} x {jax.devices()[0].platform}", "quick": quick,
-            "reverse_gradient_batch16_year_peak_rss_gib": memory_gib}
-    (RESULTS / "tune.json").write_text(json.dumps({"meta": meta, "rows": rows}, indent=1))
     fmt = lambda x, f="{:.3f}": "–" if x is None or not np.isfinite(x) else f.format(x)  # noqa: E731
+    gain = lambda x: "–" if x is None else f"{x:.4g}"  # noqa: E731
     lines = [
-        "# Gain tuning: geojax gradient tuner vs SciPy SLSQP (finite differences)",
-        "",
-        f"`python benchmarks/tune.py{' --quick' if quick else ''}` on {meta['device']} devices; one year per "
-        f"rollout, {rows[0]['starts'] if rows else 0} starts (start 0 = Katz's gains). "
+        f"One year per rollout, {rows[0]['starts'] if rows else 0} starts (start 0 = Katz's gains). "
         "ΔV in m/s/yr, exact law, full horizon; a result counts only if it keeps the ±0.05° box.",
         "",
-        "| mode | tuned | Katz ΔV | ours at Katz's gains (box) | geojax tuned ΔV | geojax wall s | SLSQP ΔV | SLSQP wall s "
-        "(evals) | SLSQP / geojax wall | geojax s to SLSQP's ΔV | SLSQP wall / that |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        *harness.table(
+            ["mode", "tuned", "Katz ΔV", "ours at Katz's gains (box)", "geojax tuned ΔV", "geojax wall s",
+             "SLSQP ΔV", "SLSQP wall s (evals)", "SLSQP / geojax wall", "geojax s to SLSQP's ΔV", "SLSQP wall / that"],
+            [[r["mode"], ", ".join(r["parameters"]), r["paper_dv_per_year_mps"],
+              f"{fmt(r['paper_gains_dv_per_year_mps'])} ({'kept' if r['paper_gains_box_ok'] else 'left'})",
+              fmt(r["geojax_dv_per_year_mps"]), fmt(r["geojax_wall_s"], "{:.0f}"), fmt(r["slsqp_best_dv_per_year_mps"]),
+              f"{fmt(r['slsqp_wall_s'], '{:.0f}')} ({r['slsqp_evaluations']})",
+              fmt(r["wall_ratio_slsqp_over_geojax"], "{:.2f}"), fmt(r["geojax_s_to_slsqp_result"], "{:.0f}"),
+              fmt(r.get("wall_ratio_slsqp_over_geojax_to_slsqp_result"), "{:.1f}")] for r in rows],
+            align="ll" + "r" * 9),
+        "", "Tuned gains (k_h in 1/(km² s), k_e in km²/s³, λ_b in degrees):", "",
+        *harness.table(["mode", "geojax k_h", "geojax k_e", "geojax λ_b", "SLSQP k_h", "SLSQP k_e", "SLSQP λ_b"],
+                       [[r["mode"], *(gain(r[f"{who}_{name}"]) for who in ("geojax", "slsqp")
+                                      for name in ("k_h_per_km2_s", "k_e_km2_per_s3", "lambda_b_deg"))] for r in rows]),
     ]
-    for r in rows:
-        lines.append(
-            f"| {r['mode']} | {', '.join(r['parameters'])} | {r['paper_dv_per_year_mps']} | {fmt(r['paper_gains_dv_per_year_mps'])} "
-            f"({'kept' if r['paper_gains_box_ok'] else 'left'}) | {fmt(r['geojax_dv_per_year_mps'])} | "
-            f"{fmt(r['geojax_wall_s'], '{:.0f}')} | {fmt(r['slsqp_best_dv_per_year_mps'])} | "
-            f"{fmt(r['slsqp_wall_s'], '{:.0f}')} ({r['slsqp_evaluations']}) | "
-            f"{fmt(r['wall_ratio_slsqp_over_geojax'], '{:.2f}')} | {fmt(r['geojax_s_to_slsqp_result'], '{:.0f}')} | "
-            f"{fmt(r.get('wall_ratio_slsqp_over_geojax_to_slsqp_result'), '{:.1f}')} |")
-    lines += ["", "Tuned gains (k_h in 1/(km² s), k_e in km²/s³, λ_b in degrees):", "",
-              "| mode | geojax k_h | geojax k_e | geojax λ_b | SLSQP k_h | SLSQP k_e | SLSQP λ_b |",
-              "|---|---:|---:|---:|---:|---:|---:|"]
-    for r in rows:
-        g = lambda x: "–" if x is None else f"{x:.4g}"  # noqa: E731
-        lines.append(f"| {r['mode']} | {g(r['geojax_k_h_per_km2_s'])} | {g(r['geojax_k_e_km2_per_s3'])} | "
-                     f"{g(r['geojax_lambda_b_deg'])} | {g(r['slsqp_k_h_per_km2_s'])} | {g(r['slsqp_k_e_km2_per_s3'])} | "
-                     f"{g(r['slsqp_lambda_b_deg'])} |")
     if memory_gib is not None:
         lines += ["", f"Peak resident memory of a reverse-mode gradient (day-checkpointed) of a one-year rollout, "
                       f"batch 16, one device: {memory_gib:.2f} GiB (whole process, compilation included)."]
-    (RESULTS / "tune.md").write_text("\n".join(lines) + "\n")
+    return harness.write(stem, run, "Gain tuning: geojax gradient tuner vs SciPy SLSQP (finite differences)",
+                         {"reverse_gradient_batch16_year_peak_rss_gib": memory_gib, "rows": rows}, lines,
+                         facts={"quick": quick})
 
 
 if __name__ == "__main__":

@@ -19,6 +19,9 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 
+DEVICE_COUNT_FLAG = "--xla_force_host_platform_device_count"
+
+
 def use_host_cores(count: int | None = None, replace: bool = False) -> None:
     """Ask XLA for one CPU device per core (``count``, default all), unless ``XLA_FLAGS`` already says
     (``replace``: whatever it says; a Ray worker inherits its driver's flags but not its node).
@@ -26,12 +29,19 @@ def use_host_cores(count: int | None = None, replace: bool = False) -> None:
     Takes effect only if no JAX computation has run yet in this process (the
     ``geojax`` command calls it first thing); later it changes nothing.
     """
-    flags = os.environ.get("XLA_FLAGS", "")
+    flags = with_host_device_count(os.environ.get("XLA_FLAGS", ""), count or os.cpu_count() or 1, replace)
+    os.environ["XLA_FLAGS"] = flags
+
+
+def with_host_device_count(flags: str, count: int, replace: bool = False) -> str:
+    """``XLA_FLAGS`` text ``flags`` asking for ``count`` CPU devices: a device count ``flags`` gives is kept
+    unless ``replace``; every other flag is kept, in its order."""
+    kept = flags.split()
     if replace:
-        flags = " ".join(f for f in flags.split() if "xla_force_host_platform_device_count" not in f)
-    if "xla_force_host_platform_device_count" not in flags:
-        count = count or os.cpu_count() or 1
-        os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={count}".strip()
+        kept = [f for f in kept if f.split("=", 1)[0] != DEVICE_COUNT_FLAG]
+    if any(f.split("=", 1)[0] == DEVICE_COUNT_FLAG for f in kept):
+        return " ".join(kept)
+    return " ".join([*kept, f"{DEVICE_COUNT_FLAG}={count}"])
 
 
 def batch_mesh() -> Mesh:
