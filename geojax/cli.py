@@ -1,12 +1,12 @@
 """The ``geojax`` command line: arguments in, the library's runs called, their summaries printed and files written.
 
     geojax demo [--out DIR]
-    geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5]
+    geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5] [--plots DIR]
     geojax simulate SCENARIO [--controller KIND] [--horizon N] [--days D] [--step S] [--seed S] [--h-rv H] [--h-att H]
                     [--out FILE.h5] [--plots DIR]
     geojax bound SCENARIO [--days D] [--step S] [--slot-steps N] [--thrusters arms|gimbal|fixed4]
-                 [--acquisition-days D] [--free-end] [--out FILE.h5]
-    geojax transfer SCENARIO [--days D] [--out FILE.h5]
+                 [--acquisition-days D] [--free-end] [--out FILE.h5] [--plots DIR]
+    geojax transfer SCENARIO [--days D] [--out FILE.h5] [--plots DIR]
     geojax sweep SWEEP.toml --out FILE.h5 [--resume] [--chunk N] [--lanes N] [--ray [ADDRESS]] [--workers N]
     geojax tune TUNE.toml --out FILE.h5
     geojax plot FILE.h5 [--out DIR] [--format png|pdf|svg] [--dpi N]
@@ -115,8 +115,7 @@ def _propagate(args) -> int:
         _say(args)(line)
     _detail(args)(f"  devices {store.device_description()}; propagated {len(result.cycles.t_s)} cycles to interpolate "
                   f"the change over exactly {sc.days:g} days")
-    if args.out:
-        print(f"wrote {result.save(args.out)}")
+    _write(result, args.out, args.plots)
     return 0
 
 
@@ -145,11 +144,16 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
                   f"loop), so it reports its times instead of a progress bar")
     for line in summary[1:]:
         say(line)
+    _write(result, out, plots)
+    return 0
+
+
+def _write(result, out, plots) -> None:
+    """The run's file (``--out``) and figures (``--plots``), each named as it is written."""
     if out:
         print(f"wrote {result.save(out)}")
     if plots:
         print("wrote " + " and ".join(map(str, result.plot(plots))))
-    return 0
 
 
 def _bound(args) -> int:
@@ -166,8 +170,7 @@ def _bound(args) -> int:
     for line in result.summary():
         say(line)
     _detail(args)(f"  devices {store.device_description()}; {result.wall_s:.1f} s in all")
-    if args.out:
-        print(f"wrote {result.save(args.out)}")
+    _write(result, args.out, args.plots)
     return 0
 
 
@@ -180,8 +183,7 @@ def _transfer(args) -> int:
     for line in result.summary():
         _say(args)(line)
     _detail(args)(f"  devices {store.device_description()}; {result.wall_s:.1f} s with compilation")
-    if args.out:
-        print(f"wrote {result.save(args.out)}")
+    _write(result, args.out, args.plots)
     return 0
 
 

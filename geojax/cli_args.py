@@ -35,6 +35,7 @@ def parser() -> argparse.ArgumentParser:
     prop.add_argument("--days", type=float, help=DAYS_HELP)
     prop.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
     prop.add_argument("--out", help="write the per-cycle mean elements to this HDF5 file")
+    prop.add_argument("--plots", help="folder for the figure (NAME-uncontrolled.png)")
 
     bnd = command("bound", help="the least Delta-V that holds the scenario's box with its thrusters (a linear program), "
                                 "re-simulated in the closed loop")
@@ -52,6 +53,7 @@ def parser() -> argparse.ArgumentParser:
                      help="no end condition (the free end: the plan may end anywhere in the box); default: periodic, "
                           "the plan ends where it started, x(T) = x(0) (Gazzino 2016), a steady state's Delta-V")
     bnd.add_argument("--out", help="write /metrics, /rounds and the per-slot /slots to this HDF5 file")
+    bnd.add_argument("--plots", help="folder for the figure of the plan and the flown box (NAME-bound.png)")
 
     sim = command("simulate", help="closed-loop station keeping (any controller); summary, metrics, status, HDF5")
     sim.add_argument("scenario", help="a scenario with a [controller] table, e.g. li2022-qffc, li2022-fompc, or a .toml path")
@@ -97,6 +99,7 @@ def parser() -> argparse.ArgumentParser:
     xfer.add_argument("--days", type=float, help="time limit in solar days (default: the scenario's); the transfer "
                       "stops earlier when it reaches GEO (not sidereal-day cycles: a transfer has no control cycle)")
     xfer.add_argument("--out", help="write /metrics and the daily /records to this HDF5 file")
+    xfer.add_argument("--plots", help="folder for the figure of the orbit and mass against time (NAME.png)")
 
     scen = command("scenarios", help="list the shipped scenarios, or print one's TOML")
     scen.add_argument("--show", metavar="NAME", help="print the TOML of the shipped scenario NAME")

@@ -53,13 +53,16 @@ def printed_lines(capsys) -> list[str]:
 
 def test_propagate_save_is_the_command_s_file(tmp_path, capsys):
     command, library = tmp_path / "command.h5", tmp_path / "library.h5"
-    assert cli.main(["propagate", "li2022", "--days", "3", "--step", "1800", "--out", str(command)]) == 0
+    assert cli.main(["propagate", "li2022", "--days", "3", "--step", "1800", "--out", str(command), "--plots",
+                     str(tmp_path / "cli")]) == 0
     printed = printed_lines(capsys)
+    assert printed[-1] == f"wrote {tmp_path / 'cli' / 'li2022-uncontrolled.png'}"
     sc = geojax.load_scenario("li2022", {"duration.days": 3, "integration.step_s": 1800})
     result = propagate_scenario(sc, progress=False)
     assert result.save(library) == library
     assert_same_file(command, library)
     assert result.summary()[1:] == printed[1:5]  # the first names the wall time
+    assert (tmp_path / "cli" / "li2022-uncontrolled.png").stat().st_size > 10_000
     figure, = result.plot(tmp_path)
     assert figure == tmp_path / "li2022-uncontrolled.png" and figure.stat().st_size > 10_000
 
@@ -88,8 +91,9 @@ def test_simulate_save_is_the_command_s_file_for_a_planner_and_a_feedback_law(na
 def test_bound_save_is_the_command_s_file(tmp_path, capsys):
     command, library = tmp_path / "command.h5", tmp_path / "library.h5"
     assert cli.main(["bound", "li2022-qffc", "--days", "1", "--slot-steps", "8", "--free-end", "--out",
-                     str(command)]) == 0
+                     str(command), "--plots", str(tmp_path / "cli")]) == 0
     printed = printed_lines(capsys)
+    assert printed[-1] == f"wrote {tmp_path / 'cli' / 'li2022-qffc-bound.png'}"
     result = bound(geojax.load_scenario("li2022-qffc", {"duration.days": 1}), slot_steps=8, free_end=True)
     result.save(library)
     assert_same_file(command, library)
@@ -104,8 +108,10 @@ def test_bound_save_is_the_command_s_file(tmp_path, capsys):
 
 def test_transfer_save_is_the_command_s_file(tmp_path, capsys):
     command, library = tmp_path / "command.h5", tmp_path / "library.h5"
-    assert cli.main(["transfer", "ma2023-quadrilateral", "--days", "0.5", "--out", str(command)]) == 0
+    assert cli.main(["transfer", "ma2023-quadrilateral", "--days", "0.5", "--out", str(command), "--plots",
+                     str(tmp_path / "cli")]) == 0
     printed = printed_lines(capsys)
+    assert printed[-1] == f"wrote {tmp_path / 'cli' / 'ma2023-quadrilateral.png'}"
     result = transfer.run(transfer.load("ma2023-quadrilateral"), days=0.5)
     result.save(library)
     assert_same_file(command, library)
