@@ -64,7 +64,7 @@ MEASURES = (("osc_deg", "osculating, whole year (ours)"), ("osc_after_deg", f"os
 def measures(cycles, station_lon_rad: float, cycle_days: float) -> dict:
     """Half-ranges (deg) [B] of the longitude excursion by each of MEASURES, from the per-cycle records."""
     lo, hi = np.asarray(cycles.dlon_min_rad), np.asarray(cycles.dlon_max_rad)  # [B, C]
-    first = int(np.ceil(ACQUISITION_DAYS / cycle_days))
+    first = min(int(np.ceil(ACQUISITION_DAYS / cycle_days)), lo.shape[1] - 1)
     mean = np.asarray(wrap_angle(np.asarray(cycles.means.lon_rad) - station_lon_rad))[:, 1:]
     largest = np.maximum(np.abs(lo), np.abs(hi))
     half = lambda a, b: np.degrees(a.max(axis=1) - b.min(axis=1)) / 2  # noqa: E731
