@@ -2,7 +2,7 @@
 baseline, "the traditional quadrilateral layout in fixed direction" (Sec. 4.1), and where the difference
 comes from.
 
-    python studies/ma2023/transfer.py [--cants 0 10 20 30 40 45 50] [--rates 0.01 0.02 0.05 0.1 0.2 0.5]
+    python studies/ma2023/transfer.py [--cants 0 20 30 35 40 45 50] [--rates 0.01 0.02 0.03 0.05 0.1 0.5]
                                       [--mc 32] [--inertias 2e3 1e4]
 
 1. The baseline at the shipped values (Table 1's orbit and joint ranges; the marked choices of
@@ -232,8 +232,8 @@ QUANTITIES = (("transfer_days", "transfer time, days"), ("propellant_kg", "xenon
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cants", type=float, nargs="+", default=[0.0, 10.0, 20.0, 30.0, 40.0, 45.0, 50.0])
-    parser.add_argument("--rates", type=float, nargs="+", default=[0.01, 0.02, 0.05, 0.1, 0.2, 0.5])
+    parser.add_argument("--cants", type=float, nargs="+", default=[0.0, 20.0, 30.0, 35.0, 40.0, 45.0, 50.0])
+    parser.add_argument("--rates", type=float, nargs="+", default=[0.01, 0.02, 0.03, 0.05, 0.1, 0.5])
     parser.add_argument("--mc", type=int, default=32, help="Monte Carlo pairs (0: skip)")
     parser.add_argument("--inertias", type=float, nargs="+", default=[2e3, 1e4],
                         help="body inertias of the coupling-torque table, kg m^2 (the scenarios': 2000)")
