@@ -6,7 +6,7 @@ The batch (half ``ma2023-boom``, half ``ma2023-quadrilateral``; perigee +-50 km,
 +-0.5 deg, uniform) is vmapped and sharded over one XLA CPU device per core (``geojax.parallel``), compiled
 once.  The same transfers run one at a time (the jitted single transfer in a Python loop, ``--single`` of
 them) give the batching ratio.  ``--days`` is the time limit (default 250 days: the boom reaches GEO after
-about 207, the quadrilateral at 40 deg after about 260, so ``--days 300`` lets both arrive; the scan runs on,
+about 207, the quadrilateral at 45 deg after about 280, so ``--days 300`` lets both arrive; the scan runs on,
 frozen, to the limit).
 Results: ``benchmarks/results/transfer.json`` and ``.md``.
 """

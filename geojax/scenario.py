@@ -115,6 +115,10 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "att_pitch": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="att_pitch"),
         "att_shared": Field(bool, False, si="att_shared"),
         "att_known": Field(bool, False, si="att_known"),
+        # How the determination error enters (loop.simulate.measured_mee; studies/ablation/li_fig17_width.py): its
+        # position and velocity parts scaled (1: eq. (48) as printed, 3 sigma per component).
+        "rv_r": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="rv_r"),
+        "rv_v": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="rv_v"),
     },
     "forces": {
         "j2": Field(bool, True),

@@ -395,7 +395,7 @@ def test_quadrilateral_delivers_cos_cant_of_the_thrust_for_the_same_propellant(l
     turns the orbit plane (the first days' plane change) by cos c times as much per second of firing (c = 40 deg
     against 0), for the same propellant per second (the pair's mass flow F / (Isp g0) does not depend on its cant)."""
     final0, rec0 = _run(loop, transfer.load("ma2023-quadrilateral", {"thruster.cant_deg": 0.0}))
-    final40, rec40 = _run(loop, transfer.load("ma2023-quadrilateral"))
+    final40, rec40 = _run(loop, transfer.load("ma2023-quadrilateral", {"thruster.cant_deg": 40.0}))
     firing0, firing40 = float(final0.stats.firing_s), float(final40.stats.firing_s)
     assert firing40 == pytest.approx(firing0, rel=0.01)  # the pattern differs only where the orbits have drifted
     used0, used40 = (2500.0 - float(f.craft.mass_kg) for f in (final0, final40))

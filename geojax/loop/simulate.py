@@ -46,10 +46,10 @@ from geojax.physics.integrate import rk4_step
 from geojax.params import Params
 from geojax.physics.propagate import MEE, CycleMeans, Dynamics, cycle_means
 
-# Li 2022, eq. (48): nominal 3-sigma errors, scaled by H_rv and H_att.
+# Li 2022, eq. (48): nominal 3-sigma determination errors per component, scaled by H_rv (the attitude's:
+# control.burns).
 NOMINAL_3SIGMA_R_M = 0.3
 NOMINAL_3SIGMA_V_MPS = 5e-5
-NOMINAL_3SIGMA_ATT_DEG = 0.05
 # A component of the delivered acceleration counts as firing when it exceeds this fraction of the
 # acceleration's norm: the RSW -> ECEF rotations leave ~1e-16 of it on an axis a law did not fire.
 FIRING_COMPONENT_RTOL = 1e-9
@@ -219,11 +219,13 @@ def position_velocity(dynamics: Dynamics, orbit, mu):
 
 
 def measured_mee(dynamics: Dynamics, orbit, noise, errors: dict, mu):
-    """The orbit-determination fix as MEE: the true r and v with Gaussian errors (``noise`` [6] ~ N(0, 1))."""
+    """The orbit-determination fix as MEE: the true r and v with Gaussian errors (``noise`` [6] ~ N(0, 1)), 1 sigma
+    H_rv x 0.3 m / 3 per position component and H_rv x 5e-5 m/s / 3 per velocity component (Li 2022, eqs.
+    (47)-(48)), each part scaled by ``errors["rv_r"]`` / ``errors["rv_v"]`` (1 as printed)."""
     r, v = position_velocity(dynamics, orbit, mu)
     h_rv = errors["h_rv"]
-    r = r + h_rv * NOMINAL_3SIGMA_R_M / 3 * noise[:3]
-    v = v + h_rv * NOMINAL_3SIGMA_V_MPS / 3 * noise[3:]
+    r = r + h_rv * errors["rv_r"] * NOMINAL_3SIGMA_R_M / 3 * noise[:3]
+    v = v + h_rv * errors["rv_v"] * NOMINAL_3SIGMA_V_MPS / 3 * noise[3:]
     fix = cartesian_to_mee(r, v, mu)
     # Keep the true longitude continuous with the state's (cartesian_to_mee wraps it).
     true_lon = dynamics.to_mee(orbit, mu)[5]
@@ -240,7 +242,7 @@ def propagate(dynamics: Dynamics, state: SpacecraftState, env: Environment, forc
     controller = none.CONTROLLER if thrust_fn is None else Controller(
         stateless_init, no_plan, lambda params, plan, t, state, environment: thrust_fn(t, environment.step_s))
     zero = jnp.asarray(0.0)
-    params = Params(state, force_model, {"dry_mass_kg": zero}, {}, {"lon_rad": zero}, {"h_rv": zero}, {})
+    params = Params(state, force_model, {"dry_mass_kg": zero}, {}, {"lon_rad": zero}, {"h_rv": zero, "rv_r": zero, "rv_v": zero}, {})
     final, records = simulate(controller, params, Shared(env, None), jax.random.key(0), step_s=step_s,
                               dynamics=dynamics)
     return final, records.cycles.means

@@ -21,8 +21,9 @@ flow is that of the two thrusters, F / (Isp g0).  The cant: a GEO quadrilateral 
 is the HS 702 xenon-ion quadrilateral with its diagonal pairs through the centre of mass (Anzel,
 "Stationkeeping the Hughes HS 702 satellite with a xenon ion propulsion system", IAF-98-A.1.09, 1998, the
 configuration the SK literature cited by Gazzino takes as typical); the sources at hand here do not print
-its cant, geojax's ``gazzino2016`` takes 45 deg, and 40 deg is our default (a marked choice; the map in
-``studies/ma2023/transfer.py`` sweeps 0-50 deg).  Beyond 45 deg the east/west pairs are the stronger
+its cant.  Our default is 45 deg (a marked choice, ``thruster.cant_deg``), the symmetric quadrilateral whose
+north/south and east/west pairs have the same authority, as geojax's ``gazzino2016`` flies it; the map in
+``studies/ma2023/transfer.py`` sweeps 0-50 deg.  Beyond 45 deg the east/west pairs are the stronger
 (sin c > cos c): the body then rolls 90 deg and uses them, so the layout's best pair delivers
 max(cos c, sin c) and a cant c and its complement 90 deg - c fly alike.
 

@@ -63,7 +63,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
     "thruster": {
         "layout": Field(str, REQUIRED, choices=("boom", "quadrilateral")),
         # the quadrilateral's cant from its north-south axis (transfer.quadrilateral); the boom ignores it
-        "cant_deg": _number(40.0, 0.0, 90.0, True),
+        "cant_deg": _number(45.0, 0.0, 90.0, True),
         "thrust_n": _number(REQUIRED, 0.0, 1e5),
         "isp_s": _number(REQUIRED, 0.0, 1e6),
     },

@@ -1,0 +1,44 @@
+"""How the orbit-determination error enters the controller's fix (Li 2022 eqs. (47)-(48); ``loop.simulate``).
+
+Independent check: the fix converted back to Cartesian (``physics.elements.mee_to_cartesian``, the inverse of
+the conversion the fix goes through) differs from the true r and v by exactly the closed form
+H_rv x (0.3 m, 5e-5 m/s) / 3 x noise per component, each part scaled by ``rv_r`` / ``rv_v``.
+"""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from geojax.loop.simulate import measured_mee
+from geojax.physics.constants import MU_EARTH_M3_S2
+from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian
+from geojax.physics.propagate import CARTESIAN, MEE
+
+# A GEO state: r = 42164 km on x, v = 3074.7 m/s on y, a little inclined.
+R0 = np.array([42164.17e3, 0.0, 0.0])
+V0 = np.array([0.0, 3074.66, 5.0])
+NOISE = jnp.array([0.7, -1.3, 2.1, -0.4, 1.9, -2.6])
+
+
+@pytest.mark.parametrize("dynamics", [MEE, CARTESIAN], ids=["mee", "cartesian"])
+@pytest.mark.parametrize("rv_r, rv_v", [(1.0, 1.0), (0.0, 1.0), (1.0, 0.0), (0.5, 2.0)])
+def test_fix_error_is_eq_48s_sigma_times_the_noise_in_each_part(dynamics, rv_r, rv_v):
+    """At H_rv = 800 (Li's largest stable level): 3 sigma = 240 m and 0.04 m/s per component, so the fix is off
+    the truth by 80 m x noise in position and 0.01333 m/s x noise in velocity, times rv_r and rv_v (0 removes
+    that part exactly)."""
+    mee = cartesian_to_mee(jnp.asarray(R0), jnp.asarray(V0), MU_EARTH_M3_S2)
+    orbit = dynamics.from_mee(mee, MU_EARTH_M3_S2)
+    errors = {"h_rv": jnp.asarray(800.0), "rv_r": jnp.asarray(rv_r), "rv_v": jnp.asarray(rv_v)}
+    fix = measured_mee(dynamics, orbit, NOISE, errors, MU_EARTH_M3_S2)
+    r, v = (np.asarray(x) for x in mee_to_cartesian(fix, MU_EARTH_M3_S2))
+    expected_r = rv_r * 80.0 * np.asarray(NOISE[:3])
+    expected_v = rv_v * (800.0 * 5e-5 / 3) * np.asarray(NOISE[3:])
+    np.testing.assert_allclose(r - R0, expected_r, atol=2e-6)  # the MEE round trip at 4e7 m: ~1e-8 m
+    np.testing.assert_allclose(v - V0, expected_v, atol=1e-9)
+
+
+def test_no_error_gives_the_true_state():
+    mee = cartesian_to_mee(jnp.asarray(R0), jnp.asarray(V0), MU_EARTH_M3_S2)
+    errors = {"h_rv": jnp.asarray(0.0), "rv_r": jnp.asarray(1.0), "rv_v": jnp.asarray(1.0)}
+    fix = measured_mee(MEE, mee, NOISE, errors, MU_EARTH_M3_S2)
+    np.testing.assert_allclose(np.asarray(fix), np.asarray(mee), rtol=1e-13, atol=1e-13)
