@@ -3,7 +3,8 @@
 Independent check: the results files (``studies/*/results/``, ``benchmarks/results/``) are written by the scripts
 that measured them; a table's number is looked up, to the digits it is printed with, among the numbers of the
 results files its section names (a script ``li2022/one_year.py`` names ``li2022/results/one_year*``, a path
-``.../results/x.md`` names itself), and every number of a cell must be in one and the same file.  A number changed in a page and not in its results file, or a results file
+``.../results/x.md`` names itself), and every number of a cell must be in one and the same file, or in the files
+the cell itself names.  A number changed in a page and not in its results file, or a results file
 regenerated without its page, fails here.  Columns that hold a paper's claims (the header names the paper, "paper"
 or "claim") are not ours and are skipped; so are the agree/differ columns' derived percentages.
 """
@@ -32,7 +33,7 @@ def half_unit(token: str) -> float:
 
 def results_files(section: str) -> list[Path]:
     found = set()
-    for name in re.findall(r"([\w/\-]+\.py|[\w/\-]+/results/[\w.\-]+)", section):
+    for name in re.findall(r"([\w/\-]+\.py|[\w/\-]+/results/[\w.\-/]+\.(?:md|json))", section):
         for path in [ROOT / name, ROOT / "studies" / name, *(ROOT / "studies").glob(f"*/{name}")]:
             if path.is_file() and path.suffix == ".py":
                 found |= {f for f in (path.parent / "results").glob(f"{path.stem}*")
@@ -72,7 +73,8 @@ def unsourced(text: str, label: str) -> list[str]:
         numbers = [[parse(t) for t in NUMBER.findall(f.read_text(errors="ignore"))] for f in files]
         for row, cell in our_cells(section):
             tokens = NUMBER.findall(cell)
-            if tokens and not any(found_in(tokens, pool) for pool in numbers):
+            named = [parse(t) for f in results_files(cell) for t in NUMBER.findall(f.read_text(errors="ignore"))]
+            if tokens and not any(found_in(tokens, pool) for pool in [*numbers, named]):
                 misses.append(f"{label}: row {row[:50]!r}: the numbers of {cell[:120]!r} are not all in any one of "
                               f"{', '.join(str(f.relative_to(ROOT)) for f in files)}")
     return misses
