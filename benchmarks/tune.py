@@ -50,6 +50,8 @@ import numpy as np  # noqa: E402
 from scipy.optimize import minimize  # noqa: E402
 
 from geojax import scenario, tune  # noqa: E402
+from geojax.control import lyapunov  # noqa: E402
+from geojax.papers import KATZ2025  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 FD_STEP = 1e-2  # SLSQP's finite-difference step in log-gain
@@ -97,10 +99,10 @@ def main() -> None:
         reference = slsqp(problem, tune.start_points(spec, center, problem.entries, problem.sizes), center, slsqp_iterations)
         reached = np.asarray(ours.history["best_dv_per_year_mps"]) <= reference["best_dv_per_year_mps"] + 1e-9
         t_reach = float(np.asarray(ours.history["wall_s"])[reached][0]) if reached.any() else None
-        gains = tune.paper_units(ours.best_params) if ours.best_params is not None else {}
+        gains = tune.reported(ours.best_params, lyapunov.FIELDS) if ours.best_params is not None else {}
         row = {
             "mode": mode, "parameters": spec.parameters, "days": spec.scenario.days, "starts": starts,
-            "paper_dv_per_year_mps": float(tune.PAPER[paper_mode]["dv_per_year_mps"]),
+            "paper_dv_per_year_mps": float(KATZ2025[paper_mode]["dv_per_year_mps"]),
             "paper_gains_dv_per_year_mps": paper_dv, "paper_gains_box_ok": bool(paper_ok),
             "geojax_dv_per_year_mps": ours.best_dv_per_year_mps, "geojax_wall_s": ours.wall_s,
             "geojax_iterations": iterations, "geojax_k_h_per_km2_s": gains.get("k_h_per_km2_s"),
@@ -145,7 +147,7 @@ def slsqp(problem: tune.Problem, starts: np.ndarray, center: np.ndarray, max_ite
     wall = time.perf_counter() - start
     gains = {}
     if best["theta"] is not None:
-        gains = tune.paper_units(tune.from_theta(best["theta"], problem.base, problem.entries))
+        gains = tune.reported(tune.from_theta(best["theta"], problem.base, problem.entries), lyapunov.FIELDS)
     return {"best_dv_per_year_mps": best["dv"], "wall_s": wall, "evaluations": evaluations,
             "k_h_per_km2_s": gains.get("k_h_per_km2_s"), "k_e_km2_per_s3": gains.get("k_e_km2_per_s3"),
             "lambda_b_deg": gains.get("lambda_b_deg")}

@@ -69,6 +69,8 @@ class Field:
     # of the TOML value ("km²/s³"; default: read from the key's unit suffix, ``_deg`` -> deg; "" for none).
     symbol: str | None = None
     unit: str | None = None
+    alias: str | None = None  # a short name a tuning accepts for this key, in a file and in Python alike ("k_h")
+    doc: str = ""  # one line: what the key means (the documentation's key tables, ``field_table``)
 
     def describe(self) -> str:
         if self.choices:
@@ -97,6 +99,17 @@ class Field:
             raise ValueError(f"{self.si}: no inverse unit conversion declared")
         value = np.asarray(leaf, dtype=float) / self.to_si
         return value.tolist() if value.ndim else float(value)
+
+
+def field_table(fields: dict[str, "Field"]) -> str:
+    """The Markdown table of a file's keys (key, default, allowed values, meaning): what the documentation shows,
+    built from the ``Field``s so that it cannot drift from what the loader checks."""
+    rows = ["| key | default | allowed | meaning |", "|---|---|---|---|"]
+    for key, f in fields.items():
+        default = "required" if f.default is REQUIRED else ("unset" if f.default is None else repr(f.default))
+        rows.append(f"| `{key}` | {default} | {f.describe() or _kind_name(f.kind if isinstance(f.kind, tuple) else (f.kind,))} "
+                    f"| {f.doc} |")
+    return "\n".join(rows)
 
 
 def degrees(value):
