@@ -6,7 +6,8 @@ becomes an array leaf of the engine's ``Params`` pytree, its SI name and unit
 conversion and, where it can be tuned, its transform to an unconstrained
 variable.  The scenario tables of ``geojax.scenario.SCHEMA`` and each
 controller's ``FIELDS`` are made of them, and everything else follows from
-them: validation, the ``Params`` leaves, the leaf a sweep axis
+them (with a key's ``alias``, ``unit`` and one-line ``doc``, read by the tuner, the figures and the
+documentation's key tables, ``field_table``): validation, the ``Params`` leaves, the leaf a sweep axis
 (``"thrusters.beta_max_deg"``) or a tuned parameter (``"controller.k_h_per_km2_s"``)
 names, and the units a tuned value is reported in.
 
@@ -107,8 +108,8 @@ def field_table(fields: dict[str, "Field"]) -> str:
     rows = ["| key | default | allowed | meaning |", "|---|---|---|---|"]
     for key, f in fields.items():
         default = "required" if f.default is REQUIRED else ("unset" if f.default is None else repr(f.default))
-        rows.append(f"| `{key}` | {default} | {f.describe() or _kind_name(f.kind if isinstance(f.kind, tuple) else (f.kind,))} "
-                    f"| {f.doc} |")
+        allowed = f.describe() or _kind_name(f.kind if isinstance(f.kind, tuple) else (f.kind,))
+        rows.append(f"| `{key}` | {default} | {allowed} | {f.doc} |")
     return "\n".join(rows)
 
 

@@ -64,7 +64,8 @@ FIELDS = {
     "method": Field(str, "sqp", choices=("sqp", "adam"),
                     doc="the optimiser (geojax.tune.sqp, geojax.tune.adam)"),
     "trust_radius": Field(_NUMBER, None, lower=0.0,
-                          doc="the SQP's first trust radius (unset: 2 for a smooth law, 0.3 for a sampled-and-held one)"),
+                          doc="the SQP's first trust radius (unset: 2 for a smooth law, 0.3 for a sampled-and-held "
+                              "one)"),
     "trust_radius_min": Field(_NUMBER, None, lower=0.0,
                               doc="the SQP's smallest trust radius (unset: 1e-6 smooth, 0.02 sampled-and-held)"),
     "days": Field(_NUMBER, None, lower=0.0, upper=36526.0,
