@@ -31,7 +31,7 @@ STUDIES = {
     "ye2022": [("ye2022/table3.py", []), ("ye2022/sweep_limits.py", [])],
     "ablation": [("ablation/fompc_annealing.py", []), ("ablation/li_predictor_error.py", []),
                  ("ablation/fig13_budget.py", []), ("ablation/katz_longitude.py", []),
-                 ("ablation/li_attitude_error.py", [])],
+                 ("ablation/li_attitude_error.py", []), ("ablation/tuning_horizon.py", [])],
     "ma2023": [("ma2023/transfer.py", [])],
     "bounds": [("bounds/table.py", []), ("bounds/operational.py", ["--days", "28", "--margin", "0.2"]),
                ("bounds/periodic.py", [])],
