@@ -7,7 +7,7 @@ conversion and, where it can be tuned, its transform to an unconstrained
 variable.  The scenario tables of ``geojax.scenario.SCHEMA`` and each
 controller's ``FIELDS`` are made of them, and everything else follows from
 them (with a key's ``alias``, ``unit`` and one-line ``doc``, read by the tuner, the figures and the
-documentation's key tables, ``field_table``): validation, the ``Params`` leaves, the leaf a sweep axis
+documentation's key tables, ``docs/hooks.py``): validation, the ``Params`` leaves, the leaf a sweep axis
 (``"thrusters.beta_max_deg"``) or a tuned parameter (``"controller.k_h_per_km2_s"``)
 names, and the units a tuned value is reported in.
 
@@ -71,7 +71,7 @@ class Field:
     symbol: str | None = None
     unit: str | None = None
     alias: str | None = None  # a short name a tuning accepts for this key, in a file and in Python alike ("k_h")
-    doc: str = ""  # one line: what the key means (the documentation's key tables, ``field_table``)
+    doc: str = ""  # one line: what the key means (the documentation's key tables, ``docs/hooks.py``)
 
     def describe(self) -> str:
         if self.choices:
@@ -100,17 +100,6 @@ class Field:
             raise ValueError(f"{self.si}: no inverse unit conversion declared")
         value = np.asarray(leaf, dtype=float) / self.to_si
         return value.tolist() if value.ndim else float(value)
-
-
-def field_table(fields: dict[str, "Field"]) -> str:
-    """The Markdown table of a file's keys (key, default, allowed values, meaning): what the documentation shows,
-    built from the ``Field``s so that it cannot drift from what the loader checks."""
-    rows = ["| key | default | allowed | meaning |", "|---|---|---|---|"]
-    for key, f in fields.items():
-        default = "required" if f.default is REQUIRED else ("unset" if f.default is None else repr(f.default))
-        allowed = f.describe() or _kind_name(f.kind if isinstance(f.kind, tuple) else (f.kind,))
-        rows.append(f"| `{key}` | {default} | {allowed} | {f.doc} |")
-    return "\n".join(rows)
 
 
 def degrees(value):

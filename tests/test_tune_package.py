@@ -3,13 +3,13 @@ tuning file's documentation built from its Fields; the short-horizon warning."""
 
 import ast
 import dataclasses
+import sys
 from pathlib import Path
 
 import h5py
 import pytest
 
-import geojax
-from geojax import cli, params, scenario, tune
+from geojax import cli, plots, scenario, tune
 from geojax.control import REGISTRY
 
 # A user's inclination damper, outside the package: thrust against the velocity's ECEF z (Li 2022's normal
@@ -30,7 +30,8 @@ def thrust(params, plan, t, state, environment):
 
 DAMPER = geojax.Controller(stateless_init, no_plan, thrust, fields={
     "k_inc_per_s": geojax.Field(float, 1e-5, lower=0.0, si="k_inc", transform=geojax.LOG, alias="k_inc",
-                                unit="1/s", doc="inclination damping gain")}, tuned_fields=("k_inc_per_s",))
+                                symbol="k_inc", unit="1/s", doc="inclination damping gain")},
+    tuned_fields=("k_inc_per_s",))
 '''
 
 
@@ -71,9 +72,8 @@ def test_a_controller_of_ones_own_is_tuned_through_the_command_line(own_scenario
     spec = tune.load(file)
     assert spec.parameters == ["controller.k_inc_per_s"]
     assert [e.name for e in tune.Problem(spec.scenario, ["k_inc"]).entries] == spec.parameters
-    groups, attrs = geojax.read_results(tmp_path / "t.h5")
-    assert tune.write._best_values(groups["best"], scenario.tomllib.loads(attrs["config_toml"]),
-                                   spec.parameters) == [f"k_inc = {best_gain:.4g} 1/s"]
+    # The best point's legend: the key by its Field's symbol and unit (the controller found by its import path).
+    assert plots.label_for("controller.k_inc_per_s", ("tuned_laws:DAMPER",)) == "k_inc (1/s)"
 
 
 def test_the_default_parameters_and_the_horizon_warning_come_from_the_controller(own_scenario):
@@ -119,7 +119,15 @@ def test_nothing_in_the_tuning_package_names_a_controller():
 
 
 def test_the_tuning_files_documentation_is_built_from_its_fields():
-    """The key table in ``geojax.tune.spec``'s docstring is the one ``params.field_table`` renders from
-    ``FIELDS``: a key added, removed or changed there and not in the documentation fails here."""
-    assert params.field_table(tune.FIELDS) in tune.spec.__doc__
-    assert all(field.doc for field in tune.FIELDS.values())
+    """The documentation's table of the tuning file's keys (docs/hooks.py, shown in docs/feedback.md beside the
+    sweep's) is generated from ``FIELDS``: every key with its default and its one-line meaning."""
+    root = Path(__file__).resolve().parent.parent
+    sys.path.insert(0, str(root / "docs"))
+    try:
+        import hooks
+    finally:
+        sys.path.remove(str(root / "docs"))
+    table = hooks.tuning_keys()
+    for key, field in tune.FIELDS.items():
+        assert field.doc and f"| `{key}` |" in table and field.doc in table
+    assert "<!-- generated: tuning-keys -->" in (root / "docs" / "feedback.md").read_text()

@@ -9,31 +9,8 @@ A tuning file names a scenario (any controller) and the scenario keys to tune; e
     iterations = 40
     days = 365.25                       # the horizon each iterate is flown over (default: the scenario's)
 
-The keys (``FIELDS``; ``params.field_table(FIELDS)`` renders this table, and a test checks that it is this one):
-
-| key | default | allowed | meaning |
-|---|---|---|---|
-| `scenario` | required | a string | the scenario tuned: a shipped name or a .toml path, any controller |
-| `parameters` | unset | a list | the tuned scenario keys ("table.key") or their aliases, each with a tuning transform (unset: the controller's ``tuned_fields``) |
-| `starts` | 16 | >= 1 and < 4097 | starts optimised at once (start 0: the scenario's values; the others spread around them) |
-| `iterations` | 40 | >= 0 and < 10001 | iterations of the optimiser |
-| `step_tolerance` | 0.0001 | >= 0 | the SQP stops when every start's step is shorter (natural-log units) |
-| `method` | 'sqp' | one of 'sqp', 'adam' | the optimiser (geojax.tune.sqp, geojax.tune.adam) |
-| `trust_radius` | unset | > 0 | the SQP's first trust radius (unset: 2 for a smooth law, 0.3 for a sampled-and-held one) |
-| `trust_radius_min` | unset | > 0 | the SQP's smallest trust radius (unset: 1e-6 smooth, 0.02 sampled-and-held) |
-| `days` | unset | > 0 and < 36526 | the horizon in days (unset: the scenario's duration.days) |
-| `step_s` | unset | > 0 and < 86401 | the integration step in s (unset: the scenario's integration.step_s) |
-| `learning_rate` | 0.1 | > 0 | Adam's first learning rate (natural-log units per iteration) |
-| `learning_rate_end` | 0.02 | > 0 | Adam's last learning rate (decayed geometrically) |
-| `momentum` | 0.5 | >= 0 and < 1 | Adam's b1 |
-| `spread_decades` | 0.3 | >= 0 | half-width of the starts' spread for keys tuned on a log scale, in decades |
-| `spread_scaled` | 0.2 | >= 0 | half-width of the starts' spread for the other keys, in their transform's units |
-| `temperature_start` | 0.1 | > 0 | the surrogate's first temperature (annealed geometrically) |
-| `temperature_end` | 0.03 | > 0 | the surrogate's last temperature |
-| `penalty_mps` | 200.0 | > 0 | Adam's penalty weight on the box violation, m/s/yr |
-| `margin` | unset | >= 0 and < 1 | how far inside the box to aim, in units of Delta_s^2 (unset: 0 smooth, 0.01 sampled-and-held, 0.02 Adam) |
-| `seed` | 0 | >= 0 | the seed of the starts' spread |
-| `gradient` | 'forward' | one of 'forward', 'reverse' | forward-mode (no tape) or reverse-mode (checkpointed per day) derivatives |
+Every key is declared in ``FIELDS`` with its default, its range and a line saying what it means; the
+documentation's table of them (docs/feedback.md, "The tuning file") is generated from it.
 
 A tuning shorter than ``MIN_HORIZON_DAYS`` or than the controller's prediction window warns
 (``horizon_warning``): the yearly Delta-V it minimises is then not the year's.

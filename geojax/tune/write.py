@@ -93,8 +93,8 @@ def tuned_scenario_toml(spec, params: Params, dv_per_year_mps: float | None = No
 
 def figure(groups: dict, attrs: dict, path, dpi: int = 150) -> Path:
     """The convergence figure of a tuning file (``plots.plot_tuning``), titled by what was tuned (the names as
-    the tuning file wrote them), on which scenario and over how long, with the best point's tuned values in its
-    keys' units as their ``Field``s declare them."""
+    the tuning file wrote them), on which scenario and over how long, with the best point's tuned values named
+    and in their units as their ``Field``s declare them (``plots.label_for``)."""
     from geojax import plots
 
     config = scenario_mod.tomllib.loads(str(attrs.get("config_toml", "")))
@@ -102,23 +102,8 @@ def figure(groups: dict, attrs: dict, path, dpi: int = 150) -> Path:
     written = scenario_mod.tomllib.loads(str(attrs.get("tune_toml", ""))).get("parameters") or keys
     days = config.get("duration", {}).get("days")
     title = f"{attrs.get('scenario', '')}{f', {days:g} days' if days else ''}: tuning {', '.join(written)}"
-    return plots.plot_tuning(groups, path, title=textwrap.fill(title, 70), dpi=dpi,
-                             best_values=_best_values(groups.get("best") or {}, config, keys))
-
-
-def _best_values(best: dict, config: dict, keys: list[str]) -> list[str]:
-    """"k_h = 1.641e-15 1/(km² s)" for each tuned key whose value ``/best`` holds (a controller's scalar keys)."""
-    try:
-        fields = scenario_mod.controller_fields(config.get("controller", {}))
-    except ValueError:  # a user's controller object, not importable here: its values are shown without units
-        fields = {}
-    lines = []
-    for name in keys:
-        table, _, key = name.rpartition(".")
-        if table != "controller" or key not in best:
-            continue
-        field = fields.get(key)
-        label = field.alias if field is not None and field.alias else key
-        unit = f" {field.unit}" if field is not None and field.unit else ""
-        lines.append(f"{label} = {float(best[key]):.4g}{unit}")
-    return lines
+    best = groups.get("best") or {}
+    controllers = (config.get("controller", {}).get("kind", "none"),)
+    values = [f"{plots.label_for(key, controllers)} = {float(best[key.rpartition('.')[2]]):.4g}" for key in keys
+              if key.startswith("controller.") and key.rpartition(".")[2] in best]  # /best: the controller's scalars
+    return plots.plot_tuning(groups, path, title=textwrap.fill(title, 70), dpi=dpi, best_values=values)
