@@ -89,7 +89,7 @@ def main() -> None:
                                "parameters": PARAMETERS[mode]})
         spec = dataclasses.replace(spec, scenario=scenario.load(f"katz2025-{paper_mode}", {"controller.thrust_mode": mode}))
         problem = tune.Problem(spec.scenario, spec.parameters, spec.penalty_mps,
-                               tune.default_margin(spec, spec.scenario), spec.gradient,
+                               tune.default_margin(spec), spec.gradient,
                                lanes=max(1, spec.starts // jax.device_count()))
         center = tune.to_theta(problem.base, problem.entries)
         paper_dv, paper_g, paper_ok = map(float, map(np.max, problem.exact_one(center)))

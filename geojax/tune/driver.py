@@ -72,7 +72,7 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
     return result
 
 
-def default_margin(spec: TuneSpec, sc=None) -> float:
+def default_margin(spec: TuneSpec) -> float:
     """``margin`` when the tuning file leaves it out.  The SQP aims at the box's edge itself when the exact
     law is smooth (its linearisation is exact there), and 1 % of Delta_s^2 inside it for the sampled-and-held
     laws, whose excursion jumps by about that much between neighbouring gains (a step aimed at the edge lands
@@ -84,7 +84,7 @@ def default_margin(spec: TuneSpec, sc=None) -> float:
     return 0.0 if _smooth(spec) else 0.01
 
 
-def default_trust_radius(spec: TuneSpec, sc=None) -> float:
+def default_trust_radius(spec: TuneSpec) -> float:
     """The SQP's first trust radius (natural-log units) when the tuning file leaves it out: 2 for a smooth
     law, whose linearisation holds over long steps, 0.3 for the sampled-and-held laws, whose surrogate's
     linearisation points the right way over a shorter range (both measured with benchmarks/tune.py)."""
