@@ -45,6 +45,9 @@ from scipy.optimize import minimize
 import harness
 from geojax import scenario, tune
 
+from geojax.control import lyapunov
+from geojax.papers import KATZ2025
+
 NAME = "tune"
 FD_STEP = 1e-2  # SLSQP's finite-difference step in log-gain
 # The paper tunes (k_h, k_e).  For the continuous law at its printed lambda_b = -0.056 deg the loop settles
@@ -86,7 +89,7 @@ def main() -> None:
                                "parameters": PARAMETERS[mode]})
         spec = dataclasses.replace(spec, scenario=scenario.load(f"katz2025-{paper_mode}", {"controller.thrust_mode": mode}))
         problem = tune.Problem(spec.scenario, spec.parameters, spec.penalty_mps,
-                               tune.default_margin(spec, spec.scenario), spec.gradient,
+                               tune.default_margin(spec), spec.gradient,
                                lanes=max(1, spec.starts // jax.device_count()))
         center = tune.to_theta(problem.base, problem.entries)
         paper_dv, paper_g, paper_ok = map(float, map(np.max, problem.exact_one(center)))
@@ -96,10 +99,10 @@ def main() -> None:
         reference = slsqp(problem, tune.start_points(spec, center, problem.entries, problem.sizes), center, slsqp_iterations)
         reached = np.asarray(ours.history["best_dv_per_year_mps"]) <= reference["best_dv_per_year_mps"] + 1e-9
         t_reach = float(np.asarray(ours.history["wall_s"])[reached][0]) if reached.any() else None
-        gains = tune.paper_units(ours.best_params) if ours.best_params is not None else {}
+        gains = tune.reported(ours.best_params, lyapunov.FIELDS) if ours.best_params is not None else {}
         row = {
             "mode": mode, "parameters": spec.parameters, "days": spec.scenario.days, "starts": starts,
-            "paper_dv_per_year_mps": float(tune.PAPER[paper_mode]["dv_per_year_mps"]),
+            "paper_dv_per_year_mps": float(KATZ2025[paper_mode]["dv_per_year_mps"]),
             "paper_gains_dv_per_year_mps": paper_dv, "paper_gains_box_ok": bool(paper_ok),
             "geojax_dv_per_year_mps": ours.best_dv_per_year_mps, "geojax_wall_s": ours.wall_s,
             "geojax_iterations": iterations, "geojax_k_h_per_km2_s": gains.get("k_h_per_km2_s"),
@@ -143,7 +146,7 @@ def slsqp(problem: tune.Problem, starts: np.ndarray, center: np.ndarray, max_ite
     wall = call.wall_s
     gains = {}
     if best["theta"] is not None:
-        gains = tune.paper_units(tune.from_theta(best["theta"], problem.base, problem.entries))
+        gains = tune.reported(tune.from_theta(best["theta"], problem.base, problem.entries), lyapunov.FIELDS)
     return {"best_dv_per_year_mps": best["dv"], "wall_s": wall, "evaluations": evaluations,
             "k_h_per_km2_s": gains.get("k_h_per_km2_s"), "k_e_km2_per_s3": gains.get("k_e_km2_per_s3"),
             "lambda_b_deg": gains.get("lambda_b_deg")}

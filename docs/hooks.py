@@ -7,6 +7,7 @@ of the repository (``studies/README.md``) inlined as it is.  The generated parts
   declarations the loader validates with): type, default, allowed range or choices, the ``Params`` leaf it becomes
   and whether ``geojax tune`` can move it;
 * ``controller-keys``: the ``[controller]`` keys of every registered controller, from each module's ``FIELDS``;
+* ``tuning-keys``: the keys of a tuning file, from ``geojax.tune.FIELDS``, each with its one-line meaning;
 * ``metrics``: the names, units and meanings of the results files' datasets (``geojax.results``);
 * ``cli-help``: ``geojax --help`` and every command's ``--help``, as the installed command prints them;
 * ``scenarios``: the shipped scenarios with their descriptions;
@@ -66,6 +67,7 @@ def _field_rows(table: str, fields: dict) -> list[str]:
         dotted = f"{table}.{key}" if table else key
         leaf = f"`{field.si}`" if field.si else ""
         tunable = field.transform.name if field.transform else ""
+        tunable += f" (alias `{field.alias}`)" if field.transform and field.alias else ""
         static = " (static: not sweepable)" if field.static else ""
         rows.append(f"| `{dotted}` | {_kind(field)} | {_default(field)} | {_cell(field.describe())}{static} | "
                     f"{leaf} | {tunable} |")
@@ -95,6 +97,15 @@ def controller_keys() -> str:
         out += [f"### `kind = \"{name}\"`", "", doc, ""]
         out += [*HEADER, *_field_rows("controller", fields), ""] if fields else ["No keys of its own.", ""]
     return "\n".join(out)
+
+
+def tuning_keys() -> str:
+    from geojax.tune import FIELDS
+
+    rows = ["| key | type | default | allowed | meaning |", "|---|---|---|---|---|"]
+    for key, field in FIELDS.items():
+        rows.append(f"| `{key}` | {_kind(field)} | {_default(field)} | {_cell(field.describe())} | {_cell(field.doc)} |")
+    return "\n".join(rows)
 
 
 def metrics() -> str:
@@ -149,6 +160,7 @@ def modules(folder: str) -> str:
     return "\n".join(rows)
 
 
-GENERATORS = {"scenario-keys": scenario_keys, "controller-keys": controller_keys, "metrics": metrics,
+GENERATORS = {"scenario-keys": scenario_keys, "controller-keys": controller_keys, "tuning-keys": tuning_keys,
+              "metrics": metrics,
               "cli-help": cli_help, "scenarios": scenarios,
               **{f"modules-{name}": (lambda name=name: modules(name)) for name in ("geojax", "studies", "benchmarks")}}

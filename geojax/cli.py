@@ -24,6 +24,7 @@ flag, where the library's spec key has one) and what is allowed, and exits with 
 from __future__ import annotations
 
 import sys
+import warnings
 from pathlib import Path
 
 from geojax.cli_args import parser as _parser
@@ -193,14 +194,17 @@ def _tune(args) -> int:
     spec = tune.load(args.file)
     _check_outputs(args)
     say = _say(args)
-    result = tune.tune(spec, out=args.out, verbose=not args.quiet)
+    with warnings.catch_warnings():  # a short horizon is said at once, on one line, whatever --quiet says
+        warnings.simplefilter("always", tune.ShortHorizonWarning)
+        warnings.showwarning = lambda message, *rest: print(f"geojax tune: warning: {message}", file=sys.stderr)
+        result = tune.tune(spec, out=args.out, verbose=not args.quiet)
     say(f"{spec.scenario.name}: {result.message}; {result.wall_s:.1f} s wall")
     if result.best_params is None:
         say("  no feasible point: every iterate left the box with the exact law")
         print(f"wrote {args.out}")
         return 1
     fields = scenario.controller_fields(spec.scenario.config["controller"], spec.controller)
-    for name, value in tune.paper_units(result.best_params, fields).items():
+    for name, value in tune.reported(result.best_params, fields).items():
         say(f"  {name:24s} {value:.6g}")
     say(f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept "
         f"(constraint lon {result.best_constraint[0]:+.4f}, lat {result.best_constraint[1]:+.4f})")

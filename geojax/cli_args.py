@@ -68,7 +68,7 @@ def parser() -> argparse.ArgumentParser:
     sim.add_argument("--plots", help="folder for the figures")
 
     tune = command("tune", help="tune controller gains by gradients through the rollout (Katz 2025)")
-    tune.add_argument("file", help="a tuning file (TOML; see geojax.tune for the keys)")
+    tune.add_argument("file", help="a tuning file (TOML; its keys: geojax.tune.spec)")
     tune.add_argument("--out", required=True, help="results file (HDF5): /iterations per iteration, /best, /metrics; "
                       "the tuned scenario is written beside it as FILE-tuned.toml")
 

@@ -29,8 +29,9 @@ def plot_file(path: str | Path, out: str | Path | None = None, fmt: str = "png",
     if kind == "tune":
         if "iterations" not in groups:
             raise ValueError(f"file {str(path)!r}: a tuning file without /iterations (stopped before its first)")
-        return [plots.plot_tuning(groups, out / f"{path.stem}-convergence.{fmt}",
-                                  title=f"{title}: tuning {attrs.get('parameters', '')}", dpi=dpi)]
+        from geojax import tune
+
+        return [tune.figure(groups, attrs, out / f"{path.stem}-convergence.{fmt}", dpi=dpi)]
     if kind == "bound":
         return [plots.plot_bound(groups["slots"], box_half_width_deg(attrs), out / f"{path.stem}.{fmt}",
                                  title=f"{title}: the least Delta-V", dpi=dpi)]

@@ -6,7 +6,8 @@ becomes an array leaf of the engine's ``Params`` pytree, its SI name and unit
 conversion and, where it can be tuned, its transform to an unconstrained
 variable.  The scenario tables of ``geojax.scenario.SCHEMA`` and each
 controller's ``FIELDS`` are made of them, and everything else follows from
-them: validation, the ``Params`` leaves, the leaf a sweep axis
+them (with a key's ``alias``, ``unit`` and one-line ``doc``, read by the tuner, the figures and the
+documentation's key tables, ``docs/hooks.py``): validation, the ``Params`` leaves, the leaf a sweep axis
 (``"thrusters.beta_max_deg"``) or a tuned parameter (``"controller.k_h_per_km2_s"``)
 names, and the units a tuned value is reported in.
 
@@ -69,6 +70,8 @@ class Field:
     # of the TOML value ("km²/s³"; default: read from the key's unit suffix, ``_deg`` -> deg; "" for none).
     symbol: str | None = None
     unit: str | None = None
+    alias: str | None = None  # a short name a tuning accepts for this key, in a file and in Python alike ("k_h")
+    doc: str = ""  # one line: what the key means (the documentation's key tables, ``docs/hooks.py``)
 
     def describe(self) -> str:
         if self.choices:

@@ -282,11 +282,12 @@ def plot_bound(slots, box_half_width_deg: float, path: str | Path, title: str = 
 
 
 @styled
-def plot_tuning(groups, path: str | Path, title: str = "", dpi: int = 150) -> Path:
+def plot_tuning(groups, path: str | Path, title: str = "", dpi: int = 150, best_values=()) -> Path:
     """The convergence of a ``geojax tune`` results file against iteration: the exact-law ΔV of every start (thin
     lines; a diverged start's iterations are left out) with the best feasible ΔV so far (thick steps) and the best
-    point (star); the larger of each start's two box constraints, (excursion / half-width)² − 1, with the box edge
-    at 0 (inside below); and, when recorded, each start's step length (log scale).
+    point (star, its legend entry followed by the lines of ``best_values``, e.g. "k_h = 1.6e-15 1/(km² s)"); the
+    larger of each start's two box constraints, (excursion / half-width)² − 1, with the box edge at 0 (inside
+    below); and, when recorded, each start's step length (log scale).  Only what is drawn is in a legend.
 
     ``groups`` are the groups of the file: ``iterations`` (dv_per_year_mps [it, starts], constraint
     [it, starts, 2], step_norm [it, starts], active [it, starts], best_dv_per_year_mps [it], ...) and, when a
@@ -304,12 +305,13 @@ def plot_tuning(groups, path: str | Path, title: str = "", dpi: int = 150) -> Pa
             a.plot(it, series[:, start], lw=0.6, alpha=0.7, color=f"C{start % 10}",
                    label="starts (exact law)" if start == 0 else None)
     best = _finite_or_nan(hist["best_dv_per_year_mps"])
-    axes[0].step(it, best, where="post", color="k", lw=2.0, label="best feasible so far")
     metrics = groups.get("metrics") or {}
-    if np.isfinite(best).any():
+    if np.isfinite(best).any():  # nothing feasible yet: no line, and no legend entry for one
+        axes[0].step(it, best, where="post", color="k", lw=2.0, label="best feasible so far")
         found = int(np.argmax(best == np.nanmin(best)))
         best_dv = float(metrics.get("dv_per_year_mps", best[found]))
-        axes[0].plot(found, best_dv, "*", color="C3", ms=11, mec="k", mew=0.5, label=f"best: {best_dv:.2f} m/s/yr")
+        axes[0].plot(found, best_dv, "*", color="C3", ms=11, mec="k", mew=0.5,
+                     label="\n".join([f"best: {best_dv:.2f} m/s/yr", *best_values]))
         if {"constraint_lon", "constraint_lat"} <= set(metrics):
             axes[1].plot(found, max(float(metrics["constraint_lon"]), float(metrics["constraint_lat"])), "*",
                          color="C3", ms=11, mec="k", mew=0.5, label="best point")
@@ -323,12 +325,13 @@ def plot_tuning(groups, path: str | Path, title: str = "", dpi: int = 150) -> Pa
         step = _finite_or_nan(np.where(alive, hist["step_norm"], np.nan))
         for start in range(step.shape[1]):
             axes[2].plot(it, np.where(step[:, start] > 0, step[:, start], np.nan), lw=0.6, alpha=0.7,
-                         color=f"C{start % 10}")
+                         color=f"C{start % 10}", label="starts' accepted steps" if start == 0 else None)
         if np.nanmax(step, initial=0.0) > 0:
             axes[2].set_yscale("log")
         axes[2].set(xlabel="iteration", ylabel="step length (θ units)")
-    for a in axes[:2]:
-        a.legend(loc="best", fontsize="small")
+    for a in axes:
+        if a.get_legend_handles_labels()[0]:
+            a.legend(loc="best", fontsize="small")
     for a in axes:
         a.xaxis.set_major_locator(MaxNLocator(integer=True))
     return _save(fig, list(axes), title, path, dpi)

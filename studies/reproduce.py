@@ -32,7 +32,7 @@ STUDIES = {
     "ablation": [("ablation/fompc_annealing.py", []), ("ablation/li_predictor_error.py", []),
                  ("ablation/fig13_budget.py", []), ("ablation/katz_longitude.py", []),
                  ("ablation/li_attitude_error.py", []), ("ablation/li_fig15_unsolved.py", ["--levels", "300", "400"]),
-                 ("ablation/li_fig17_width.py", ["--reps", "4"])],
+                 ("ablation/li_fig17_width.py", ["--reps", "4"]), ("ablation/tuning_horizon.py", [])],
     "ma2023": [("ma2023/transfer.py", [])],
     "bounds": [("bounds/table.py", []), ("bounds/operational.py", ["--days", "28", "--margin", "0.2"]),
                ("bounds/periodic.py", [])],

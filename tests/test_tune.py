@@ -1,5 +1,7 @@
 """geojax tune: input checks, per-iteration records in HDF5, and a diverging run that keeps its best point."""
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -33,7 +35,8 @@ def test_missing_gain_is_an_error(tmp_path):
 @pytest.mark.parametrize("raw, message", [
     ({"scenario": "katz2025-discrete", "parameters": ["k_h", "gain"]}, "parameters: 'gain' is not tunable here; tunable: thrusters.thrust_n"),
     ({"scenario": "katz2025-continuous", "parameters": ["sigma"]}, "'controller.sigma_km_per_s2' is not set in scenario"),
-    ({"scenario": "li2022-qffc"}, "'controller.k_h_per_km2_s' is not tunable here"),
+    ({"scenario": "li2022-qffc", "parameters": ["controller.k_h_per_km2_s"]}, "'controller.k_h_per_km2_s' is not tunable here"),
+    ({"scenario": "li2022-qffc"}, "parameters: missing, and the controller of scenario li2022-qffc declares no default"),
     ({"scenario": "katz2025-discrete", "starts": 0}, "starts: must be >= 1"),
     ({"scenario": "katz2025-discrete", "temperature_start": 0.01, "temperature_end": 0.1}, "temperature_end"),
     ({"scenario": "katz2025-discrete", "step": 3}, "step: unknown key"),
@@ -48,8 +51,7 @@ def test_bad_tuning_files_name_the_field(raw, message):
 def test_parameter_space_round_trip_keeps_threshold_norm():
     """The unconstrained vector maps back to the same gains, and any threshold weights give |sigma| = u0."""
     sc = scenario.load("katz2025-discrete")
-    names = [tune.ALIASES[n] for n in ["k_h", "k_e", "k_lambda", "lambda_b", "sigma"]]
-    problem = tune.Problem(sc, names)
+    problem = tune.Problem(sc, ["k_h", "k_e", "k_lambda", "lambda_b", "sigma"])  # aliases, as in a tuning file
     params = problem.base
     theta = tune.to_theta(params, problem.entries)
     back = tune.from_theta(theta, params, problem.entries)
@@ -116,7 +118,7 @@ def test_sqp_walks_into_the_box_and_never_back_out():
     inside it stays inside with a Delta-V that never rises; and the run ends with a feasible point."""
     spec = tune.from_dict({"scenario": "katz2025-continuous", "days": 20.0, "starts": 2, "iterations": 20,
                            "parameters": ["k_h", "k_e", "lambda_b"], "spread_decades": 0.1})
-    spec = tune.dataclasses.replace(spec, scenario=scenario.load(
+    spec = dataclasses.replace(spec, scenario=scenario.load(
         "katz2025-continuous", {"duration.days": 20.0, "controller.thrust_mode": "continuous-clipped"}))
     result = tune.tune(spec, verbose=False)
     violation = np.maximum(result.history["constraint"], 0.0).sum(axis=2)  # [iteration, start]

@@ -26,7 +26,12 @@ the mean-element estimate it enables (Li 2022 eqs. (24)-(27)), that many cycle
 boundaries from the cycle's start on; ``record(plan) -> {name: array}`` adds
 per-cycle records (a ``"solved"`` bool counts cycles without a solution, the
 burn records of ``control.burns`` feed the burn metrics); ``surrogate`` is a
-smooth stand-in used for derivatives (``geojax.tune``).
+smooth stand-in used for derivatives (``geojax.tune``): its sharpness, where it has one, is the leaf
+``params.controller[SURROGATE_TEMPERATURE]``, which the tuner anneals (the exact law ignores it).
+
+What a tuning may move is declared here too: a field with a ``transform`` is tunable (named by its key,
+``"controller.k_h_per_km2_s"``, or its ``alias``, ``"k_h"``), and its ``unit`` labels the figures.  The
+tuner (``geojax.tune``) reads nothing else of a controller.
 
 No controller name is compared inside the traced loop: the loop only calls
 these functions.  A new controller is one module under ``control/`` that
@@ -43,6 +48,10 @@ from typing import Any, Callable, Mapping, NamedTuple
 import jax.numpy as jnp
 
 from geojax.physics.dynamics import Thrust, no_thrust
+
+
+# The ``params.controller`` leaf holding a surrogate's temperature (``geojax.tune`` anneals it).
+SURROGATE_TEMPERATURE = "temperature"
 
 
 class Estimate(NamedTuple):
@@ -70,6 +79,8 @@ class Controller:
     reference_cycles: int = 0
     record: Callable | None = None
     surrogate: Any = None  # a Controller, or None: the controller is its own surrogate
+    # The ``fields`` a tuning moves when its file names no ``parameters`` (each with a ``transform``).
+    tuned_fields: tuple[str, ...] = ()
     # How wide to batch it (``geojax.lanes``).  Samples per CPU device per compiled call, measured on one pinned
     # core; the step is also compiled for this many lanes on every platform (``physics.propagate.for_lanes``), so a
     # wider batch gives the same numbers bit for bit.

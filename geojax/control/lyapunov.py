@@ -56,7 +56,7 @@ import numpy as np
 
 from geojax.physics import thrust_laws
 from geojax.physics.constants import OMEGA_EARTH_RAD_S
-from geojax.control.base import Controller, no_plan, stateless_init
+from geojax.control.base import SURROGATE_TEMPERATURE, Controller, no_plan, stateless_init
 from geojax.physics.dynamics import Thrust
 from geojax.physics.elements import wrap_angle
 from geojax.physics.frames import rotate_z, rsw_basis
@@ -81,20 +81,26 @@ SIGMA_WEIGHTS = Transform("log-weights", _sigma_to_theta, _sigma_from_theta)
 # The [controller] table, in the paper's units (see the module docstring for the reading of each).
 FIELDS = {
     "k_h_per_km2_s": Field(NUMBER, REQUIRED, lower=0.0, si="k_h_per_m2_s", to_si=1e-6, transform=LOG,
-                           symbol="k_h", unit="1/(km² s)"),
+                           symbol="k_h", unit="1/(km² s)", alias="k_h", doc="angular-momentum gain, eq. (1)"),
     "k_e_km2_per_s3": Field(NUMBER, REQUIRED, lower=0.0, si="k_e_m2_per_s3", to_si=1e6, transform=LOG,
-                            symbol="k_e", unit="km²/s³"),
+                            symbol="k_e", unit="km²/s³", alias="k_e", doc="eccentricity gain, eq. (1)"),
     "k_lambda_km_per_rad": Field(NUMBER, REQUIRED, lower=0.0, lower_inclusive=True, si="k_lambda_m_per_rad", to_si=1e3,
-                                 transform=LOG, symbol="k_λ", unit="km/rad"),
+                                 transform=LOG, symbol="k_λ", unit="km/rad", alias="k_lambda",
+                                 doc="longitude gain of the desired radius, eq. (4)"),
     "lambda_b_deg": Field(NUMBER, REQUIRED, si="lambda_b_rad", to_si=math.pi / 180,
-                          transform=scaled(LAMBDA_B_SCALE_RAD, "0.1 deg"), symbol="λ_b"),
-    "thrust_mode": Field(str, "continuous-clipped", choices=thrust_laws.MODES, static=True),
+                          transform=scaled(LAMBDA_B_SCALE_RAD, "0.1 deg"), symbol="λ_b", alias="lambda_b",
+                          doc="longitude bias, eq. (4)"),
+    "thrust_mode": Field(str, "continuous-clipped", choices=thrust_laws.MODES, static=True,
+                         doc="thrust implementation, eqs. (5)-(7) (thrust_laws)"),
     # u0: largest acceleration; default thrusters.thrust_n / spacecraft.mass_kg.
-    "u0_km_per_s2": Field(NUMBER, None, lower=0.0, si="u0_mps2", to_si=1e3, symbol="u_0", unit="km/s²"),
+    "u0_km_per_s2": Field(NUMBER, None, lower=0.0, si="u0_mps2", to_si=1e3, symbol="u_0", unit="km/s²",
+                          doc="largest acceleration; default thrusters.thrust_n / spacecraft.mass_kg"),
     # Discrete thresholds (eq. (6)) along ECEF x, y, z; their norm must be u0.
-    "sigma_km_per_s2": Field(list, None, length=3, si="sigma_mps2", to_si=1e3, transform=SIGMA_WEIGHTS),
+    "sigma_km_per_s2": Field(list, None, length=3, si="sigma_mps2", to_si=1e3, transform=SIGMA_WEIGHTS, alias="sigma",
+                             doc="discrete thresholds along ECEF x, y, z, eq. (6); their norm is u0"),
     # Temperature of the sigmoid surrogate the tuner differentiates (``thrust_laws``; exact runs ignore it).
-    "surrogate_temperature": Field(NUMBER, 0.05, lower=0.0, si="temperature"),
+    "surrogate_temperature": Field(NUMBER, 0.05, lower=0.0, si=SURROGATE_TEMPERATURE,
+                                   doc="temperature of the sigmoid surrogate the tuner differentiates"),
 }
 
 
@@ -130,14 +136,15 @@ def controller(mode: str, smooth: bool = False) -> Controller:
         r_ecef = rotate_z(r_eci, angle)
         u_cmd = accel(gains(c), station(params), r_ecef, rotate_z(v_eci, angle))
         limits = thrust_laws.ThrustLimits(c["u0_mps2"], c.get("sigma_mps2", jnp.zeros(3)))
-        u_ecef = deliver(u_cmd, limits, smooth, c["temperature"])
+        u_ecef = deliver(u_cmd, limits, smooth, c[SURROGATE_TEMPERATURE])
         u_rsw = rsw_basis(r_eci, v_eci) @ rotate_z(u_ecef, -angle)
         u_norm = thrust_laws.safe_norm(u_rsw)
         return Thrust(u_rsw / u_norm, u_norm * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
 
     surrogate = None if smooth or mode == "continuous-clipped" else controller(mode, smooth=True)
+    # Katz 2025 tunes (k_h, k_e) (Sec. 3, fmincon), k_lambda and lambda_b fixed at Sec. 3.1's values.
     return Controller(stateless_init, no_plan, thrust, FIELDS, surrogate=surrogate,
-                      bound_geometry="gimbal")
+                      bound_geometry="gimbal", tuned_fields=("k_h_per_km2_s", "k_e_km2_per_s3"))
 
 
 def gains(controller: dict) -> "LyapunovGains":

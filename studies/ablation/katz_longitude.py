@@ -35,7 +35,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 import geojax  # noqa: E402
-from geojax import tune  # noqa: E402
+from geojax.papers import KATZ2025  # noqa: E402
 from geojax.loop.metrics import step_table  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
@@ -108,7 +108,7 @@ def markdown(rows: list[dict], args) -> str:
              "Variants:", ""]
     lines += [f"- `{name}`: {what}" for name, (_, what, _) in VARIANTS.items()]
     for mode in dict.fromkeys(r["mode"] for r in rows):
-        paper = tune.PAPER[mode]
+        paper = KATZ2025[mode]
         lines += ["", f"## {mode} (Katz: ΔV {paper['dv_per_year_mps']}, Δλ ±{paper['dlon_half_range_deg']}, "
                       f"Δδ ±{paper['dlat_half_range_deg']})", "",
                   "| variant | ΔV | ±Δλ whole | ±Δλ after | centre after | ±Δλ after / Katz | ± daily-mean Δλ after | "

@@ -39,6 +39,8 @@ import geojax
 import numpy as np  # noqa: E402
 
 from geojax import plots, scenario, tune  # noqa: E402
+from geojax.control import lyapunov  # noqa: E402
+from geojax.papers import KATZ2025  # noqa: E402
 from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_NONFINITE, step_table
 
 SHORT = ["k_h", "k_e", "k_lambda", "lambda_b"]
@@ -86,7 +88,7 @@ def main() -> None:
         sc = scenario.load(f"katz2025-{mode}", {"duration.days": args.days})
         paper = simulate_feedback(sc)
         plots.plot_feedback(paper.steps, 0.05, out / f"{mode}-paper-gains", title=f"{mode}, Katz's gains")
-        row = {"mode": mode, "paper": tune.PAPER[mode], "ours_at_paper_gains": paper.metrics, "tunings": []}
+        row = {"mode": mode, "paper": KATZ2025[mode], "ours_at_paper_gains": paper.metrics, "tunings": []}
         best = None
         tunings = ([(PAPER_TUNING, {}, None)] if args.paper_tunings else []) + TUNINGS[mode]
         for names, extra, thrust_mode in tunings:
@@ -141,7 +143,7 @@ def add_verified(entry: dict, sc, params, best):
     if params is None:
         return best
     check = verify(sc, params)
-    entry.update(gains=tune.paper_units(params), verified=check.metrics)
+    entry.update(gains=tune.reported(params, lyapunov.FIELDS), verified=check.metrics)
     if check.metrics["box_ok"] > 0 and (best is None or check.metrics["dv_per_year_mps"] < best[0].metrics["dv_per_year_mps"]):
         return check, entry["parameters"]
     return best
@@ -172,7 +174,7 @@ def from_benchmark(mode: str, sc) -> list[dict]:
 
 def verify(sc, params):
     """An independent exact-law run of the tuned gains through ``geojax simulate``'s path (not the tuner's)."""
-    gains = tune.paper_units(params)
+    gains = tune.reported(params, lyapunov.FIELDS)
     overrides = {f"controller.{k}": v for k, v in gains.items()
                  if not k.startswith("sigma") and k not in ("u0_km_per_s2", "surrogate_temperature")}
     if sc.config["controller"]["thrust_mode"] == "discrete":

@@ -1,0 +1,109 @@
+"""What a tuning leaves behind: its HDF5 file, the tuned scenario beside it, and its convergence figure.
+
+The file (``geojax tune --out FILE.h5``): ``/iterations/<name>`` [iteration, start] (``theta`` [iteration,
+start, parameter], ``constraint`` [iteration, start, box_axis], ``temperature``, ``best_dv_per_year_mps`` and
+``wall_s`` [iteration]), ``/starts/theta`` [start, parameter], and, once a feasible point is found, ``/best``
+(the controller's keys in their TOML units, and ``theta``) and ``/metrics`` (``dv_per_year_mps``,
+``constraint_lon``, ``constraint_lat``); attributes ``kind = "tune"``, ``scenario``, ``parameters`` (the tuned
+keys), ``status``, ``tune_toml``, ``controller``.  The tuned scenario, ``FILE-tuned.toml``, is the tuning's
+scenario with each tuned key at its best value; ``geojax simulate FILE-tuned.toml`` runs it.
+"""
+
+from __future__ import annotations
+
+import copy
+import textwrap
+from pathlib import Path
+
+import jax.numpy as jnp
+import numpy as np
+
+from geojax import scenario as scenario_mod, store
+from geojax.params import Params
+from geojax.tune.space import reported, toml_value, tuned
+
+# Axis names of a tuning file's datasets (geojax.results).
+TUNE_DIMS = {"iterations": ("iteration", "start"), "iterations/theta": ("iteration", "start", "parameter"),
+             "iterations/constraint": ("iteration", "start", "box_axis"),
+             **{f"iterations/{k}": ("iteration",) for k in ("temperature", "best_dv_per_year_mps", "wall_s")},
+             "starts": ("start", "parameter"), "best/theta": ("parameter",)}
+
+
+def write(out, spec, problem, hist, theta_starts, best, message: str, wall_s: float) -> None:
+    """Write the tuning's HDF5 file (atomically) and, once it has ended with a feasible point, the tuned scenario."""
+    groups = {"iterations": {k: np.stack(v) for k, v in hist.items()}, "starts": {"theta": np.asarray(theta_starts)}}
+    groups["iterations"]["active"] = groups["iterations"]["active"].astype(np.int8)
+    if best["theta"] is not None:
+        params = problem.params(jnp.asarray(best["theta"]))
+        controller_fields = scenario_mod.controller_fields(spec.scenario.config["controller"], spec.controller)
+        groups["best"] = {**reported(params, controller_fields), "theta": best["theta"]}
+        groups["metrics"] = {"dv_per_year_mps": best["dv"], "constraint_lon": best["g"][0],
+                             "constraint_lat": best["g"][1]}
+    attrs = {"kind": "tune", "scenario": spec.scenario.name, "parameters": ",".join(spec.parameters),
+             "status": message, "tune_toml": spec.text,
+             "controller": spec.scenario.controller}
+    store.write_h5(out, groups, scenario_mod.to_toml(spec.scenario.config), wall_s, attrs=attrs, dims=TUNE_DIMS)
+    if best["theta"] is not None and message != "running":
+        store.atomic_write(tuned_scenario_path(out), tuned_scenario_toml(spec, params, best["dv"]).encode())
+
+
+def tuned_scenario_path(out) -> Path:
+    """Where ``geojax tune --out FILE.h5`` writes the tuned scenario: ``FILE-tuned.toml`` beside it."""
+    out = Path(out)
+    return out.with_name(f"{out.stem}-tuned.toml")
+
+
+def tuned_config(spec, params: Params, dv_per_year_mps: float | None = None) -> dict:
+    """The tuning's scenario table with each tuned key set to its value in ``params``, in the key's own unit, and
+    a description that says what was tuned, on which scenario, over how long and (given) to what Delta-V."""
+    config = copy.deepcopy(spec.scenario.config)
+    for entry in tuned(spec.scenario, spec.controller, spec.parameters):
+        leaf = getattr(params, entry.table)[entry.field.si]
+        config[entry.table][entry.name.rpartition(".")[2]] = toml_value(entry.field, leaf)
+    outcome = "" if dv_per_year_mps is None else \
+        f": {dv_per_year_mps:.3f} m/s/yr of Delta-V per year with the exact law, box kept"
+    config["description"] = (f"{', '.join(spec.parameters)} tuned by geojax tune ({spec.method}, {spec.starts} starts, "
+                             f"{spec.iterations} iterations) on scenario {spec.scenario.name} over {spec.days:g} days"
+                             f"{outcome}")
+    config["name"] = f"{spec.scenario.name}-tuned"
+    return config
+
+
+def tuned_scenario_fault(spec, params: Params) -> str | None:
+    """Why ``geojax simulate`` would refuse the tuned scenario (one line), or None.
+
+    The descent moves each tuned key within its own bounds, but a scenario's load checks also tie keys
+    together (Ye 2022 eq. (41): a t_max whose burn beats the largest daily drift at the thrust), so a tuned
+    thrust or burn limit can leave them."""
+    try:  # read back from the TOML that is written, as ``geojax simulate`` reads it
+        scenario_mod.from_dict(scenario_mod.tomllib.loads(scenario_mod.to_toml(tuned_config(spec, params))),
+                               spec.controller)
+    except ValueError as error:
+        return str(error)
+    return None
+
+
+def tuned_scenario_toml(spec, params: Params, dv_per_year_mps: float | None = None) -> str:
+    """The tuned scenario as TOML (``geojax simulate FILE-tuned.toml`` runs it): the tuning's scenario with
+    each tuned key set to its best value, in the key's own unit (``tuned_config``)."""
+    header = (f"# {spec.scenario.name} with {', '.join(spec.parameters)} tuned by geojax tune;\n"
+              f"# run it with: geojax simulate THIS_FILE\n")
+    return header + scenario_mod.to_toml(tuned_config(spec, params, dv_per_year_mps))
+
+
+def figure(groups: dict, attrs: dict, path, dpi: int = 150) -> Path:
+    """The convergence figure of a tuning file (``plots.plot_tuning``), titled by what was tuned (the names as
+    the tuning file wrote them), on which scenario and over how long, with the best point's tuned values named
+    and in their units as their ``Field``s declare them (``plots.label_for``)."""
+    from geojax import plots
+
+    config = scenario_mod.tomllib.loads(str(attrs.get("config_toml", "")))
+    keys = [k for k in str(attrs.get("parameters", "")).split(",") if k]
+    written = scenario_mod.tomllib.loads(str(attrs.get("tune_toml", ""))).get("parameters") or keys
+    days = config.get("duration", {}).get("days")
+    title = f"{attrs.get('scenario', '')}{f', {days:g} days' if days else ''}: tuning {', '.join(written)}"
+    best = groups.get("best") or {}
+    controllers = (config.get("controller", {}).get("kind", "none"),)
+    values = [f"{plots.label_for(key, controllers)} = {float(best[key.rpartition('.')[2]]):.4g}" for key in keys
+              if key.startswith("controller.") and key.rpartition(".")[2] in best]  # /best: the controller's scalars
+    return plots.plot_tuning(groups, path, title=textwrap.fill(title, 70), dpi=dpi, best_values=values)
