@@ -38,6 +38,7 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -72,7 +73,8 @@ def run_epochs(controller: str, reps: int | None, out: Path) -> Path:
     if reps:  # a compiled call never mixes epochs: as wide as one epoch's draws, not the CPU's default width
         changes.update(repetitions=reps, lanes=-(-reps // jax.local_device_count()))
     spec = sweep.load(SWEEP_FILE, changes=changes)
-    return sweep.run_sweep(spec, out / f"epochs_{controller}.h5", resume=True, progress=True)
+    return sweep.run_sweep(spec, out / f"epochs_{controller}{f'_{reps}' if reps else ''}.h5", resume=True,
+                           progress=True)
 
 
 def sweep_timing(ds) -> dict:
@@ -208,7 +210,7 @@ def main(argv=None) -> int:
     ap.add_argument("--continuous-years", type=int, default=5, help="0: skip the continuous-run check")
     ap.add_argument("--out", type=Path, default=HERE / "results")
     args = ap.parse_args(argv)
-    command = "python studies/lifetime/lifetime.py " + " ".join(argv or [])
+    command = "python studies/lifetime/lifetime.py " + " ".join(sys.argv[1:] if argv is None else argv)
     args.out.mkdir(parents=True, exist_ok=True)
     base = scenario.load("li2022-qffc")
     mass, isp = base.mass_kg, float(base.config["thrusters"]["isp_s"])

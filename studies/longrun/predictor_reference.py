@@ -39,6 +39,7 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -217,7 +218,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=HERE / "results")
     ap.add_argument("--name", default="predictor_reference", help="results file of the --years runs")
     args = ap.parse_args(argv)
-    command = "python studies/longrun/predictor_reference.py " + " ".join(argv or [])
+    command = "python studies/longrun/predictor_reference.py " + " ".join(sys.argv[1:] if argv is None else argv)
     args.out.mkdir(parents=True, exist_ok=True)
     for controllers, years, name in ((args.controllers, args.years, args.name),
                                      (args.long_controllers, args.long_years, f"predictor_reference_{args.long_years}yr")):
