@@ -183,11 +183,12 @@ def yearly(ds) -> dict:
 
 def figure(years, rows: dict, drift, floor, path: Path) -> None:
     import matplotlib
+    import matplotlib.ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.4, 3.8), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(6.4, 4.6), constrained_layout=True)
     for name, r in rows.items():
         line, = ax.plot(years, r["yearly"]["mean_mps"], "o-", ms=3, label=f"{name}: mean of {r['mission']['draws']}")
         ax.fill_between(years, r["yearly"]["p5_mps"], r["yearly"]["p95_mps"], color=line.get_color(), alpha=0.2, lw=0)
@@ -198,7 +199,8 @@ def figure(years, rows: dict, drift, floor, path: Path) -> None:
     right.plot(years, drift, "s:", color="grey", ms=3, label="uncontrolled Δi per year")
     right.set_ylabel("uncontrolled inclination drift (°/yr)")
     lines = ax.get_legend_handles_labels()[0] + right.get_legend_handles_labels()[0]
-    ax.legend(lines, [h.get_label() for h in lines], fontsize="small", loc="upper right")
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
+    fig.legend(lines, [h.get_label() for h in lines], fontsize="small", loc="outside lower center", ncol=2)
     fig.savefig(path, dpi=150)
     plt.close(fig)
 
@@ -258,7 +260,8 @@ def report(r: dict) -> str:
                      f"{kg[50]:.1f} / {kg[95]:.1f} | {m['propellant_mean_kg']:.1f} | {m['draws_with_status']} | "
                      f"{t['samples']}, {t['wall_s']:.0f} s, {t['compile_s']:.0f} s, {t['samples_per_s']:.2f} "
                      f"({t['lanes']}) |")
-    lines += ["", "Sweeps ran on 2 CPU cores shared with other work (load 10–25): the wall times are inflated. "
+    lines += ["", "Sweeps ran on 2 CPU cores shared with other developers' work (load average 25–38 while they ran): the wall "
+              "times are inflated. "
               f"Device: {next(iter(rows.values()))['timing']['device'] if rows else ''}.", "",
               "## Year by year: the Moon's node", "",
               "ΔV per year, mean over the draws (m/s/yr); uncontrolled Δi: the one-cycle mean inclination vector's "
