@@ -4,8 +4,11 @@ The public API (shapes and units in each docstring):
 
 * ``load_scenario(name_or_path, overrides=None, controller=None) -> Scenario``: a shipped scenario by name
   (``available_scenarios()``) or a TOML file, validated; ``overrides`` maps dotted keys to values.
-* ``simulate(scenario, seed=0, controller=None, keep_steps=False) -> Result``: one closed-loop rollout;
-  ``Result.metrics`` (units in the names), ``Result.status`` (``STATUS_MEANINGS``), ``Result.records``.
+* ``simulate(scenario, seed=0, controller=None, keep_steps=None) -> Result``: one closed-loop rollout;
+  ``Result.metrics`` (units in the names), ``Result.status`` (``STATUS_MEANINGS``), ``Result.records``;
+  ``Result.save(path)`` writes the file ``geojax simulate --out`` writes, ``summary()`` the lines it prints,
+  ``plot(folder)`` the figures of ``--plots`` (so do ``uncontrolled.propagate_scenario``, ``bound.bound`` and
+  ``transfer.run``'s results, for ``propagate``, ``bound`` and ``transfer``).
 * ``simulate_batch(scenario, params, seeds=...) -> Result``: a batch in one compiled call (leading axis on
   every leaf); ``prepare_params(scenario, n)`` gives n copies of a scenario's ``Params`` to edit.
 * ``load_sweep`` / ``run_sweep``: Monte Carlo sweeps to HDF5, resumable (``ray=``: on a Ray cluster);

@@ -86,21 +86,21 @@ def _check_reachable(address: str) -> None:
 
 class ChunkWorker:
     """A Ray actor: one worker process, its XLA devices, each controller compiled once (for ``chunk``
-    samples a call at most)."""
+    samples a call at most) by ``make_runner(sweep, controller, chunk)`` (the sweep's ``ChunkRunner``: an object
+    with ``compile_s`` and ``run(first, length)``), which the sweep hands over, so this module imports nothing
+    of the sweep."""
 
-    def __init__(self, sweep, devices: int, chunk: int):
+    def __init__(self, sweep, devices: int, chunk: int, make_runner):
         from geojax.parallel import use_host_cores
 
         use_host_cores(devices, replace=True)  # before this process's first JAX computation
-        self.sweep, self.chunk, self.runners = sweep, chunk, {}
+        self.sweep, self.chunk, self.make_runner, self.runners = sweep, chunk, make_runner, {}
 
     def run(self, controller: str, first: int, length: int):
         """The metrics of one chunk, and (process id, seconds compiling for it)."""
-        from geojax.sweep import ChunkRunner
-
         compile_s = 0.0
         if controller not in self.runners:
-            self.runners[controller] = ChunkRunner(self.sweep, controller, self.chunk)
+            self.runners[controller] = self.make_runner(self.sweep, controller, self.chunk)
             compile_s = self.runners[controller].compile_s
         return self.runners[controller].run(first, length), (os.getpid(), compile_s)
 
@@ -146,10 +146,12 @@ def default_chunk(n_samples: int, nodes: list[dict]) -> int | None:
     return max(1, min(math.ceil(n_samples / gpus), ACCELERATOR_MAX_LANES)) if gpus else None
 
 
-def run_chunks(sweep, todo: list[tuple[str, int, int]], save, bar, workers: int | None = None) -> float:
-    """Run each (controller, first sample, length) of ``todo`` on the cluster joined by ``connected``,
-    calling ``save(controller, first, values)`` once per chunk as it finishes.  Returns the longest
-    compilation of any worker (seconds)."""
+def run_chunks(sweep, todo: list[tuple[str, int, int]], save, bar, workers: int | None = None, *,
+               make_runner) -> float:
+    """Run each (controller, first sample, length) of ``todo`` on the cluster joined by ``connected``, each
+    worker computing its chunks with the runners ``make_runner`` builds (``ChunkWorker``), calling
+    ``save(controller, first, values)`` once per chunk as it finishes.  Returns the longest compilation of any
+    worker (seconds)."""
     import ray
     from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 
@@ -159,7 +161,7 @@ def run_chunks(sweep, todo: list[tuple[str, int, int]], save, bar, workers: int 
     actors = [remote.options(num_cpus=devices, num_gpus=gpus, max_restarts=MAX_RESTARTS,
                              max_task_retries=MAX_RESTARTS,
                              scheduling_strategy=NodeAffinitySchedulingStrategy(node, soft=True))
-              .remote(sweep, devices, max(length for _, _, length in todo))
+              .remote(sweep, devices, max(length for _, _, length in todo), make_runner)
               for node, devices, gpus in placements(ray.nodes(), workers)]
     live = set(range(len(actors)))
     pending = collections.deque(todo)

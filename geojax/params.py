@@ -65,6 +65,10 @@ class Field:
     to_si: float | Callable = 1.0  # factor (or function) from the TOML unit to the leaf's SI unit
     transform: Transform | None = None  # how geojax.tune moves it (None: not tunable)
     static: bool = False  # sets the compiled loop's structure: equal across a sweep, never tuned
+    # How figures and tables name it: a symbol ("β_max"; default: the key without its unit suffix) and the unit
+    # of the TOML value ("km²/s³"; default: read from the key's unit suffix, ``_deg`` -> deg; "" for none).
+    symbol: str | None = None
+    unit: str | None = None
 
     def describe(self) -> str:
         if self.choices:

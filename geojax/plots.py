@@ -7,6 +7,7 @@ small quantities are shown in a power of ten named in the axis label (``e_x (10�
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import warnings
 from pathlib import Path
@@ -35,15 +36,8 @@ DAY_S = 86400.0
 UNCONTROLLED_DAYS = 30.0  # the uncontrolled ground track shown beside a closed loop (Li 2022 Fig. 4)
 INSET_RATIO = 0.2  # the controlled path gets a zoomed inset when it spans less than this of the uncontrolled one
 
-# Axis labels (name, unit) of the keys of sweeps, metrics and tunings; others follow ``_quantity``'s fallback.
+# Axis labels (name, unit) of the metrics; a scenario or controller key is labelled by its ``Field`` (``_quantity``).
 QUANTITIES = {
-    "thrusters.beta_max_deg": ("β_max", "deg"), "thrusters.beta_min_deg": ("β_min", "deg"),
-    "thrusters.alpha_max_deg": ("α_max", "deg"), "thrusters.alpha_min_deg": ("α_min", "deg"),
-    "controller.horizon": ("horizon N", "cycles"), "controller.di_max": ("Δi_max", ""),
-    "controller.k_h_per_km2_s": ("k_h", "1/(km² s)"), "controller.k_e_km2_per_s3": ("k_e", "km²/s³"),
-    "controller.k_lambda_km_per_rad": ("k_λ", "km/rad"), "controller.lambda_b_deg": ("λ_b", "deg"),
-    "controller.u0_km_per_s2": ("u_0", "km/s²"),
-    "errors.h_rv": ("H_rv", ""), "errors.h_att": ("H_att", ""), "epoch.utc": ("epoch", "year"),
     "dv_per_year_mps": ("ΔV per year", "m/s/yr"), "max_abs_dlon_deg": ("max |δλ|", "deg"),
     "max_abs_dlat_deg": ("max |δφ|", "deg"), "max_abs_mean_dlon_deg": ("max |mean δλ|", "deg"),
     "mean_dlon_deg": ("mean δλ", "deg"), "dlon_half_range_deg": ("δλ half-range", "deg"),
@@ -213,7 +207,8 @@ def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv
                     ax.plot(x[bad], unstable, "x", color=line.get_color(), ms=8, mew=1.5, label=f"{name}: unstable")
     if len(grid_values) <= 12:  # the ticks on the grid's values, not between them
         ax.set_xticks(sorted(grid_values), [f"{v:g}" for v in sorted(grid_values)])
-    ax.set(xlabel=_label(*_quantity(param), x_power), ylabel=_label(*_quantity(metric), y_power))
+    names = [c.decode() if isinstance(c, bytes) else str(c) for _, g in runs for c in g["grid"]["controller"]]
+    ax.set(xlabel=_label(*_quantity(param, names), x_power), ylabel=_label(*_quantity(metric), y_power))
     handles, _ = ax.get_legend_handles_labels()
     ax.legend(handles=handles + bands, loc="best", fontsize="small")
     return _save(fig, [ax], title, path, dpi)
@@ -256,6 +251,44 @@ def plot_feedback(steps, box_half_width_deg: float, path_stem: str | Path, title
     axes[4].set_title("u_z, two days mid-run", loc="left")
     history = _save(fig, list(axes), title, f"{path_stem}-thrust.{fmt}", dpi)
     return [track, history]
+
+
+@styled
+def plot_transfer(records, path: str | Path, title: str = "", dpi: int = 150) -> Path:
+    """A transfer's orbit and mass against time (``/records`` of ``geojax transfer --out``: t_days, a_km, e,
+    i_deg, mass_kg, one row per record interval)."""
+    days = np.asarray(records["t_days"])
+    fig, axes = plt.subplots(2, 2, figsize=(7.2, 4.6), constrained_layout=True)
+    ax = axes.ravel()
+    for a, (key, name, unit) in zip(ax, [("a_km", "semi-major axis", "km"), ("e", "eccentricity", ""),
+                                          ("i_deg", "inclination", "deg"), ("mass_kg", "mass", "kg")]):
+        a.plot(days, records[key], "o-" if len(days) < 30 else "-", ms=3)  # a short transfer: its few records seen
+        a.set(xlabel="days", ylabel=_label(name, unit))
+        a.xaxis.set_major_locator(MaxNLocator(5))
+    return _save(fig, ax, title, path, dpi)
+
+
+@styled
+def plot_bound(slots, box_half_width_deg: float, path: str | Path, title: str = "", dpi: int = 150) -> Path:
+    """A fuel bound's plan: the Delta-V of each slot in R, S, W, and the flown longitude offset and latitude at
+    every step start inside the ±box (``/slots`` of ``geojax bound --out``)."""
+    t_s = np.asarray(slots["t_s"])
+    slot_s = 2 * t_s[0]  # slot mid-times: (k + 1/2) slot_s
+    steps = np.asarray(slots["dlon_deg"]).shape[1]
+    step_days = ((t_s[:, None] - slot_s / 2) + np.arange(steps) * slot_s / steps).ravel() / DAY_S
+    fig, ax = plt.subplots(2, 1, figsize=(7.2, 4.6), sharex=True, constrained_layout=True)
+    for key, name in (("dv_r_mps", "R"), ("dv_s_mps", "S"), ("dv_w_mps", "W")):
+        ax[0].step(t_s / DAY_S, slots[key], where="mid", label=name)
+    ax[0].set(ylabel="ΔV per slot (m/s)")
+    _legend_above(ax[0])
+    for key, name in (("dlon_deg", "δλ"), ("lat_deg", "δφ")):
+        ax[1].plot(step_days, np.asarray(slots[key]).ravel(), label=name)
+    box = box_half_width_deg
+    ax[1].plot(step_days[[0, -1]], [box, box], "k--", lw=0.8, label=f"box ±{box:g}°")
+    ax[1].plot(step_days[[0, -1]], [-box, -box], "k--", lw=0.8)
+    ax[1].set(xlabel="days", ylabel="flown (deg)")
+    _legend_above(ax[1])
+    return _save(fig, ax, title, path, dpi)
 
 
 @styled
@@ -311,21 +344,44 @@ def plot_tuning(groups, path: str | Path, title: str = "", dpi: int = 150) -> Pa
     return _save(fig, list(axes), title, path, dpi)
 
 
-def label_for(key: str) -> str:
+def label_for(key: str, controllers=()) -> str:
     """A readable axis label with its unit for a sweep axis, metric or tuned parameter key:
     "thrusters.beta_max_deg" -> "β_max (deg)", "dv_per_year_mps" -> "ΔV per year (m/s/yr)"."""
-    return _label(*_quantity(key))
+    return _label(*_quantity(key, controllers))
 
 
-def _quantity(key: str) -> tuple[str, str]:
-    """(name, unit) of a key: from ``QUANTITIES``, else its last dotted part with a unit suffix read as the unit
-    ("spacecraft.mass_kg" -> ("mass", "kg")); a compound unit (``_per_``) is left in the name."""
+def field_of(key: str, controllers=()):
+    """The ``Field`` that declares a dotted scenario key ("thrusters.beta_max_deg"; a ``controller.`` key from
+    the first of ``controllers``, shipped names or import paths, that declares it; of the shipped ones where
+    none is named), or None."""
+    from geojax.control import REGISTRY, lookup
+    from geojax.scenario import SCHEMA
+
+    table, _, name = key.rpartition(".")
+    if table != "controller":
+        return SCHEMA.get(table, {}).get(name)
+    for controller in controllers or REGISTRY:
+        with contextlib.suppress(ValueError):
+            fields = lookup(controller).FIELDS
+            if name in fields:
+                return fields[name]
+    return None
+
+
+def _quantity(key: str, controllers=()) -> tuple[str, str]:
+    """(name, unit) of a key: a metric's from ``QUANTITIES``; a scenario or controller key's from its ``Field``
+    (``symbol``, ``unit``) where it declares them; else the key's last dotted part with a unit suffix read as the
+    unit ("spacecraft.mass_kg" -> ("mass", "kg")); a compound unit (``_per_``) is left in the name."""
     if key in QUANTITIES:
         return QUANTITIES[key]
+    field = field_of(key, controllers) if "." in key else None
     name = key.rsplit(".", 1)[-1]
-    if "_per_" in name:
-        return name, ""
-    stem, unit = split_unit(name)  # the units of the results files (geojax.results), drawn with superscripts
+    stem, unit = ("", "") if "_per_" in name else split_unit(name)  # the results files' units (geojax.results)
+    stem = stem or name
+    if field is not None and field.unit is not None:  # the unit declared: the name as written, or its symbol
+        stem, unit = field.symbol or name, field.unit
+    elif field is not None:
+        stem = field.symbol or stem
     return stem, unit.replace("^2", "²")
 
 

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from geojax.loop.metrics import STATUS_TEXT
+
 # Unit of a dataset by the end of its name (the project's naming rule: the name says the unit).
 UNIT_SUFFIXES = (
     ("_per_year_mps", "m/s/yr"), ("_deg_per_day", "deg/day"), ("_mps2", "m/s^2"), ("_mps", "m/s"),
@@ -41,7 +43,7 @@ DESCRIPTIONS = {
     "burns_per_thruster_per_orbit": "burns per thruster per orbit",
     "mean_beta_deg": "mean pitch angle of the burns",
     "cycles_without_solution": "cycles whose plan had no solution",
-    "code": "status: 0 ok, 1 cycles without a solution, 2 left the longitude box, 3 left the latitude box, ...",
+    "code": "status: " + STATUS_TEXT,
     "lon_deg": "one-cycle mean longitude (east)",
     "ex": "one-cycle mean eccentricity vector, x (MEE f)", "ey": "one-cycle mean eccentricity vector, y (MEE g)",
     "ix": "one-cycle mean inclination vector, x (MEE h)", "iy": "one-cycle mean inclination vector, y (MEE k)",

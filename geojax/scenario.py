@@ -48,7 +48,7 @@ EPHEMERIS_UTC_RANGE = {"meeus": ("1999-01-01", "2051-01-01"), "de421": ("1999-01
 SCHEMA: dict[str, dict[str, Field]] = {
     "": {"name": Field(str, REQUIRED), "description": Field(str, "")},
     "epoch": {
-        "utc": Field(str, REQUIRED),
+        "utc": Field(str, REQUIRED, symbol="epoch", unit="year"),  # a sweep axis of dates is drawn in years
         "ut1_minus_utc_s": Field(_NUMBER, 0.0, lower=-0.9, upper=0.9),
     },
     "orbit": {
@@ -86,17 +86,19 @@ SCHEMA: dict[str, dict[str, Field]] = {
         # The mass without propellant: the thrusters stop when it is reached (status 5).  0: no limit set.
         "dry_mass_kg": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=MAX_MASS_KG, si="dry_mass_kg"),
         "srp_area_m2": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6),
-        "reflectivity": Field(_NUMBER, 0.0, lower=0.0, upper=1.0 + 1e-12, lower_inclusive=True),
+        # The SRP model's reflectivity eta (Li 2022 eq. (4)); the default is the force model's (Li's 0.6).
+        "reflectivity": Field(_NUMBER, ForceModel._field_defaults["reflectivity"], lower=0.0, upper=1.0 + 1e-12,
+                              lower_inclusive=True),
     },
     "thrusters": {
         "count": Field(int, 2, lower=1, upper=65, lower_inclusive=True),
         "thrust_n": Field(_NUMBER, REQUIRED, lower=0.0, upper=1e5, si="thrust_n", transform=LOG),
         "isp_s": Field(_NUMBER, REQUIRED, lower=0.0, upper=1e6, si="isp_s", transform=LOG),
         # Robotic-arm limits, Li 2022 eq. (1); defaults: the "normal" level of Table 1.
-        "beta_max_deg": Field(_NUMBER, 70.0, si="beta_max_rad", to_si=degrees),
-        "beta_min_deg": Field(_NUMBER, 0.0, si="beta_min_rad", to_si=degrees),
-        "alpha_max_deg": Field(_NUMBER, 60.0, si="alpha_max_rad", to_si=degrees),
-        "alpha_min_deg": Field(_NUMBER, 30.0, si="alpha_min_rad", to_si=degrees),
+        "beta_max_deg": Field(_NUMBER, 70.0, si="beta_max_rad", to_si=degrees, symbol="β_max"),
+        "beta_min_deg": Field(_NUMBER, 0.0, si="beta_min_rad", to_si=degrees, symbol="β_min"),
+        "alpha_max_deg": Field(_NUMBER, 60.0, si="alpha_max_rad", to_si=degrees, symbol="α_max"),
+        "alpha_min_deg": Field(_NUMBER, 30.0, si="alpha_min_rad", to_si=degrees, symbol="α_min"),
         "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True, upper=c.SIDEREAL_DAY_S, si="min_burn_s"),
         # The thruster geometry the fuel bound uses (geojax.bound.directions): Li's two arms, Katz's gimbal,
         # Gazzino's four fixed NE/NW/SE/SW thrusters (cant_deg from the north-south axis); unset: from the
@@ -108,8 +110,8 @@ SCHEMA: dict[str, dict[str, Field]] = {
     "controller": {"kind": Field(str, "none")},
     # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors (0.3 m, 5e-5 m/s, 0.05 deg).
     "errors": {
-        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_rv"),
-        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_att"),
+        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_rv", symbol="H_rv"),
+        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_att", symbol="H_att"),
         # How the attitude error enters (control.burns; studies/ablation/li_attitude_error.py): its yaw and pitch
         # parts scaled (1: eq. (47) as printed), one draw shared by a cycle's two burns instead of one each, and
         # the burns' magnitudes re-fitted to the directions flown (the plan knows the error) instead of kept.
@@ -131,7 +133,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         # Sun and Moon: "meeus" (analytic series, geojax.physics.ephemeris) or "de421" (JPL DE421 through
         # jplephem), evaluated once per scenario on the environment grid.
         "ephemeris": Field(str, "meeus", choices=("meeus", "de421")),
-        "srp_pressure_n_m2": Field(_NUMBER, 4.5605e-6, lower=0.0, lower_inclusive=True, upper=1e-2),
+        "srp_pressure_n_m2": Field(_NUMBER, ForceModel._field_defaults["srp_pressure_1au_n_m2"], lower=0.0, lower_inclusive=True, upper=1e-2),
         # The Earth's field to degree and order N (EGM2008, tide-free, shipped to degree 20): replaces `j2` and
         # `c22_s22` where given (those stay for the papers' models).  Order: default the degree, 0 <= M <= N.
         "gravity_degree": Field(int, None, lower=2, upper=MAX_GRAVITY_DEGREE + 1, lower_inclusive=True),

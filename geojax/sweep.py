@@ -319,7 +319,7 @@ def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool
         if on_ray:
             from geojax import cluster
 
-            compile_s = cluster.run_chunks(sweep, todo, save, bar, workers)
+            compile_s = cluster.run_chunks(sweep, todo, save, bar, workers, make_runner=ChunkRunner)
         else:
             compile_s, runners = 0.0, {}
             for controller, first, length in todo:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import time
+from pathlib import Path
 from typing import NamedTuple
 
 import jax
@@ -22,10 +23,62 @@ from geojax.progress import Progress
 from geojax.physics.propagate import DYNAMICS, CycleMeans, environment_grid, steps_per_cycle
 from geojax.scenario import Scenario
 
+
 class PropagationResult(NamedTuple):
+    """An uncontrolled run: one-cycle means (``propagated_cycles`` of them), and its file, summary and figure.
+
+    The file (``kind = "propagate"``): ``/cycles`` (``cycles_table``, the run's ``cycle_count(days)`` cycles),
+    attributes ``scenario``, ``epoch_tt_s`` and ``step_s`` beside ``store.write_h5``'s.
+    """
+
     cycles: CycleMeans  # numpy leaves [n_cycles]
     step_s: float  # the step actually used
     wall_s: float
+    scenario: Scenario | None = None
+
+    def table(self) -> dict[str, np.ndarray]:
+        """The ``/cycles`` datasets: the first ``cycle_count(days)`` cycle means in edge units."""
+        from geojax.loop.setup import cycle_count
+
+        return cycles_table(self.cycles, cycle_count(self._scenario().days))
+
+    def save(self, path) -> Path:
+        """Write the file ``geojax propagate --out`` writes; returns its path."""
+        from geojax import store
+        from geojax.scenario import to_toml
+
+        sc = self._scenario()
+        return store.write_h5(path, {"cycles": self.table()}, to_toml(sc.config), self.wall_s,
+                              attrs={"kind": "propagate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s,
+                                     "step_s": self.step_s})
+
+    def summary(self) -> list[str]:
+        """The lines ``geojax propagate`` prints: the run, and what it did to the mean elements over its days."""
+        from geojax.loop.setup import cycle_count
+
+        sc = self._scenario()
+        drift = drift_summary(self.cycles, sc.days)
+        return [f"{sc.name}: {sc.days:g} days, {cycle_count(sc.days)} sidereal-day cycles, step {self.step_s:.2f} s, "
+                f"{sc.dynamics.upper()} RK4, {self.wall_s:.1f} s wall",
+                f"  mean inclination       {drift.i_start_deg:.4f} deg -> {drift.i_end_deg:.4f} deg",
+                f"  inclination-vector change  {drift.di_deg:.4f} deg towards {drift.di_direction_deg:.1f} deg "
+                f"over {drift.elapsed_days:.1f} days",
+                f"  mean longitude drift   {drift.dlon_deg:+.4f} deg",
+                f"  largest |e - e0|       {drift.de_max:.3e}"]
+
+    def plot(self, folder, title: str | None = None) -> list[Path]:
+        """The mean elements per cycle, ``FOLDER/NAME-uncontrolled.png``; returns its path in a list."""
+        from geojax.loop.report import draw
+
+        sc = self._scenario()
+        title = f"{sc.name}, no control, {sc.days:g} days" if title is None else title
+        return draw({"cycles": self.table()}, sc.config["station"]["box_half_width_deg"],
+                    Path(folder) / f"{sc.name}-uncontrolled", title)
+
+    def _scenario(self) -> Scenario:
+        if self.scenario is None:
+            raise ValueError("scenario: this result does not carry its scenario; make it with propagate_scenario")
+        return self.scenario
 
 
 def propagated_cycles(days: float) -> int:
@@ -69,7 +122,7 @@ def propagate_scenario(scenario: Scenario, progress: bool | None = None) -> Prop
             if b == 0:  # the first block compiled the step: the rate and the ETA start after it
                 bar.restart(f"compiled and ran the first {block} cycles in {time.perf_counter() - start:.1f} s")
     cycles = jax.tree_util.tree_map(lambda *xs: np.concatenate(xs)[:n_cycles], *pieces)
-    return PropagationResult(cycles, step_s, time.perf_counter() - start)
+    return PropagationResult(cycles, step_s, time.perf_counter() - start, scenario)
 
 
 def cycles_table(cycles: CycleMeans, n_cycles: int | None = None) -> dict[str, np.ndarray]:

@@ -206,7 +206,7 @@ def test_cli_bound_writes_results_and_refuses_an_impossible_box(tmp_path, capsys
     assert cli.main(["bound", str(tight), "--days", "2"]) == 2
     err = capsys.readouterr().err
     assert err.strip().count("\n") == 0 and "outside the box" in err
-    with pytest.raises(ValueError, match="--slot-steps"):
+    with pytest.raises(ValueError, match="bound.slot_steps"):
         bound(geojax.load_scenario("li2022-qffc", {"duration.days": 1}), slot_steps=5)
 
 

@@ -161,7 +161,7 @@ def thrust(params, plan, t, state, environment):
     return geojax.Thrust(accel / norm, magnitude * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
 
 
-DAMPER = geojax.Controller(stateless_init, no_plan, thrust, lanes_cpu=16, fields={
+DAMPER = geojax.Controller(stateless_init, no_plan, thrust, lanes_cpu=16, bound_geometry="gimbal", fields={
     "k_inc_per_s": geojax.Field(float, 1e-5, lower=0.0, si="k_inc", transform=geojax.LOG)})
 NOT_A_CONTROLLER = 3
 '''
@@ -182,6 +182,13 @@ def test_a_controller_of_ones_own_is_named_by_import_path(tmp_path, monkeypatch,
     assert cli.main(["simulate", str(scenario_path), "--days", "2", "-q", "--out", str(tmp_path / "one.h5")]) == 0
     with h5py.File(tmp_path / "one.h5") as f:
         assert f["metrics/dv_per_year_mps"][()] > 0  # the law fired
+        assert "steps" in f and "reference" not in f  # a feedback law (no reference) keeps its steps by default
+    from geojax.bound.directions import geometry_of
+
+    # The bound's thruster geometry is the controller's fact, not a name the bound knows.
+    assert geometry_of(scenario.load(scenario_path).config).name == "gimbal"
+    assert geometry_of(scenario.load("li2022-qffc").config).name == "arms"
+    assert geometry_of(scenario.load("katz2025-continuous").config).name == "gimbal"
     spec = tmp_path / "s.toml"
     spec.write_text(f'scenario = "{scenario_path}"\ncontrollers = ["my_laws:DAMPER"]\n[set]\n"duration.days" = 2.0\n'
                     '[grid]\n"controller.k_inc_per_s" = [1e-6, 1e-4]\n')

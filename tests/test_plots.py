@@ -224,3 +224,25 @@ def test_a_sweep_figure_marks_the_grid_and_draws_only_what_its_legend_names(tmp_
         "fompc: min–max of 3 repetitions"]
     attrs = {"name": "fig09", "base_scenario_toml": '[duration]\ndays = 365.25\n'}
     assert cli.sweep_title(attrs, ["controller", "thrusters.beta_max_deg"]) == "thrusters.beta_max_deg: fig09, 365.25 days"
+
+
+def test_axis_labels_come_from_the_fields(tmp_path, monkeypatch):
+    """A swept key is labelled by its ``Field``'s symbol and unit (declared once, with the key), a user's
+    controller key by its own ``Field`` (found through the import path the file names), not guessed from the
+    key's spelling; an undeclared unit is read from the key's suffix."""
+    from geojax.plots import label_for
+
+    (tmp_path / "laws_with_units.py").write_text(
+        "import geojax\n"
+        "from geojax.control.base import no_plan, stateless_init, coast\n"
+        "LAW = geojax.Controller(stateless_init, no_plan, coast, fields={\n"
+        "    'thrust_frac_n': geojax.Field(float, 0.5, lower=0.0, si='frac', unit=''),\n"
+        "    'gain_x': geojax.Field(float, 1.0, si='gain', symbol='g', unit='1/s')})\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert label_for("thrusters.beta_max_deg") == "β_max (deg)"
+    assert label_for("controller.horizon", ["fompc"]) == "horizon N (cycles)"
+    assert label_for("controller.k_h_per_km2_s", ["lyapunov"]) == "k_h (1/(km² s))"
+    assert label_for("spacecraft.mass_kg") == "mass (kg)"  # no symbol declared: the key's own stem and suffix
+    assert label_for("controller.thrust_frac_n", ["laws_with_units:LAW"]) == "thrust_frac_n"  # declared unitless
+    assert label_for("controller.gain_x", ["laws_with_units:LAW"]) == "g (1/s)"
+    assert label_for("controller.thrust_frac_n") == "thrust_frac (N)"  # no controller named: the suffix's unit

@@ -1,25 +1,62 @@
-"""The README's Python examples run as written (in a fresh folder, one after another, as a reader would)."""
+"""The Python examples of the README and the documentation run as written (in a fresh folder, one after another
+in each page, as a reader would), and every command the README shows parses."""
 
 import re
+import shlex
 from pathlib import Path
 
-README = Path(__file__).resolve().parent.parent / "README.md"
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
 
-def python_examples() -> list[str]:
-    section = README.read_text().split("\n## Python", 1)[1].split("\n## ", 1)[0]
-    return re.findall(r"```python\n(.*?)```", section, flags=re.S)
+def python_examples(page: Path) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", page.read_text(), flags=re.S)
 
 
-def test_the_readme_python_examples_run_as_written(tmp_path, monkeypatch, capsys):
+def test_the_documentation_has_its_examples():
+    counts = {page.name: len(python_examples(page)) for page in PAGES}
+    assert counts["README.md"] >= 1
+    assert counts["python.md"] >= 3  # a batch, a controller of one's own (simulate, sweep, tuning), reading results
+
+
+@pytest.mark.parametrize("page", [p for p in PAGES if python_examples(p)], ids=lambda p: p.name)
+def test_the_python_examples_run_as_written(page, tmp_path, monkeypatch, capsys):
     """Each example in a namespace of its own (a reader copies one block; its files stay for the next)."""
-    examples = python_examples()
-    assert len(examples) >= 3  # a batch, a controller of one's own (simulate, sweep, tuning), reading results
     monkeypatch.chdir(tmp_path)
-    for number, code in enumerate(examples, 1):
-        namespace = {"__name__": "__readme__"}
-        exec(compile(code, f"README.md, Python example {number}", "exec"), namespace)
-        if number == 1:  # the batch stays in the box: every sample's status is 0, as its comment says
+    namespace = {}
+    for number, code in enumerate(python_examples(page), 1):
+        namespace = {"__name__": "__docs__"}
+        exec(compile(code, f"{page.name}, Python example {number}", "exec"), namespace)
+        if page.name == "python.md" and number == 1:  # the batch stays in the box: every status 0, as it says
             assert capsys.readouterr().out.splitlines()[0] == "[100   0   0   0   0   0]"
-    assert (tmp_path / "mine.h5").is_file()
-    assert namespace["ds"].dv_per_year_mps.dims == ("controller", "controller.k_inc_per_s", "repetition")
+    if page.name == "python.md":
+        assert (tmp_path / "mine.h5").is_file()
+        assert namespace["ds"].dv_per_year_mps.dims == ("controller", "controller.k_inc_per_s", "repetition")
+    if page.name == "README.md":
+        assert namespace["result"].metrics["dv_per_year_mps"] > 0
+
+
+def readme_commands() -> list[list[str]]:
+    block = re.search(r"## One example per command\n\n```bash\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+    return [shlex.split(line.split("#")[0].split(">")[0]) for line in block.group(1).splitlines() if line.strip()]
+
+
+def test_every_command_the_readme_shows_parses_and_names_files_that_exist():
+    """The README's one example per command: each parses with the real parser, and the files it names exist."""
+    from geojax import cli, scenario
+
+    commands = readme_commands()
+    shown = {argv[1] for argv in commands}
+    subparsers = [a for a in cli._parser()._actions if a.__class__.__name__ == "_SubParsersAction"][0]
+    assert shown >= set(subparsers.choices) - {"demo"}  # the demo is in the set-up commands
+    for argv in commands:
+        assert argv[0] == "geojax"
+        args = cli._parser().parse_args(argv[1:])
+        for name in ("scenario", "file"):
+            value = getattr(args, name, None)
+            if value and value.endswith(".toml"):
+                assert (ROOT / value).is_file(), argv
+            elif value and name == "scenario":
+                assert value in scenario.available() or value.startswith("ma2023"), argv

@@ -120,13 +120,15 @@ GEOMETRIES = ("arms", "gimbal", "fixed4")
 
 def geometry_of(config: dict, name: str | None = None) -> Geometry:
     """The thruster geometry of a scenario's validated ``config``: ``name`` if given, else its
-    ``thrusters.layout``, else the gimbal for a Lyapunov law (Katz) or a zone NSSK manipulator (Ye), the arms
-    otherwise (Li)."""
+    ``thrusters.layout``, else its controller's ``bound_geometry`` (the gimbal for a Lyapunov law (Katz) or a
+    zone NSSK manipulator (Ye), the arms for Li's planners)."""
     name = name or config["thrusters"].get("layout")
     if name is None:
-        name = "gimbal" if config["controller"]["kind"] in ("lyapunov", "zone_nssk") else "arms"
+        from geojax.control import lookup
+
+        name = lookup(config["controller"]["kind"]).make([config["controller"]]).bound_geometry
     if name not in GEOMETRIES:
-        raise ValueError(f"--thrusters: must be one of {', '.join(GEOMETRIES)}, got {name!r}")
+        raise ValueError(f"bound.thrusters: must be one of {', '.join(GEOMETRIES)}, got {name!r}")
     if name == "arms":
         t = config["thrusters"]
         return arms(*(math.radians(float(t[k])) for k in ("beta_max_deg", "beta_min_deg", "alpha_max_deg",

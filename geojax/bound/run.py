@@ -27,6 +27,7 @@ problem's linear model (weak duality, ``bound.program``); how it moves with the 
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Callable, NamedTuple
 
 import jax
@@ -42,7 +43,7 @@ from geojax.loop.metrics import SECONDS_PER_YEAR
 from geojax.loop.setup import prepare, unstack
 from geojax.physics.constants import G0_MPS2
 from geojax.physics.dynamics import Thrust
-from geojax.scenario import Scenario, from_dict
+from geojax.scenario import Scenario, from_dict, to_toml
 
 # The program holds the box shrunk by this fraction, so that the flown plan (nonlinear) holds the full box.
 BOX_MARGIN = 1e-3
@@ -72,6 +73,29 @@ class BoundResult(NamedTuple):
     lon_deg: np.ndarray  # [S, T] longitude less the station's at every step start (flown plan)
     lat_deg: np.ndarray  # [S, T] latitude
     wall_s: float
+    # What its file records (``bound.report``): the arguments that shaped the program and the scenario's TOML.
+    acquisition_days: float = 0.0
+    free_end: bool = False
+    config_toml: str = ""
+    epoch_tt_s: float = float("nan")
+
+    def save(self, path) -> Path:
+        """Write the file ``geojax bound --out`` writes (``bound.report``); returns its path."""
+        from geojax.bound import report
+
+        return report.save(self, path)
+
+    def summary(self) -> list[str]:
+        """The lines ``geojax bound`` prints after the program."""
+        from geojax.bound import report
+
+        return report.summary(self)
+
+    def plot(self, folder) -> list[Path]:
+        """Draw the plan (Delta-V per slot) and the flown box into ``folder``; returns the figure's path in a list."""
+        from geojax.bound import report
+
+        return report.plot(self, folder)
 
 
 def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, acquisition_days: float = 0.0,
@@ -98,7 +122,7 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
     env = batch.shared.env
     n_cycles, n_steps = env.earth_angle_rad.shape[:2]
     if slot_steps < 1 or n_steps % slot_steps:
-        raise ValueError(f"--slot-steps: must divide the {n_steps} integration steps of a sidereal day, got {slot_steps}")
+        raise ValueError(f"bound.slot_steps: must divide the {n_steps} integration steps of a sidereal day, got {slot_steps}")
     n_slots = n_cycles * n_steps // slot_steps
     slot_s = slot_steps * batch.step_s
     env_slots = jax.tree_util.tree_map(lambda x: x.reshape((n_slots, slot_steps) + x.shape[2:]), env)
@@ -121,7 +145,7 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
     u = np.zeros((n_slots, 3))
     model = model_of(u, np.zeros(n_slots))
     if not 0 <= acquisition_days < n_cycles * n_steps * batch.step_s / 86400.0:
-        raise ValueError(f"--acquisition-days: must be >= 0 and shorter than the horizon, got {acquisition_days!r}")
+        raise ValueError(f"bound.acquisition_days: must be >= 0 and shorter than the horizon, got {acquisition_days!r}")
     first = int(np.ceil(acquisition_days * 86400.0 / slot_s - 1e-9))
     start_lon, start_lat = np.degrees(np.abs(model.y[0, 0]))
     if first == 0 and max(start_lon, start_lat) > np.degrees(box):
@@ -188,7 +212,8 @@ def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, ac
         {k: float(v) for k, v in result.metrics.items()}, int(result.status), history[-1]["linear_error_deg"],
         history[-1]["max_abs_box_deg"],
         history, (np.arange(n_slots) + 0.5) * slot_s, u, per_thruster, np.degrees(model.y[..., 0]),
-        np.degrees(model.y[..., 1]), time.perf_counter() - start)
+        np.degrees(model.y[..., 1]), time.perf_counter() - start, float(acquisition_days), bool(free_end),
+        to_toml(sc.config), sc.epoch_tt_s)
 
 
 def _head(model: SlotModel, horizon: int) -> SlotModel:
@@ -235,5 +260,5 @@ def _resimulate(uncontrolled: Scenario, u, fuel, slot_steps, slot_s, geometry: G
     from geojax.loop.rollout import simulate
 
     concurrent = 1 if geometry.one_at_a_time else len(geometry.generators)
-    return simulate(uncontrolled, 0, controller=replay(u, fuel, slot_steps, slot_s, concurrent))
+    return simulate(uncontrolled, 0, controller=replay(u, fuel, slot_steps, slot_s, concurrent), keep_steps=False)
 

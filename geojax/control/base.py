@@ -20,7 +20,8 @@ Optional parts: ``fields`` declares the keys of the scenario's ``[controller]``
 table (TOML key, unit conversion, bounds, tuning transform: ``params.Field``);
 ``lanes_cpu``, ``lane_bytes`` and ``lane_bytes_per_cycle`` tell the orchestration how wide
 to batch it (``geojax.lanes``: the width measured on one CPU core, and the memory model that sizes a
-GPU's batch); ``reference_cycles`` > 0 asks the loop for the shared uncontrolled reference and
+GPU's batch); ``keeps_steps`` whether a single run keeps per-step records; ``bound_geometry`` the
+thruster geometry ``geojax bound`` assumes for it; ``reference_cycles`` > 0 asks the loop for the shared uncontrolled reference and
 the mean-element estimate it enables (Li 2022 eqs. (24)-(27)), that many cycle
 boundaries from the cycle's start on; ``record(plan) -> {name: array}`` adds
 per-cycle records (a ``"solved"`` bool counts cycles without a solution, the
@@ -79,6 +80,18 @@ class Controller:
     # 15.6 and 21.3 kB per lane), for a user's controller that does not say.
     lane_bytes: int = 32_000
     lane_bytes_per_cycle: int = 400
+    # Whether a single run keeps its per-step records (``geojax simulate``'s ``/steps/`` and the ground-track
+    # figures): a feedback law has no plan to record per cycle, so its story is in the steps.  None: a controller
+    # without the predictor's reference (``reference_cycles == 0``: a feedback law) keeps them.
+    keeps_steps: bool | None = None
+    # The thruster geometry of the fuel bound when the scenario's ``thrusters.layout`` is unset
+    # (``geojax.bound.directions.GEOMETRIES``): Li's two robotic arms, or a gimbal that points anywhere.
+    bound_geometry: str = "arms"
+
+
+def keeps_steps(controller: Controller) -> bool:
+    """Whether a single run of ``controller`` keeps its per-step records (``Controller.keeps_steps``)."""
+    return controller.reference_cycles == 0 if controller.keeps_steps is None else controller.keeps_steps
 
 
 def stateless_init(params, context):

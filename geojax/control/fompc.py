@@ -50,22 +50,25 @@ FIELDS = qffc.FIELDS
 
 
 class MpcParams(NamedTuple):
-    """FOMPC parameters a sweep can vary (array leaves; ``params.controller`` holds them by the same names)."""
+    """FOMPC parameters a sweep can vary (array leaves; ``params.controller`` holds them by the same names).
+
+    The defaults are the ``[controller]`` keys' (``qffc.FIELDS``), the one place they are declared."""
 
     # numpy defaults: a jnp array built at import would start JAX's backend before ``geojax.parallel`` can
     # ask for one device per core
-    horizon: jnp.ndarray = np.asarray(6)  # N, cycles (<= Annealing.n_max)
-    di_max: jnp.ndarray = np.asarray(8e-5)  # Delta i_max, MEE (h, k)
-    penalty: jnp.ndarray = np.asarray(1e8)  # P, (m/s)^2 per unit (h, k)^2
-    dv_exponent: jnp.ndarray = np.asarray(2.0)  # J sums V^dv_exponent per burn: 2 as eq. (42), 1 the fuel
+    horizon: jnp.ndarray = np.asarray(FIELDS["horizon"].default)  # N, cycles (<= Annealing.n_max)
+    di_max: jnp.ndarray = np.asarray(FIELDS["di_max"].default)  # Delta i_max, MEE (h, k)
+    penalty: jnp.ndarray = np.asarray(FIELDS["penalty"].default)  # P, (m/s)^2 per unit (h, k)^2
+    dv_exponent: jnp.ndarray = np.asarray(FIELDS["dv_exponent"].default)  # J sums V^dv_exponent per burn
 
 
 class Annealing(NamedTuple):
-    """Shape and schedule of the simulated annealing (static: hashable Python numbers)."""
+    """Shape and schedule of the simulated annealing (static: hashable Python numbers); ``chains`` and
+    ``iterations`` default to the ``[controller]`` keys' (``qffc.FIELDS``)."""
 
-    n_max: int = 10  # horizon padding
-    chains: int = 8
-    iterations: int = 64
+    n_max: int = FIELDS["horizon"].upper - 1  # horizon padding: the largest N a scenario may ask for
+    chains: int = FIELDS["chains"].default
+    iterations: int = FIELDS["iterations"].default
     step_start: float = 0.3  # 1-sigma move of each fraction w_k
     step_end: float = 0.01
     temperature_start: float = 0.05  # relative to the QFFC sequence's cost

@@ -80,14 +80,17 @@ SIGMA_WEIGHTS = Transform("log-weights", _sigma_to_theta, _sigma_from_theta)
 
 # The [controller] table, in the paper's units (see the module docstring for the reading of each).
 FIELDS = {
-    "k_h_per_km2_s": Field(NUMBER, REQUIRED, lower=0.0, si="k_h_per_m2_s", to_si=1e-6, transform=LOG),
-    "k_e_km2_per_s3": Field(NUMBER, REQUIRED, lower=0.0, si="k_e_m2_per_s3", to_si=1e6, transform=LOG),
-    "k_lambda_km_per_rad": Field(NUMBER, REQUIRED, lower=0.0, lower_inclusive=True, si="k_lambda_m_per_rad", to_si=1e3, transform=LOG),
+    "k_h_per_km2_s": Field(NUMBER, REQUIRED, lower=0.0, si="k_h_per_m2_s", to_si=1e-6, transform=LOG,
+                           symbol="k_h", unit="1/(km² s)"),
+    "k_e_km2_per_s3": Field(NUMBER, REQUIRED, lower=0.0, si="k_e_m2_per_s3", to_si=1e6, transform=LOG,
+                            symbol="k_e", unit="km²/s³"),
+    "k_lambda_km_per_rad": Field(NUMBER, REQUIRED, lower=0.0, lower_inclusive=True, si="k_lambda_m_per_rad", to_si=1e3,
+                                 transform=LOG, symbol="k_λ", unit="km/rad"),
     "lambda_b_deg": Field(NUMBER, REQUIRED, si="lambda_b_rad", to_si=math.pi / 180,
-                          transform=scaled(LAMBDA_B_SCALE_RAD, "0.1 deg")),
+                          transform=scaled(LAMBDA_B_SCALE_RAD, "0.1 deg"), symbol="λ_b"),
     "thrust_mode": Field(str, "continuous-clipped", choices=thrust_laws.MODES, static=True),
     # u0: largest acceleration; default thrusters.thrust_n / spacecraft.mass_kg.
-    "u0_km_per_s2": Field(NUMBER, None, lower=0.0, si="u0_mps2", to_si=1e3),
+    "u0_km_per_s2": Field(NUMBER, None, lower=0.0, si="u0_mps2", to_si=1e3, symbol="u_0", unit="km/s²"),
     # Discrete thresholds (eq. (6)) along ECEF x, y, z; their norm must be u0.
     "sigma_km_per_s2": Field(list, None, length=3, si="sigma_mps2", to_si=1e3, transform=SIGMA_WEIGHTS),
     # Temperature of the sigmoid surrogate the tuner differentiates (``thrust_laws``; exact runs ignore it).
@@ -133,7 +136,8 @@ def controller(mode: str, smooth: bool = False) -> Controller:
         return Thrust(u_rsw / u_norm, u_norm * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
 
     surrogate = None if smooth or mode == "continuous-clipped" else controller(mode, smooth=True)
-    return Controller(stateless_init, no_plan, thrust, FIELDS, surrogate=surrogate)
+    return Controller(stateless_init, no_plan, thrust, FIELDS, surrogate=surrogate,
+                      bound_geometry="gimbal")
 
 
 def gains(controller: dict) -> "LyapunovGains":

@@ -70,8 +70,9 @@ FIELDS = {
     "vdt_estimate": Field(bool, False, si="vdt_estimate"),
     # FOMPC (Li 2022, eqs. (40)-(42)): horizon N <= 10 cycles, Delta i_max in MEE (h, k), penalty P in
     # (m/s)^2 per unit (h, k)^2; simulated annealing with `chains` chains of `iterations` moves.
-    "horizon": Field(int, 6, lower=1, upper=11, lower_inclusive=True, si="horizon"),
-    "di_max": Field(NUMBER, 8e-5, lower=0.0, si="di_max", transform=LOG),
+    "horizon": Field(int, 6, lower=1, upper=11, lower_inclusive=True, si="horizon", symbol="horizon N",
+                     unit="cycles"),
+    "di_max": Field(NUMBER, 8e-5, lower=0.0, si="di_max", transform=LOG, symbol="Δi_max", unit=""),
     "penalty": Field(NUMBER, 1e8, lower=0.0, si="penalty", transform=LOG),
     # The power of each burn's Delta-V in J: 2 as eq. (42) prints it (V_1k^2 + V_2k^2); 1 scores the fuel itself.
     "dv_exponent": Field(NUMBER, 2.0, lower=1.0, upper=3.0, lower_inclusive=True, si="dv_exponent"),

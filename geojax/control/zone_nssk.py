@@ -334,7 +334,8 @@ def _record(plan: ZonePlan) -> dict:
 
 
 # Reads the reference at the cycle's start and end boundaries (the drift of eq. (56)).
-CONTROLLER = Controller(stateless_init, _plan, _thrust, FIELDS, reference_cycles=2, record=_record)
+CONTROLLER = Controller(stateless_init, _plan, _thrust, FIELDS, reference_cycles=2, record=_record,
+                        bound_geometry="gimbal")  # the manipulator points its one thruster anywhere
 
 
 def make(tables: list[dict]) -> Controller:

@@ -10,21 +10,21 @@ from __future__ import annotations
 
 import functools
 import time
+from pathlib import Path
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.physics.constants import SIDEREAL_DAY_S
-from geojax.control.base import Controller
+from geojax.control.base import Controller, keeps_steps
 from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
-from geojax.control import none
-from geojax.loop.setup import Batch, prepare, reference, uncontrolled_boundaries, unstack
+from geojax.loop import report
+from geojax.loop.setup import Batch, controller_of, prepare, reference, unstack
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
-from geojax.physics.propagate import Dynamics, environment_grid, for_lanes, steps_per_cycle
+from geojax.physics.propagate import Dynamics, for_lanes
 from geojax.scenario import Scenario
 
 
@@ -33,7 +33,9 @@ class Result(NamedTuple):
 
     ``metrics`` maps the names of ``loop.metrics.summarize`` (units in the names) to values,
     ``status`` is the status code (``loop.metrics.STATUS_MEANINGS``), ``records`` the per-cycle (and, if
-    kept, per-step) records, ``params`` the parameters the rollout ran with (SI).
+    kept, per-step) records, ``params`` the parameters the rollout ran with (SI).  A single rollout
+    (``simulate``) also carries its ``scenario`` and ``seed``, what its file records (``save``); a batch's
+    are None: plain references, so the vmapped result stays its arrays.
     """
 
     metrics: dict
@@ -44,10 +46,24 @@ class Result(NamedTuple):
     step_s: float
     wall_s: float  # compilation included
     compile_s: float = float("nan")  # measured where ``on_compiled`` was given
+    scenario: Scenario | None = None  # a single rollout's
+    seed: int | None = None  # a single rollout's, None where it was given a key
 
     def cycles(self) -> dict[str, np.ndarray]:
         """The per-cycle records in edge units (``/cycles``) of a single rollout."""
         return cycle_table(self.records)
+
+    def save(self, path) -> Path:
+        """Write the file ``geojax simulate --out`` writes (``loop.report``); returns its path."""
+        return report.save(self, path)
+
+    def summary(self, paper: bool = True) -> list[str]:
+        """The lines ``geojax simulate`` prints: status and metrics, with ``paper`` beside a paper's numbers."""
+        return report.summary(self, paper)
+
+    def plot(self, folder) -> list[Path]:
+        """Draw the figures ``geojax simulate --plots`` draws into ``folder``; returns their paths."""
+        return report.plot(self, folder)
 
 
 def rollout(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,
@@ -88,19 +104,23 @@ def _batched(params, keys, shared, reference_env, controller, step_s, dynamics, 
     return jax.vmap(one, in_axes=(0, 0, None, None))(params, keys, shared, reference_env)
 
 
-def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None = None, keep_steps: bool = False,
-             key=None, on_compiled=None) -> Result:
+def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None = None,
+             keep_steps: bool | None = None, key=None, on_compiled=None) -> Result:
     """One closed-loop rollout of ``scenario`` (its registered controller, or ``controller``).
 
     ``seed`` (or a ``jax.random`` ``key``) draws the orbit-determination and attitude errors
     and any randomness of the controller; same seed, same result.  ``keep_steps`` also returns
-    the per-step records (``records.steps``, leaves [n_cycles, n_steps, ...]).
+    the per-step records (``records.steps``, leaves [n_cycles, n_steps, ...]); by default as the controller says
+    (``Controller.keeps_steps``: a feedback law's are kept, its figures are drawn per step; a planner's are not).
     """
+    if keep_steps is None:
+        keep_steps = keeps_steps(controller_of([scenario]) if controller is None else controller)
     result = simulate_batch([scenario], seeds=[seed], controller=controller, keep_steps=keep_steps,
                             keys=None if key is None else jnp.stack([key]), on_compiled=on_compiled)
     first = lambda tree: jax.tree_util.tree_map(lambda x: x[0], tree)  # noqa: E731
     return result._replace(metrics=first(result.metrics), status=result.status[0], records=first(result.records),
-                           final=first(result.final), params=first(result.params))
+                           final=first(result.final), params=first(result.params), scenario=scenario,
+                           seed=None if key is not None else seed)
 
 
 def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None = None, *, seeds=None, keys=None,
@@ -158,23 +178,3 @@ def prepare_params(scenario: Scenario, n: int, controller: Controller | None = N
     """``n`` copies of a scenario's ``Params`` (leading axis n), to edit leaves per sample."""
     params = unstack(prepare([scenario], controller).params, 0)
     return jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, (n, *jnp.shape(x))), params)
-
-
-_uncontrolled_jit = jax.jit(uncontrolled_boundaries, static_argnames=("step_s", "dynamics"))
-
-
-def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]:
-    """The uncontrolled run from the initial state (not re-started: the path the satellite would take without
-    control), its mean elements at the first ``n_cycles + 1`` cycle boundaries (``/reference``: t_s, lon_deg, ex,
-    ey, ix, iy), and the station's targets (``/target``), for figures beside a closed loop."""
-    batch = prepare([scenario], none.CONTROLLER)
-    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, batch.step_s,
-                           n_cycles + 1, steps_per_cycle(scenario.step_s))
-    _, ref = _uncontrolled_jit(unstack(batch.params, 0), env, step_s=batch.step_s, dynamics=batch.dynamics)
-    ref = np.asarray(ref)
-    uncontrolled = {"t_s": np.arange(len(ref)) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
-                    "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}
-    station = scenario.config["station"]
-    goals = {"lon_deg": float(station["lon_deg"]), "drift_deg_per_day": 0.0,
-             **{k: float(station[k]) for k in ("ex", "ey", "ix", "iy")}}
-    return uncontrolled, goals

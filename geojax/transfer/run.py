@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+from pathlib import Path
 from typing import NamedTuple
 
 import jax
@@ -20,6 +21,25 @@ class TransferResult(NamedTuple):
     metrics: dict  # names carry units; see ``metrics``
     records: dict  # per record interval, edge units (deg, days, km), numpy
     wall_s: float
+    scenario: TransferScenario | None = None  # what its file records (``transfer.report``)
+
+    def save(self, path) -> Path:
+        """Write the file ``geojax transfer --out`` writes (``transfer.report``); returns its path."""
+        from geojax.transfer import report
+
+        return report.save(self, path)
+
+    def summary(self, paper: bool = True) -> list[str]:
+        """The lines ``geojax transfer`` prints, with ``paper`` beside Ma & Kong 2023's numbers."""
+        from geojax.transfer import report
+
+        return report.summary(self, paper)
+
+    def plot(self, folder) -> list[Path]:
+        """Draw the orbit and mass against time into ``folder``; returns the figure's path in a list."""
+        from geojax.transfer import report
+
+        return report.plot(self, folder)
 
 
 def static_for(sc: TransferScenario, days: float | None = None, record_every_s: float = SECONDS_PER_DAY) -> Static:
@@ -46,7 +66,7 @@ def run(sc: TransferScenario, days: float | None = None, record_every_s: float =
     static = static_for(sc, days, record_every_s)
     final, records = jax.jit(transfer, static_argnums=2)(sc.params, env_grid(sc, static), static)
     final, records = jax.device_get((final, records))
-    return TransferResult(metrics(final, sc.params), record_table(records), time.perf_counter() - start)
+    return TransferResult(metrics(final, sc.params), record_table(records), time.perf_counter() - start, sc)
 
 
 def stack(params_list) -> TransferParams:

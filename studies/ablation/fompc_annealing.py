@@ -39,10 +39,10 @@ import jax  # noqa: E402
 
 import geojax  # noqa: E402
 from geojax.loop.metrics import ns_delta_v_mps  # noqa: E402
+from geojax.papers import LI2022  # noqa: E402
 from geojax.physics.constants import SIDEREAL_DAY_S  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
-LI = {"qffc": 60.2, "fompc": 54.2}
 # name: (scenario overrides, what it tests)
 VARIANTS = {
     "default": ({}, "chains 8 x iterations 64 (our default), P = 1e8, N = 6, Δi_max = 8e-5 in MEE (h, k)"),
@@ -138,7 +138,7 @@ def main() -> None:
                                                           "seeds": args.seeds, "rows": rows}, indent=1))
     lines = [f"# FOMPC ablation: optimizer or formulation? ({args.days:g} days, {args.seeds} annealing seeds)", "",
              f"`python studies/ablation/fompc_annealing.py`; li2022, normal limits, no errors. QFFC {dv_qffc:.2f} "
-             f"m/s/yr (Li {LI['qffc']}); Li's FOMPC {LI['fompc']} (a 10.0 % saving).", "",
+             f"m/s/yr (Li {LI2022['qffc']['dv_per_year_mps']}); Li's FOMPC {LI2022['fompc']['dv_per_year_mps']} (a 10.0 % saving).", "",
              "| variant | what it changes | ΔV (m/s/yr) | QFFC (same spacecraft) | saving vs QFFC | "
              "out-of-plane ΔV: FOMPC / QFFC | max mean δλ (°) | max Δi (MEE) | status | wall s |",
              "|---|---|---|---|---|---|---|---|---|---|"]

@@ -34,6 +34,7 @@ from geojax.bound import operational as op  # noqa: E402
 from geojax.bound.directions import geometry_of  # noqa: E402
 from geojax.bound.run import BOX_MARGIN, _uncontrolled  # noqa: E402
 from geojax.loop.rollout import simulate  # noqa: E402
+from geojax.papers import GAZZINO2016  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 SCENARIO = "gazzino2016"
@@ -188,7 +189,7 @@ def write_terminal(outs: list, wall_s: float, folder: Path) -> None:
         fuel = rows["fuel-based (Problem 6)"]["dv_per_year_mps"]
         ratios = ", ".join(f"{name} {100 * (fuel / r['dv_per_year_mps'] - 1):+.1f} %" for name, r in rows.items()
                            if name.startswith(("Problem 7", "effect-based")))
-        lines.append(f"- {o['days']:g} days: {ratios} (Gazzino: +81.6 %)")
+        lines.append(f"- {o['days']:g} days: {ratios} (Gazzino: {GAZZINO2016['fuel_over_effect_percent']} %)")
     lines += ["", "Problem 7: the relaxed plan's effect on the end state and the pulses' mismatch (MEE p, f, g, h, k, L in "
               "units of 1e-4 of p, of 1, of rad; linear model):", ""]
     for o in outs:
@@ -246,7 +247,7 @@ def write(out: dict, wall_s: float, folder: Path) -> None:
                      f"| {r['status']} | {r['max_abs_dlon_deg']:.4f} | {r['max_abs_dlat_deg']:.4f} | {r['rms_lon_box']:.2f} "
                      f"| {r['rms_lat_box']:.2f} | {100 * r['outer_fraction']:.1f} % |")
     fuel, effect = rows["fuel-based"]["dv_per_year_mps"], rows["effect-based"]["dv_per_year_mps"]
-    lines += ["", f"Fuel-based over effect-based: {100 * (fuel / effect - 1):+.1f} % (Gazzino: +81.6 %).", "",
+    lines += ["", f"Fuel-based over effect-based: {100 * (fuel / effect - 1):+.1f} % (Gazzino: {GAZZINO2016['fuel_over_effect_percent']} %).", "",
               "The same with a smaller margin: `--margin 0.05 --out studies/bounds/results/operational-margin0.05`; "
               "with Gazzino's terminal condition x(T) = x(0) and Problem 7 as printed: `--terminal --days 7 14 28` "
               "(`operational-terminal.md`). What the three say about Gazzino's findings (the fuel factor, Fig. 6's "

@@ -30,6 +30,7 @@ from geojax import plots  # noqa: E402
 from geojax.bound import bound  # noqa: E402
 from geojax.control import REGISTRY  # noqa: E402
 from geojax.physics.constants import SIDEREAL_DAY_S  # noqa: E402
+from geojax.papers import KATZ2025, LI2022  # noqa: E402
 from geojax.physics.propulsion import PRESETS_DEG  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
@@ -44,9 +45,9 @@ CASES = {
                  "acquisition_days": 60.0},
 }
 # Published Delta-V per year of the same runs (Li 2022 Table 2; Katz 2025 Table 1), beside ours.
-PAPER = {("li2022-normal", "li2022-qffc"): 60.2, ("li2022-normal", "li2022-fompc"): 54.2,
-         ("katz2025", "katz2025-continuous"): 62.795, ("katz2025", "katz2025-discrete"): 55.55,
-         ("katz2025", "katz2025-constant"): 56.088}
+PAPER = {**{("li2022-normal", f"li2022-{kind}"): float(LI2022[kind]["dv_per_year_mps"]) for kind in ("qffc", "fompc")},
+         **{("katz2025", f"katz2025-{mode}"): float(KATZ2025[mode]["dv_per_year_mps"])
+            for mode in ("continuous", "discrete", "constant")}}
 
 
 def run_case(name: str, days: float, rows: dict | None = None, only: list | None = None) -> dict:

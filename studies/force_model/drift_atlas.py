@@ -21,11 +21,12 @@ import numpy as np
 
 import geojax  # noqa: F401  (x64)
 from geojax.physics import constants as c
+from geojax.papers import SOOP1994_EQUILIBRIA_DEG
 from geojax.physics.geopotential import egm2008, longitude_acceleration_rad_s2
 
 HERE = Path(__file__).resolve().parent
 GEO_RADIUS_M = 42164.16e3
-PUBLISHED_DEG = {"stable": (75.1, -105.3), "unstable": (-11.5, 161.9)}
+PUBLISHED_DEG = SOOP1994_EQUILIBRIA_DEG
 DEGREES = (2, 3, 4, 8, 20)
 
 
@@ -60,7 +61,7 @@ def main():
     lines = ["# Drift atlas: equilibrium longitudes of the geostationary ring from the Earth's field", "",
              f"`{results['command']}`; circular equatorial orbit of radius {GEO_RADIUS_M / 1e3:.2f} km, EGM2008 "
              "(tide-free) to degree and order N, field alone (no Sun, Moon, SRP).  Longitudes in deg E.  Published: "
-             "stable 75.1 and -105.3, unstable -11.5 and 161.9.", "",
+             "stable {:g} and {:g}, unstable {:g} and {:g}.".format(*PUBLISHED_DEG["stable"], *PUBLISHED_DEG["unstable"]), "",
              "| N | stable | unstable | largest |longitude acceleration| (deg/day^2) |", "|---:|---|---|---:|"]
     for degree, row in results["degrees"].items():
         lines.append(f"| {degree} | {', '.join(f'{x:.2f}' for x in row['stable_deg'])} | "

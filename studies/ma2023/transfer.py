@@ -35,9 +35,12 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 from geojax import transfer  # noqa: E402
+from geojax.papers import MA2023  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
-PAPER = {"time_saving": 29.7, "fuel_saving": 22.9, "efficiency": 0.95, "track_deg": (0.017, 0.006, 0.011)}
+PAPER = {"time_saving": float(MA2023["time_saving_percent"]), "fuel_saving": float(MA2023["fuel_saving_percent"]),
+         "efficiency": float(MA2023["thrust_efficiency"]),
+         "track_deg": tuple(float(MA2023[f"j{j}_track_max_deg"]) for j in (1, 2, 3))}
 LAYOUTS = ("boom", "quadrilateral")
 
 
@@ -169,9 +172,9 @@ def map_figure(rows, m, cants, rates, path):
                 grids["time"][i, j] = saving(m["transfer_days"][b], m["transfer_days"][q])
                 grids["fuel"][i, j] = saving(m["total_propellant_kg"][b], m["total_propellant_kg"][q])
             grids["eff"][i, j] = m["thrust_efficiency"][b]
-    for ax, (key, title) in zip(axes, (("time", "boom time saving, % (paper 29.7)"),
-                                       ("fuel", "boom fuel saving (xenon + attitude), % (paper 22.9)"),
-                                       ("eff", "boom thrust efficiency (paper 0.95)"))):
+    for ax, (key, title) in zip(axes, (("time", f"boom time saving, % (paper {PAPER['time_saving']})"),
+                                       ("fuel", f"boom fuel saving (xenon + attitude), % (paper {PAPER['fuel_saving']})"),
+                                       ("eff", f"boom thrust efficiency (paper {PAPER['efficiency']})"))):
         image = ax.imshow(grids[key], origin="lower", aspect="auto", cmap="viridis")
         ax.set_xticks(range(len(rates)), [f"{r:g}" for r in rates])
         ax.set_yticks(range(len(cants)), [f"{c:g}" for c in cants])

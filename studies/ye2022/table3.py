@@ -32,16 +32,9 @@ from geojax import scenario  # noqa: E402
 from geojax.control.effects import V_SYNC_MPS  # noqa: E402
 from geojax.control.zone_nssk import N0_RAD_S, ZONE_NAMES, arc_efficiency, drift_model_eq7_rad_per_day  # noqa: E402
 from geojax.physics.constants import SIDEREAL_DAY_S  # noqa: E402
+from geojax.papers import YE2022_TABLE3 as PAPER  # noqa: E402
 from geojax.physics.frames import earth_rotation_angle_rad  # noqa: E402
 
-# Ye 2022, Tables 2-3: (Delta-V m/s/yr, accuracy deg, path, capture as the text states it).
-PAPER = {
-    1: ("44.04", "0.03", "five → two → normal", "≈ 6 months"),
-    2: ("41.48", "0.03", "five → three → normal", "–"),
-    3: ("46.89", "0.03", "four → one → normal", "–"),
-    4: ("47.82", "0.005", "four → one → normal", "–"),
-    5: ("54.93", "0.008", "four → one → normal", "–"),
-}
 MIN_HOLD = 2
 
 

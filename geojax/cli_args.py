@@ -1,0 +1,103 @@
+"""The arguments of the ``geojax`` command line (``geojax.cli`` runs the commands and prints)."""
+
+from __future__ import annotations
+
+import argparse
+
+import geojax
+
+DAYS_HELP = ("duration in solar days (default: the scenario's); the run is that many sidereal-day cycles, "
+             "rounded (20 days: 20 cycles), the same in propagate, simulate, sweep and tune")
+
+
+def parser() -> argparse.ArgumentParser:
+    """Every command, its arguments and their help; ``args.command`` names the command given (None: none)."""
+    top = argparse.ArgumentParser(
+        prog="geojax",
+        description="Closed-loop station keeping of electric-propulsion GEO satellites in JAX.",
+    )
+    top.add_argument("--version", action="version", version=f"geojax {geojax.__version__}")
+    sub = top.add_subparsers(dest="command", metavar="COMMAND")
+    common = argparse.ArgumentParser(add_help=False)  # every command: -q / -v
+    talk = common.add_mutually_exclusive_group()
+    talk.add_argument("-q", "--quiet", action="store_true", help="print only the files written (and errors)")
+    talk.add_argument("-v", "--verbose", action="store_true",
+                      help="also print compilation times, devices and where each number comes from")
+
+    def command(name, **kw):
+        return sub.add_parser(name, parents=[common], **kw)
+
+    demo = command("demo", help="li2022 for one year, without control and with the QFFC: summaries, figures")
+    demo.add_argument("--out", default="geojax-demo", help="folder for the figures and HDF5 files (default: geojax-demo)")
+
+    prop = command("propagate", help="uncontrolled propagation; one-cycle mean elements per sidereal day")
+    prop.add_argument("scenario", help="a shipped scenario name (see 'geojax scenarios') or a .toml path")
+    prop.add_argument("--days", type=float, help=DAYS_HELP)
+    prop.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
+    prop.add_argument("--out", help="write the per-cycle mean elements to this HDF5 file")
+
+    bnd = command("bound", help="the least Delta-V that holds the scenario's box with its thrusters (a linear program), "
+                                "re-simulated in the closed loop")
+    bnd.add_argument("scenario", help="a shipped scenario name or a .toml path (its thrusters, box, forces, epoch)")
+    bnd.add_argument("--days", type=float, help=DAYS_HELP)
+    bnd.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
+    bnd.add_argument("--slot-steps", type=int, default=4,
+                     help="integration steps per thrust slot (thrust constant in RSW over a slot; default 4: 1 h)")
+    bnd.add_argument("--thrusters", choices=("arms", "gimbal", "fixed4"),
+                     help="thruster geometry: Li's two arms, Katz's gimbal, Gazzino's four fixed NE/NW/SE/SW thrusters "
+                          "(default: gimbal for a lyapunov or zone_nssk scenario, else arms)")
+    bnd.add_argument("--acquisition-days", type=float, default=0.0,
+                     help="hold the box from this day on (a start the thrusters cannot hold at once; default 0)")
+    bnd.add_argument("--free-end", action="store_true",
+                     help="no end condition (the free end: the plan may end anywhere in the box); default: periodic, "
+                          "the plan ends where it started, x(T) = x(0) (Gazzino 2016), a steady state's Delta-V")
+    bnd.add_argument("--out", help="write /metrics, /rounds and the per-slot /slots to this HDF5 file")
+
+    sim = command("simulate", help="closed-loop station keeping (any controller); summary, metrics, status, HDF5")
+    sim.add_argument("scenario", help="a scenario with a [controller] table, e.g. li2022-qffc, li2022-fompc, or a .toml path")
+    sim.add_argument("--controller", help="override controller.kind (qffc, fompc, lyapunov, ...)")
+    sim.add_argument("--horizon", type=int, help="FOMPC prediction horizon N in cycles, 1-10 (default: the scenario's)")
+    sim.add_argument("--days", type=float, help=DAYS_HELP)
+    sim.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
+    sim.add_argument("--seed", type=int, default=0, help="seed of the orbit-determination and attitude errors (default 0)")
+    sim.add_argument("--h-rv", type=float, help="orbit-determination error level H_rv (Li 2022 eq. 48; default: the scenario's)")
+    sim.add_argument("--h-att", type=float, help="attitude error level H_att (default: the scenario's)")
+    sim.add_argument("--out", help="write /metrics and /cycles to this HDF5 file")
+    sim.add_argument("--plots", help="folder for the figures")
+
+    tune = command("tune", help="tune controller gains by gradients through the rollout (Katz 2025)")
+    tune.add_argument("file", help="a tuning file (TOML; see geojax.tune for the keys)")
+    tune.add_argument("--out", required=True, help="results file (HDF5): /iterations per iteration, /best, /metrics; "
+                      "the tuned scenario is written beside it as FILE-tuned.toml")
+
+    swp = command("sweep", help="Monte Carlo sweep over scenario parameters x repetitions x controllers; HDF5")
+    swp.add_argument("file", help="a sweep file (TOML; see geojax.sweep for the keys)")
+    swp.add_argument("--out", required=True, help="results file (HDF5); chunks are kept in FILE.h5.parts/ until done")
+    swp.add_argument("--resume", action="store_true", help="continue an interrupted sweep into the same --out")
+    swp.add_argument("--chunk", type=int, help="samples per saved chunk (default: one compiled batch of the widest "
+                     "controller on every local device, or with --ray on a cluster with GPUs an even share per GPU "
+                     "worker, at most one GPU batch; a resumed sweep keeps its cut)")
+    swp.add_argument("--lanes", type=int, help="samples per device in one compiled call (default: the platform's, "
+                     "128 QFFC / 32 FOMPC / 8 MPC per CPU core, on a GPU the widest batch its memory holds, up to "
+                     "65536); the results do not depend on it; one that cannot fit is refused")
+    swp.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
+                     help="run the chunks as Ray tasks: alone, on a Ray instance started here; 'auto', HOST:PORT or "
+                     "ray://HOST:PORT, on a running cluster (pip install \"geojax[ray]\"); same results as a local run")
+    swp.add_argument("--workers", type=int, help="with --ray: worker processes (default one per GPU of a GPU node "
+                     "and one per CPU node, each using its share of the node's cores)")
+
+    plot = command("plot", help="draw the figures of a results file (simulate, propagate, sweep, tune, bound, transfer)")
+    plot.add_argument("file", help="an HDF5 file written by geojax")
+    plot.add_argument("--out", help="folder for the figures (default: next to the file)")
+    plot.add_argument("--format", choices=("png", "pdf", "svg"), default="png", help="figure format (default png)")
+    plot.add_argument("--dpi", type=int, default=150, help="resolution of PNG figures (default 150)")
+
+    xfer = command("transfer", help="GTO-GEO low-thrust transfer, gimbaled boom or quadrilateral layout (Ma & Kong 2023)")
+    xfer.add_argument("scenario", help="a shipped transfer (ma2023-boom, ma2023-quadrilateral) or a .toml path")
+    xfer.add_argument("--days", type=float, help="time limit in solar days (default: the scenario's); the transfer "
+                      "stops earlier when it reaches GEO (not sidereal-day cycles: a transfer has no control cycle)")
+    xfer.add_argument("--out", help="write /metrics and the daily /records to this HDF5 file")
+
+    scen = command("scenarios", help="list the shipped scenarios, or print one's TOML")
+    scen.add_argument("--show", metavar="NAME", help="print the TOML of the shipped scenario NAME")
+    return top

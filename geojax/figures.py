@@ -1,0 +1,52 @@
+"""The figures of a results file, by what it holds (``geojax plot``): a sweep's, a tuning's convergence, a bound's
+plan, a transfer's orbit, or a single run's (``loop.report.draw``: per step, per cycle, the station keeping)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def plot_file(path: str | Path, out: str | Path | None = None, fmt: str = "png", dpi: int = 150) -> list[Path]:
+    """Draw the figures of the geojax results file ``path`` into ``out`` (default: beside it), named after the
+    file; ``ValueError`` with one line for a file that is not one or holds nothing to draw."""
+    from geojax import plots, store, sweep_report
+    from geojax.loop.report import draw
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"file {str(path)!r}: no such file")
+    try:
+        groups, attrs = store.read_h5(path)
+    except OSError:
+        raise ValueError(f"file {str(path)!r}: not an HDF5 file") from None
+    out = Path(out) if out else path.parent
+    title = str(attrs.get("scenario", attrs.get("name", path.stem)))
+    kind = attrs.get("kind")
+    if kind == "sweep":
+        axes = str(attrs["grid_axes"]).split(",")
+        return [plots.plot_sweep(groups, axes, out / f"{path.stem}.{fmt}", title=sweep_report.title(attrs, axes),
+                                 dpi=dpi)]
+    if kind == "tune":
+        if "iterations" not in groups:
+            raise ValueError(f"file {str(path)!r}: a tuning file without /iterations (stopped before its first)")
+        return [plots.plot_tuning(groups, out / f"{path.stem}-convergence.{fmt}",
+                                  title=f"{title}: tuning {attrs.get('parameters', '')}", dpi=dpi)]
+    if kind == "bound":
+        return [plots.plot_bound(groups["slots"], box_half_width_deg(attrs), out / f"{path.stem}.{fmt}",
+                                 title=f"{title}: the least Delta-V", dpi=dpi)]
+    if kind == "transfer":
+        return [plots.plot_transfer(groups["records"], out / f"{path.stem}.{fmt}", title=title, dpi=dpi)]
+    if "steps" in groups or "cycles" in groups:
+        drawn_box = "steps" in groups or {"reference", "target"} <= set(groups)
+        box = box_half_width_deg(attrs) if drawn_box else 0.0
+        return draw(groups, box, out / path.stem, title, fmt=fmt, dpi=dpi)
+    raise ValueError(f"file {str(path)!r}: nothing geojax can plot "
+                     f"(no /cycles, /steps, sweep, tuning, bound or transfer data)")
+
+
+def box_half_width_deg(attrs) -> float:
+    """The box half-width (deg) of the scenario stored with a results file."""
+    from geojax import scenario
+
+    config = scenario.tomllib.loads(str(attrs["config_toml"]))
+    return float(scenario.from_dict(config).config["station"]["box_half_width_deg"])

@@ -1,0 +1,153 @@
+"""The file, the summary and the figures of one closed-loop run: what ``Result.save``, ``Result.summary`` and
+``Result.plot`` give (``geojax simulate --out / --plots`` calls them), and the figures ``geojax plot`` draws of a
+``simulate`` or ``propagate`` file (``draw``).
+
+The file (``kind = "simulate"``): ``/metrics`` (``loop.metrics.summarize``'s, ``cpu_s_per_orbit`` and
+``status``), ``/cycles`` (``loop.metrics.cycle_table``), then where the run kept its steps (a feedback law's, by
+default: it has no reference run) the per-step ``/steps`` (``loop.metrics.step_table``), else the uncontrolled
+``/reference`` and the station's ``/target`` (``reference_and_target``); attributes ``kind``, ``scenario``,
+``epoch_tt_s``, ``seed``, ``compile_s`` and ``status_codes`` beside ``store.write_h5``'s.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import jax
+import numpy as np
+
+from geojax.control import none
+from geojax.loop.metrics import STATUS_MEANINGS, STATUS_TEXT, step_table
+from geojax.loop.setup import cycle_count, prepare, uncontrolled_boundaries, unstack
+from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
+from geojax.physics.propagate import environment_grid, steps_per_cycle
+from geojax.scenario import Scenario
+
+
+def groups(result) -> dict[str, dict]:
+    """The datasets of the run's file, ``{group: {name: value}}``."""
+    sc = scenario_of(result)
+    out = {"metrics": {**metrics(result), "status": int(result.status)}, "cycles": result.cycles()}
+    if result.records.steps is not None:
+        out["steps"] = step_table(result.records, result.step_s, float(result.params.station["lon_rad"]))
+    else:
+        out["reference"], out["target"] = reference_and_target(sc, len(result.records.cycles.dv_mps))
+    return out
+
+
+def save(result, path: str | Path) -> Path:
+    """Write the run's file to ``path`` (atomically); returns the path."""
+    from geojax import store
+    from geojax.scenario import to_toml
+
+    sc = scenario_of(result)
+    attrs = {"kind": "simulate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s,
+             **({} if result.seed is None else {"seed": result.seed}), "compile_s": result.compile_s,
+             "status_codes": STATUS_TEXT}
+    return store.write_h5(path, groups(result), to_toml(sc.config), result.wall_s, attrs=attrs)
+
+
+def metrics(result) -> dict[str, float]:
+    """The loop's metrics as floats, and ``cpu_s_per_orbit``: wall seconds per cycle after compilation (with it,
+    where the compilation was not timed apart: ``simulate(..., on_compiled=...)``)."""
+    n_cycles = len(result.records.cycles.dv_mps)
+    return {**{k: float(v) for k, v in result.metrics.items()}, "cpu_s_per_orbit": run_s(result) / n_cycles}
+
+
+def run_s(result) -> float:
+    """Wall seconds of the run, less its compilation where that was timed."""
+    return result.wall_s - (result.compile_s if math.isfinite(result.compile_s) else 0.0)
+
+
+def summary(result, paper: bool = True) -> list[str]:
+    """What ``geojax simulate`` prints after the run: its length, time and status, then every metric, beside the
+    published number of a shipped scenario's paper (``geojax.papers``) with ``paper``, and a note where this run
+    differs from the paper's."""
+    from geojax import papers, scenario
+
+    sc = scenario_of(result)
+    values = metrics(result)
+    code = int(result.status)
+    timed = "after compilation" if math.isfinite(result.compile_s) else "with compilation"
+    lines = [f"{sc.name}: {sc.controller}, {len(result.records.cycles.dv_mps)} cycles in {run_s(result):.1f} s "
+             f"{timed}, status {code} ({STATUS_MEANINGS[code]})"]
+    published, source = papers.published(sc.name, sc.config) if paper else ({}, "")
+    changed = []
+    if published:
+        shipped = scenario.load(sc.name).config if sc.name in scenario.available() else None
+        changed = papers.departures(sc.config, result.seed or 0, shipped)
+    if changed:
+        source = f"{source} (its own run)"
+    lines.append(f"  {'metric':32s} {'geojax':>12s}  {source}")
+    lines += [f"  {name:32s} {value:12.5g}  {published.get(name, '')}" for name, value in values.items()]
+    if changed:
+        lines.append(f"  note: {source.split(' (')[0]}'s numbers are for its own run; this one differs in "
+                     f"{', '.join(changed)}, so they are shown for orientation only")
+    return lines
+
+
+def plot(result, folder: str | Path) -> list[Path]:
+    """The run's figures in ``folder``, named after the scenario: from its steps (a feedback law's), the ground
+    track and thrust (``NAME-ground-track.png``, ``NAME-thrust.png``), else its cycles and station keeping
+    (``NAME.png``, ``NAME-station-keeping.png``)."""
+    sc = scenario_of(result)
+    mode = sc.config["controller"].get("thrust_mode")  # Katz 2025's laws name theirs
+    title = f"{sc.name}, {mode} thrust" if result.records.steps is not None and mode else f"{sc.name}, {sc.controller}"
+    return draw(groups(result), sc.config["station"]["box_half_width_deg"], Path(folder) / sc.name, title)
+
+
+def draw(groups: dict, box_half_width_deg: float, stem: Path, title: str, fmt: str = "png",
+         dpi: int = 150) -> list[Path]:
+    """The figures of a single run's datasets, written as ``STEM[-what].FMT``: per step (``/steps``: ground
+    track and thrust), else per cycle (``/cycles``), with the station keeping where ``/reference`` and
+    ``/target`` are there."""
+    from geojax import plots
+
+    if "steps" in groups:
+        return plots.plot_feedback(groups["steps"], box_half_width_deg, stem, title=title, dpi=dpi, fmt=fmt)
+    figures = [plots.plot_cycles(groups["cycles"], stem.parent / f"{stem.name}.{fmt}", title=title, dpi=dpi)]
+    if {"reference", "target"} <= set(groups):
+        figures.append(plots.plot_station_keeping(groups["cycles"], groups["reference"], groups["target"],
+                                                  stem.parent / f"{stem.name}-station-keeping.{fmt}", title=title,
+                                                  box_half_width_deg=box_half_width_deg, dpi=dpi))
+    return figures
+
+
+def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]:
+    """The uncontrolled run from the initial state (not re-started: the path the satellite would take without
+    control), its mean elements at the first ``n_cycles + 1`` cycle boundaries (``/reference``: t_s, lon_deg, ex,
+    ey, ix, iy), and the station's targets (``/target``), for figures beside a closed loop."""
+    batch = prepare([scenario], none.CONTROLLER)
+    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, batch.step_s,
+                           n_cycles + 1, steps_per_cycle(scenario.step_s))
+    _, ref = _uncontrolled_jit(unstack(batch.params, 0), env, step_s=batch.step_s, dynamics=batch.dynamics)
+    ref = np.asarray(ref)
+    uncontrolled = {"t_s": np.arange(len(ref)) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
+                    "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}
+    station = scenario.config["station"]
+    goals = {"lon_deg": float(station["lon_deg"]), "drift_deg_per_day": 0.0,
+             **{k: float(station[k]) for k in ("ex", "ey", "ix", "iy")}}
+    return uncontrolled, goals
+
+
+_uncontrolled_jit = jax.jit(uncontrolled_boundaries, static_argnames=("step_s", "dynamics"))
+
+
+def flown_days(days: float) -> str:
+    """``days`` as a run flies them: whole sidereal-day cycles, named when the rounding is more than 2 %."""
+    n = cycle_count(days)
+    flown = n * SIDEREAL_DAY_S / SECONDS_PER_DAY
+    if abs(flown - days) <= 0.02 * days:
+        return f"{days:g} days"
+    return f"{days:g} days, flown as {n} sidereal-day cycle{'s' * (n != 1)} ({flown:.3f} days)"
+
+
+def scenario_of(result):
+    """The scenario of a single rollout's result; ``ValueError`` for a batch or a result without one."""
+    if np.ndim(result.status) != 0:
+        raise ValueError(f"a batch of {np.size(result.status)} rollouts (simulate_batch): save, summarise or plot "
+                         f"one (geojax.simulate), or write a batch with geojax.run_sweep")
+    if result.scenario is None:
+        raise ValueError("scenario: this Result does not carry its scenario; make it with geojax.simulate")
+    return result.scenario
