@@ -1,6 +1,6 @@
 """Issue 32, item 4: the propellant of a 15-year mission of Li's satellite at 96 deg E, and the year-to-year swing.
 
-    python studies/lifetime/lifetime.py [--controllers qffc,fompc:4] [--mission-years 15]
+    python studies/lifetime/lifetime.py [--controllers qffc,fompc:8,mpc:2] [--mission-years 15]
                                         [--continuous-years 5] [--out studies/lifetime/results]
 
 1. **Yearly Delta-V over the Moon's node cycle** (``epochs.toml``, one sweep per controller through
@@ -207,7 +207,7 @@ def figure(years, rows: dict, drift, floor, path: Path) -> None:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--controllers", default="qffc,fompc:4", help="NAME or NAME:DRAWS (default: the file's 64)")
+    ap.add_argument("--controllers", default="qffc,fompc:8,mpc:2", help="NAME or NAME:DRAWS (default: the file's 64)")
     ap.add_argument("--mission-years", type=int, default=15)
     ap.add_argument("--continuous-years", type=int, default=5, help="0: skip the continuous-run check")
     ap.add_argument("--out", type=Path, default=HERE / "results")
