@@ -160,6 +160,16 @@ def plot_sweep(groups, axes_names: list[str], path: str | Path, metric: str = "d
     return plot_sweeps([(label, groups)], axes_names, path, metric, title, dpi=dpi)
 
 
+def _numeric(values) -> np.ndarray:
+    """A swept axis as numbers: dates (an ``epoch.utc`` axis) as decimal years."""
+    values = np.asarray(values)
+    if values.dtype.kind in "SUO":
+        from geojax.epoch_axis import as_years
+
+        return as_years(values)
+    return values.astype(float)
+
+
 @styled
 def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
                 dpi: int = 150) -> Path:
@@ -168,14 +178,14 @@ def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv
 
     fig, ax = plt.subplots(figsize=(5.0, 3.4), constrained_layout=True)
     param = axes_names[1]
-    x_power = decade(*(np.asarray(g["grid"][param.replace(".", "__")], float) for _, g in runs))
+    x_power = decade(*(_numeric(g["grid"][param.replace(".", "__")]) for _, g in runs))
     y_power = decade(*(np.asarray(g["metrics"][metric], float) for _, g in runs))
     grid_values, bands = set(), []
     for prefix, groups in runs:
         values = np.asarray(groups["metrics"][metric], float) / 10.0**y_power  # [controller, grid..., reps]
         status = np.asarray(groups["status"]["code"])
         controllers = [c.decode() if isinstance(c, bytes) else str(c) for c in groups["grid"]["controller"]]
-        x = np.asarray(groups["grid"][param.replace(".", "__")], float) / 10.0**x_power
+        x = _numeric(groups["grid"][param.replace(".", "__")]) / 10.0**x_power
         grid_values.update(x.tolist())
         for i, controller in enumerate(controllers):
             v = values[i].reshape(len(x), -1, values.shape[-1])  # [x, other axes, reps]

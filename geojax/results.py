@@ -142,8 +142,13 @@ def open_results(path: str | Path):
                 if group_name == "grid":
                     dim = "controller" if name == "controller" else name.replace("__", ".")
                     values = ds[()]
-                    coords[dim] = xr.Variable(dim, [v.decode() for v in values] if values.dtype.kind == "S" else values,
-                                              _attrs(ds))
+                    if dim == "epoch.utc":  # dates, as datetime64 (``ds.sel({"epoch.utc": "2030"})``)
+                        from geojax.epoch_axis import as_datetime64
+
+                        values = as_datetime64(values)
+                    elif values.dtype.kind == "S":
+                        values = [v.decode() for v in values]
+                    coords[dim] = xr.Variable(dim, values, _attrs(ds))
                     continue
                 known = fallback.get(group_name, ())
                 dims = [ds.dims[axis].label or (known[axis] if axis < len(known) else f"{name}_axis{axis}")

@@ -40,11 +40,15 @@ MAX_ORBIT_KM = 2.0e6  # beyond Earth's Hill sphere (1.5e6 km)
 MAX_ANGLE_RAD, MAX_ANGLE_DEG = 1.0e3, 1.0e5  # about 160 and 280 turns: more is a unit slip
 MAX_MASS_KG = 1.0e6  # twice the ISS
 MAX_DAYS = 36526.0  # a hundred years
+# The UTC dates a run may span, by ephemeris: from the leap-second table's start (``physics.time``) to the end of
+# the years the Meeus series are checked over against ERFA (tests/test_ephemeris.py, 2000-2050), or to the end of
+# the DE421 kernel (JD 2524624.5, 2200-02-02).
+EPHEMERIS_UTC_RANGE = {"meeus": ("1999-01-01", "2051-01-01"), "de421": ("1999-01-01", "2200-02-01")}
 
 SCHEMA: dict[str, dict[str, Field]] = {
     "": {"name": Field(str, REQUIRED), "description": Field(str, "")},
     "epoch": {
-        "utc": Field(str, REQUIRED),
+        "utc": Field(str, REQUIRED, symbol="epoch", unit="year"),  # a sweep axis of dates is drawn in years
         "ut1_minus_utc_s": Field(_NUMBER, 0.0, lower=-0.9, upper=0.9),
     },
     "orbit": {
@@ -216,17 +220,23 @@ def load(name_or_path: str | Path, overrides: dict | None = None, controller=Non
     return from_dict(with_overrides(raw, overrides), controller)
 
 
-def started_at(name_or_path: str | Path, utc: str, overrides: dict | None = None) -> Scenario:
-    """Scenario ``name_or_path`` (with ``overrides``) started at ``utc`` instead of its epoch, from the same
-    orbit relative to the Earth: its initial MEE, the true longitude moved by the Earth's rotation between the
-    two epochs (the same geographic longitude; ``orbit.elements = "mee"``).  A fresh run of a later year."""
-    base = load(name_or_path, overrides)
-    if base.config["orbit"]["elements"] != "mee":
-        raise ValueError(f"orbit.elements: started_at moves an MEE initial state, got {base.config['orbit']['elements']!r}")
-    moved = load(name_or_path, {**(overrides or {}), "epoch.utc": utc})
+def started_at(name_or_path: str | Path, utc: str, overrides: dict | None = None, controller=None) -> Scenario:
+    """Scenario ``name_or_path`` (with ``overrides``; ``controller`` as in ``load``) started at ``utc`` instead
+    of its epoch, from the same orbit relative to the Earth: the same geographic longitude, so the same slot in
+    another year.  An MEE initial state keeps its elements but the true longitude, moved by the Earth's rotation
+    between the two epochs; a ``station_offset`` one is already given in the Earth-fixed frame and needs no
+    move; a Keplerian one is refused (its angles are inertial: give it as MEE).  A fresh run of a later year."""
+    base = load(name_or_path, overrides, controller)
+    kind = base.config["orbit"]["elements"]
+    moved = load(name_or_path, {**(overrides or {}), "epoch.utc": utc}, controller)
+    if kind == "station_offset":
+        return moved
+    if kind != "mee":
+        raise ValueError(f"orbit.elements: moving a scenario to another epoch needs \"mee\" or \"station_offset\" "
+                         f"elements, got {kind!r}")
     angle = lambda sc: float(earth_rotation_angle_rad(sc.epoch_tt_s, sc.epoch_tt_s, sc.tt_minus_ut1_s))  # noqa: E731
     l_rad = math.remainder(float(base.initial_mee[5]) + angle(moved) - angle(base), 2 * math.pi)
-    return load(name_or_path, {**(overrides or {}), "epoch.utc": utc, "orbit.L_rad": l_rad})
+    return load(name_or_path, {**(overrides or {}), "epoch.utc": utc, "orbit.L_rad": l_rad}, controller)
 
 
 def with_overrides(raw: dict, overrides: dict | None) -> dict:
@@ -279,6 +289,7 @@ def from_dict(raw: dict, controller=None) -> Scenario:
     utc = parse_utc(config["epoch"]["utc"])
     epoch_tt_s = tt_seconds_from_utc(utc)
     tt_minus_ut1_s = TT_MINUS_TAI_S + tai_minus_utc_s(utc.date()) - config["epoch"]["ut1_minus_utc_s"]
+    _check_ephemeris_range(utc, config)
     initial_mee = _initial_mee(config, epoch_tt_s, tt_minus_ut1_s)
     return Scenario(config, epoch_tt_s, tt_minus_ut1_s, initial_mee, _force_model(config))
 
@@ -310,6 +321,18 @@ def _validate(raw: dict, controller=None) -> dict:
     arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
     _check_propellant(config)
     return config
+
+
+def _check_ephemeris_range(utc, config: dict) -> None:
+    """The run (epoch to epoch + duration) within the dates of ``EPHEMERIS_UTC_RANGE`` for its ephemeris."""
+    import datetime as dt
+
+    ephemeris, days = config["forces"]["ephemeris"], config["duration"]["days"]
+    first, last = (dt.datetime.fromisoformat(d) for d in EPHEMERIS_UTC_RANGE[ephemeris])
+    start = utc.astimezone(dt.timezone.utc).replace(tzinfo=None) if utc.tzinfo is not None else utc
+    if not first <= start <= start + dt.timedelta(days=days) <= last:
+        raise ValueError(f"epoch.utc: a run of {days:g} days from {config['epoch']['utc']} leaves the dates of the "
+                         f"{ephemeris} ephemeris, {first.date()} to {last.date()} (forces.ephemeris)")
 
 
 def _check_gravity(forces: dict) -> None:

@@ -21,6 +21,10 @@ repetitions and optional Monte Carlo dispersions of the initial state:
     mee_1sigma = [0.1, 1e-6, 1e-6, 1e-6, 1e-6, 1e-5]   # p (km), f, g, h, k, L (rad)
     offset_ecef_1sigma_km = [1.0, 1.0, 1.0]             # position offset along ECEF x, y, z
 
+A grid axis ``"epoch.utc" = ["2027-01-01T12:00:00", ...]`` (dates, not numbers) flies the same slot from
+each date: the base scenario moved as ``scenario.started_at`` moves it (``geojax.epoch_axis`` says how, and
+why the points of one epoch share their environment in every compiled call).
+
 Every grid point is a scenario loaded with its values, so every range and
 check of ``geojax.scenario`` applies and every key that becomes an array leaf
 of ``params.Params`` (or changes the initial state or the force model) can be
@@ -63,11 +67,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax import lanes as lanes_mod, scenario as scenario_mod, store
+from geojax import epoch_axis, lanes as lanes_mod, scenario as scenario_mod, store
 from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.loop.metrics import CYCLE_NAMES, STATUS_TEXT, cycle_series
 from geojax.loop.rollout import rollout_fn
-from geojax.loop.setup import controller_of, cycle_count, disperse, prepare, reference_per_sample
+from geojax.loop.setup import Batch, controller_of, cycle_count, disperse, prepare, reference_per_sample
 from geojax.params import Field, check_table
 from geojax.parallel import per_device
 from geojax.progress import Progress
@@ -166,6 +170,9 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
     for key, values in grid.items():
         if not isinstance(values, list) or not values:
             raise ValueError(f"grid.{key}: must be a non-empty list of values, got {values!r}")
+        if key == epoch_axis.KEY:
+            epoch_axis.check_values(values)
+            continue
         for value in values:
             if not isinstance(value, (int, float, bool)):
                 raise ValueError(f"grid.{key}: must be a list of numbers (or true/false), got {value!r}")
@@ -186,9 +193,14 @@ def prepare_check(sweep: Sweep, controller: str) -> None:
     differ only in array leaves (``loop.setup``), naming the grid key at fault."""
     from geojax.loop.setup import _check_static, controller_of
 
-    scenarios = [_scenario(sweep, controller, p) for p in _points(sweep)]
+    points = list(_points(sweep))
+    scenarios = [_scenario(sweep, controller, p) for p in points]
+    ctrl = sweep.custom.get(controller) or controller_of(scenarios)
+    groups = epoch_axis.groups(points)
     try:
-        _check_static(scenarios, sweep.custom.get(controller) or controller_of(scenarios))
+        for group in groups:  # within an epoch, as every sweep
+            _check_static([scenarios[i] for i in group], ctrl)
+        _check_static([scenarios[g[0]] for g in groups], ctrl, skip=epoch_axis.STATIC_KEYS)  # and between them
     except ValueError as err:
         raise ValueError(f"grid.{err}") from None
 
@@ -203,6 +215,9 @@ def _scenario(sweep: Sweep, controller: str, point: dict):
     overrides = {**sweep.fixed, **point, "controller.kind": controller}
     if isinstance(point.get("controller.vdt_estimate"), (int, float)):
         overrides["controller.vdt_estimate"] = bool(point["controller.vdt_estimate"])  # 0 / 1 on a numeric axis
+    if epoch_axis.KEY in point:
+        return epoch_axis.scenario_at(sweep.scenario, overrides.pop(epoch_axis.KEY), overrides,
+                                      sweep.custom.get(controller))
     return scenario_mod.load(sweep.scenario, overrides, sweep.custom.get(controller))
 
 
@@ -332,17 +347,31 @@ class ChunkRunner:
         self.repetitions = sweep.repetitions
         self.plan = lane_plan(sweep, controller, chunk)
         self.width = self.plan.lanes * jax.local_device_count()
-        self._batch_fn, self._params, self.compile_s = _compiled_batch(sweep, controller, self.width)
+        self._batch_fn, self._params, self._group_of_point, self.compile_s = _compiled_batch(sweep, controller,
+                                                                                            self.width)
 
     def run(self, first: int, length: int, on_samples=None) -> dict:
-        pieces = []
-        for lane0 in range(first, first + length, self.width):
-            idx = np.minimum(np.arange(lane0, lane0 + self.width), self.n_samples - 1)  # pad with the last sample
-            out_lanes = self._batch_fn(_lanes(self._params, idx // self.repetitions), idx)
-            pieces.append({k: np.asarray(v) for k, v in out_lanes.items()})
-            if on_samples is not None:
-                on_samples(min(self.width, first + length - lane0))
-        return {k: np.concatenate([p[k] for p in pieces])[:length] for k in pieces[0]}
+        samples = np.arange(first, first + length)
+        group_of_sample = self._group_of_point[samples // self.repetitions]
+        pieces = []  # (rows of the chunk, metrics of those rows)
+        for group in dict.fromkeys(group_of_sample.tolist()):  # a compiled call never mixes epochs
+            rows = np.flatnonzero(group_of_sample == group)
+            for lane0 in range(0, len(rows), self.width):
+                taken = rows[lane0:lane0 + self.width]
+                # Padded with the samples after, or (several epochs) with the call's last: a lane of another
+                # epoch would run with this epoch's Sun and Moon, and a solver's loop waits for its slowest lane.
+                pad = samples[taken[-1]] if self._group_of_point.max() > 0 else self.n_samples - 1
+                idx = np.minimum(samples[taken[0]] + np.arange(self.width), pad)
+                idx[:len(taken)] = samples[taken]
+                out_lanes = self._batch_fn(_lanes(self._params, idx // self.repetitions), idx, group)
+                pieces.append((taken, {k: np.asarray(v)[:len(taken)] for k, v in out_lanes.items()}))
+                if on_samples is not None:
+                    on_samples(len(taken))
+        out = {k: np.empty((length, *v.shape[1:]), v.dtype) for k, v in pieces[0][1].items()}
+        for rows, values in pieces:
+            for k, v in values.items():
+                out[k][rows] = v
+        return out
 
 
 def _write_results(sweep: Sweep, out: Path, parts: Path, wall_s: float, compile_s: float, lanes: str = "") -> Path:
@@ -366,7 +395,8 @@ def _write_results(sweep: Sweep, out: Path, parts: Path, wall_s: float, compile_
         groups["cycles"] = {k: np.stack([results[c][f"cycles__{k}"] for c in sweep.controllers]).reshape(*shape, -1)
                             for k in CYCLE_NAMES}
     status = stacked("status").reshape(shape).astype(np.int8)
-    grid = {k.replace(".", "__"): np.asarray(v, dtype=float) for k, v in sweep.grid.items()}
+    grid = {k.replace(".", "__"): np.asarray(v, dtype="S" if k == epoch_axis.KEY else float)
+            for k, v in sweep.grid.items()}
     grid["controller"] = np.array(sweep.controllers, dtype="S")
     base = scenario_mod.to_toml(_scenario(sweep, sweep.controllers[0], {}).config)  # [set] applied, fully resolved
     store.write_h5(out, {"grid": grid, "metrics": metrics, "status": {"code": status}, **groups}, sweep.text, wall_s,
@@ -389,7 +419,8 @@ def lane_plan(sweep: Sweep, controller: str, chunk: int | None = None) -> lanes_
     """The width of ``controller``'s compiled call on this process's devices (``geojax.lanes.plan``): the
     sweep's ``lanes`` if set (``ValueError`` if it cannot fit), else the platform's for a chunk of ``chunk``
     samples (default: the whole sweep)."""
-    scenarios = [_scenario(sweep, controller, p) for p in _points(sweep)]
+    points = list(_points(sweep))
+    scenarios = [_scenario(sweep, controller, points[i]) for i in epoch_axis.groups(points)[0]]  # one epoch's
     ctrl = sweep.custom.get(controller) or controller_of(scenarios)
     samples = math.ceil(min(chunk or math.inf, sweep.n_points * sweep.repetitions) / jax.local_device_count())
     n_cycles = cycle_count(scenarios[0].days)
@@ -410,32 +441,54 @@ def _chunk_len(start: int, chunk: int, n_samples: int) -> int:
 
 
 def _compiled_batch(sweep: Sweep, controller: str, width: int):
-    """(function of (params [width], sample indices [width]) -> metrics, params of every grid point [n_points],
-    set-up seconds: the batch's shared arrays and its reference run, compiled and run, and the compilation)."""
+    """(function of (params [width], sample indices [width], epoch group) -> metrics, params of every grid point
+    [n_points], the epoch group of every grid point [n_points], set-up seconds: each epoch's shared arrays and
+    reference run, and the one compilation).
+
+    What the samples of one epoch share (the environment grid, the predictor's reference or the segments each
+    sample runs its own on, the Earth angle at the start) is an argument of the compiled call, not a constant
+    in it, so one program serves every epoch (``geojax.epoch_axis``)."""
     begun = time.perf_counter()
-    scenarios = [_scenario(sweep, controller, p) for p in _points(sweep)]
-    batch = prepare(scenarios, sweep.custom.get(controller))
+    points = list(_points(sweep))
+    groups = epoch_axis.groups(points)
+    scenarios = [_scenario(sweep, controller, p) for p in points]
+    batches = [prepare([scenarios[i] for i in group], sweep.custom.get(controller)) for group in groups]
+    batch = batches[0]
+    if any(b.reference_per_sample != batch.reference_per_sample for b in batches):
+        raise ValueError(f"grid.{epoch_axis.KEY}: the other axes must vary the same leaves at every epoch")
     # The step compiled for the controller's CPU width whatever the batch (``Controller.lanes_cpu``): the
     # fusion boundaries it sets move the last bit, so every width gives the same numbers.
     one_rollout = rollout_fn(batch, lanes=batch.controller.lanes_cpu)
     base_key = jax.random.key(sweep.seed)
-    first = scenarios[0]
     dispersion = (jnp.asarray(sweep.dispersion["mee_1sigma"]) * jnp.array([1e3, 1, 1, 1, 1, 1]),
                   jnp.asarray(sweep.dispersion["offset_ecef_1sigma_km"]) * 1e3)
-    angle0 = earth_rotation_angle_rad(first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s)
 
-    def one(p, j):
+    def shared_of(b: Batch, group) -> tuple:
+        first = scenarios[group[0]]
+        angle0 = earth_rotation_angle_rad(first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s)
+        return b.shared, b.reference_env if b.reference_per_sample else None, jnp.asarray(angle0)
+
+    def one(p, j, shared, reference_env, angle0):
         key = jax.random.fold_in(base_key, j)
         if sweep.dispersed:
             p = disperse(p, jax.random.fold_in(key, DISPERSION_STREAM), *dispersion, angle0, batch.dynamics)
-        _, records, out = one_rollout(p, key)
+        _, records, out = one_rollout(p, key, shared=shared, reference_env=reference_env)
         if sweep.cycles:
             out.update({f"cycles__{k}": v for k, v in cycle_series(records).items()})
         return out
 
+    shared = [shared_of(b, g) for b, g in zip(batches, groups, strict=True)]
     lanes = np.zeros(width, dtype=int)
-    run, _ = per_device(jax.vmap(one), (_lanes(batch.params, lanes), lanes))
-    return lambda p, idx: run(p, np.asarray(idx)), batch.params, time.perf_counter() - begun
+    run, _ = per_device(jax.vmap(one, in_axes=(0, 0, None, None, None)), (_lanes(batch.params, lanes), lanes),
+                        shared=shared[0])
+    # Every grid point's params, in point order (each group's batch stacks its own points).
+    order = np.concatenate(groups)
+    params = jax.tree_util.tree_map(lambda *xs: jnp.concatenate(xs)[np.argsort(order)], *[b.params for b in batches])
+    group_of_point = np.empty(len(points), dtype=int)
+    for g, group in enumerate(groups):
+        group_of_point[group] = g
+    return (lambda p, idx, g: run(p, np.asarray(idx), shared=shared[g]), params, group_of_point,
+            time.perf_counter() - begun)
 
 
 def _lanes(params, point_index):

@@ -27,7 +27,8 @@ def summary(spec, groups) -> list[str]:
             dv = flat["dv_per_year_mps"][j]
             counts = ", ".join(f"{int(np.sum(status[j] == c))} {STATUS_MEANINGS[c]}"
                                for c in range(1, len(STATUS_MEANINGS)) if np.any(status[j] == c))
-            where = ", ".join(f"{k.rpartition('.')[2]} {v:g}" for k, v in zip(keys, point, strict=True))
+            where = ", ".join(f"{k.rpartition('.')[2]} {v if isinstance(v, str) else format(v, 'g')}"
+                              for k, v in zip(keys, point, strict=True))
             spread = f" ± {np.std(dv):.2f}" if spec.repetitions > 1 else ""
             lines.append(f"    {where}: ΔV {np.mean(dv):.2f}{spread} m/s/yr, max |δλ| "
                          f"{np.max(flat['max_abs_dlon_deg'][j]):.4f}°, max |δφ| {np.max(flat['max_abs_dlat_deg'][j]):.4f}°; "

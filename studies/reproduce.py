@@ -1,6 +1,6 @@
 """Regenerate a paper's tables and figures with one command.
 
-    python studies/reproduce.py li2022 [katz2025 ye2022 ma2023 bounds ablation longrun compare ...]   # or: all
+    python studies/reproduce.py li2022 [katz2025 ye2022 ma2023 bounds ablation longrun lifetime compare ...]   # or: all
     python studies/reproduce.py li2022 --only fig09 fig13         # scripts whose name contains a word
     python studies/reproduce.py all --list                         # the commands, without running them
 
@@ -37,6 +37,7 @@ STUDIES = {
     "bounds": [("bounds/table.py", []), ("bounds/operational.py", ["--days", "28", "--margin", "0.2"]),
                ("bounds/periodic.py", [])],
     "longrun": [("longrun/predictor_reference.py", [])],
+    "lifetime": [("lifetime/lifetime.py", [])],
     "compare": [("compare/windows.py", [])],
 }
 

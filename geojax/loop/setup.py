@@ -163,8 +163,12 @@ STATIC_KEYS = {"integration.step_s": lambda sc: steps_per_cycle(sc.step_s), "dur
                "forces.ephemeris": lambda sc: sc.config["forces"]["ephemeris"]}
 
 
-def _check_static(scenarios: list[Scenario], controller: Controller) -> None:
+def _check_static(scenarios: list[Scenario], controller: Controller, skip: tuple[str, ...] = ()) -> None:
+    """``ValueError`` naming the first key of ``STATIC_KEYS`` (but ``skip``) or of the controller's static
+    settings whose value differs between ``scenarios``."""
     for key, value in STATIC_KEYS.items():
+        if key in skip:
+            continue
         values = {value(sc) for sc in scenarios}
         if len(values) > 1:
             raise ValueError(f"{key}: sets the shape of the compiled loop; one value per batch (run one sweep per value)")

@@ -18,7 +18,10 @@ seed 0) and each segment length (0: never re-started, the reference of before is
   same: ``scenario.started_at``); the check of issue 32 is the last year within 2 % of the fresh run.  Beside them,
   the "i window term" of each compared year (``window_dv_mps``): a fresh run starts at the centre of its
   inclination window and may end the year at the edge, which a year in steady state cannot; for the MPC's
-  wide window (3.3e-4) that is worth a few per cent, so it also runs at the FOMPC's (``mpc@8e-5``);
+  wide window (3.3e-4) that is worth a few per cent, so it also runs at the FOMPC's (``mpc@8e-5``); and the
+  "closed" years (``closing_dv_mps``): each year's Delta-V plus what returns its slow elements (mean e and i
+  vectors) at its last cycle to those at its first, valued by the Gauss equations: the fair fresh year, since
+  every year compared then ends in the state it started from (``--name fair_fresh --segments 30``);
 * (the mechanism, on the QFFC) the inclination of the reference the controller reads at the first boundary of
   each year, and the error of the natural drift of the inclination vector it predicts over a cycle, against an
   independent uncontrolled propagation (Cartesian dynamics) started from the controlled orbit's true state,
@@ -36,6 +39,7 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -113,6 +117,22 @@ def window_dv_mps(records, first: int, last: int, beta_max_deg: float) -> float:
     return 2 * V_SYNC_MPS * dhk / np.sin(np.radians(beta_max_deg))
 
 
+def closing_dv_mps(records, first: int, last: int, beta_max_deg: float) -> float:
+    """Delta-V that returns the slow elements at cycle ``last`` to those of cycle ``first``, valued by the Gauss
+    equations at their least impulsive cost: the inclination term of ``window_dv_mps`` plus V |Delta(f, g)| / 2
+    for the eccentricity vector (a tangential burn moves e by 2 dv / V).  Added to a year's Delta-V it gives the
+    year's "closed" Delta-V: the year flown as if it had to end in the state it started from, Gazzino's
+    x(T) = x(0) (``geojax bound``'s periodic default)."""
+    m = records.cycles.means
+    de = np.hypot(float(m.ex[last] - m.ex[first]), float(m.ey[last] - m.ey[first]))
+    return window_dv_mps(records, first, last, beta_max_deg) + V_SYNC_MPS * de / 2
+
+
+def per_julian_year(dv_mps: float) -> float:
+    """A Delta-V over one year of ``YEAR_CYCLES`` cycles, per 365.25 days (as ``dv_year<k>_mps``)."""
+    return dv_mps * 365.25 * 86400.0 / (YEAR_CYCLES * SIDEREAL_DAY_S)
+
+
 def measure(controller: str, years: int, segment_cycles: int) -> dict:
     """``controller``: a li2022 controller, with ``@DI_MAX`` its inclination window (MEE h, k) changed."""
     kind, _, di_max = controller.partition("@")
@@ -135,6 +155,12 @@ def measure(controller: str, years: int, segment_cycles: int) -> dict:
            "window_last_mps": window_dv_mps(records, (years - 1) * YEAR_CYCLES, last, beta_max),
            "window_fresh_mps": window_dv_mps(fresh_records, 0, len(fresh_records.cycles.dv_mps) - 1, beta_max),
            "wall_s": wall_s + fresh_wall_s}
+    closing_last = closing_dv_mps(records, (years - 1) * YEAR_CYCLES, last, beta_max)
+    closing_fresh = closing_dv_mps(fresh_records, 0, len(fresh_records.cycles.dv_mps) - 1, beta_max)
+    row.update({"closing_last_mps": closing_last, "closing_fresh_mps": closing_fresh,
+                "closed_last_dv_per_year_mps": per_year[-1] + per_julian_year(closing_last),
+                "closed_fresh_dv_per_year_mps": fresh + per_julian_year(closing_fresh)})
+    row["closed_last_over_fresh"] = row["closed_last_dv_per_year_mps"] / row["closed_fresh_dv_per_year_mps"] - 1
     if controller == "qffc":
         row.update(drift_errors(batch, params, records, years))
     print(json.dumps(row), flush=True)
@@ -144,18 +170,28 @@ def measure(controller: str, years: int, segment_cycles: int) -> dict:
 def table(rows: list[dict], years: int) -> str:
     head = ("| controller | reference re-started every | " + " | ".join(f"year {y + 1} (m/s/yr)" for y in range(years))
             + " | steady state, years 2+ (m/s/yr) | fresh run of the last year (m/s/yr) | last year / fresh | status (long, fresh) "
-            "| max abs(i - i_T) | i window term, last year / fresh (m/s) |")
+            "| max abs(i - i_T) | i window term, last year / fresh (m/s) | closing ΔV, last year / fresh (m/s) "
+            "| closed year, last / fresh (m/s/yr) | closed: last / fresh |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     for r in rows:
         every = "never" if r["segment_cycles"] == 0 else f"{r['segment_cycles']} cycles"
         lines.append(f"| {r['controller']} | {every} | " + " | ".join(f"{v:.2f}" for v in r["years_dv_per_year_mps"])
                      + f" | {r['steady_dv_per_year_mps']:.2f} | {r['fresh_dv_per_year_mps']:.2f} | {100 * r['last_over_fresh']:+.2f} % | {r['status']}, "
                      f"{r['fresh_status']} | {r['max_abs_di']:.2e} | {r['window_last_mps']:.2f} / "
-                     f"{r['window_fresh_mps']:.2f} |")
+                     f"{r['window_fresh_mps']:.2f} | {r['closing_last_mps']:.2f} / {r['closing_fresh_mps']:.2f} | "
+                     f"{r['closed_last_dv_per_year_mps']:.2f} / {r['closed_fresh_dv_per_year_mps']:.2f} | "
+                     f"{100 * r['closed_last_over_fresh']:+.2f} % |")
     lines += ["", "i window term: the out-of-plane ΔV that would fly the mean inclination vector back from the year's "
               "last cycle to its first (2 V |Δ(h, k)| / sin β_max). A fresh run starts near the window's centre and "
               "may end the year at its edge; a year in steady state starts and ends near the edge. The difference of "
-              "the two terms is what the fresh run's first year saves on its start, not a change in the controller."]
+              "the two terms is what the fresh run's first year saves on its start, not a change in the controller.",
+              "", "Closed year (the fair fresh year): a year's ΔV plus the closing ΔV, what returns the slow elements "
+              "at the year's last cycle to those of its first at their least cost by the Gauss equations (the i window "
+              "term above plus V |Δe| / 2): every year then ends where it started, as Gazzino's x(T) = x(0) and "
+              "`geojax bound`'s periodic default. A run that ends the year at its window's edge keeps ΔV that the next "
+              "year pays; the closing term charges it to the year that took it. In a steady state the term is small "
+              "(the box is crossed in the same way every year), so the closed steady-state year is its raw ΔV to "
+              "within that term; a fresh year's start at the window's centre no longer counts as a saving."]
     mech = [r for r in rows if "ref_i_deg" in r]
     if mech:
         lines += ["", "The mechanism (QFFC): the inclination of the reference the controller reads at each year's first "
@@ -182,7 +218,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=HERE / "results")
     ap.add_argument("--name", default="predictor_reference", help="results file of the --years runs")
     args = ap.parse_args(argv)
-    command = "python studies/longrun/predictor_reference.py " + " ".join(argv or [])
+    command = "python studies/longrun/predictor_reference.py " + " ".join(sys.argv[1:] if argv is None else argv)
     args.out.mkdir(parents=True, exist_ok=True)
     for controllers, years, name in ((args.controllers, args.years, args.name),
                                      (args.long_controllers, args.long_years, f"predictor_reference_{args.long_years}yr")):
