@@ -29,7 +29,7 @@ from pathlib import Path
 
 from geojax.cli_args import parser as _parser
 from geojax.loop.report import flown_days  # noqa: F401  (printed before a run; tests read it here)
-from geojax.sweep_report import summary as sweep_summary, title as sweep_title  # noqa: F401
+from geojax.sweep.report import summary as sweep_summary, title as sweep_title  # noqa: F401
 
 EXIT_BAD_INPUT = 2
 # The flag of each spec key a library error may name (the library speaks in spec keys, the command line in flags).
@@ -52,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"geojax {args.command}: error: {in_flags(str(err))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except RuntimeError as err:
-        from geojax.cluster import ClusterError
+        from geojax.sweep.cluster import ClusterError
 
         if not isinstance(err, ClusterError):
             raise

@@ -9,7 +9,8 @@ from pathlib import Path
 def plot_file(path: str | Path, out: str | Path | None = None, fmt: str = "png", dpi: int = 150) -> list[Path]:
     """Draw the figures of the geojax results file ``path`` into ``out`` (default: beside it), named after the
     file; ``ValueError`` with one line for a file that is not one or holds nothing to draw."""
-    from geojax import plots, store, sweep_report
+    from geojax import plots, store
+    from geojax.sweep import report as sweep_report
     from geojax.loop.report import draw
 
     path = Path(path)

@@ -164,7 +164,7 @@ def _numeric(values) -> np.ndarray:
     """A swept axis as numbers: dates (an ``epoch.utc`` axis) as decimal years."""
     values = np.asarray(values)
     if values.dtype.kind in "SUO":
-        from geojax.epoch_axis import as_years
+        from geojax.sweep.epochs import as_years
 
         return as_years(values)
     return values.astype(float)

@@ -143,7 +143,7 @@ def open_results(path: str | Path):
                     dim = "controller" if name == "controller" else name.replace("__", ".")
                     values = ds[()]
                     if dim == "epoch.utc":  # dates, as datetime64 (``ds.sel({"epoch.utc": "2030"})``)
-                        from geojax.epoch_axis import as_datetime64
+                        from geojax.sweep.epochs import as_datetime64
 
                         values = as_datetime64(values)
                     elif values.dtype.kind == "S":

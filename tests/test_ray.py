@@ -1,4 +1,4 @@
-"""Sweeps on a Ray cluster (geojax.cluster): bit for bit a local run, through a worker killed mid-sweep and
+"""Sweeps on a Ray cluster (geojax.sweep.cluster): bit for bit a local run, through a worker killed mid-sweep and
 a driver killed and resumed; bad addresses and a missing Ray in one line.
 
 The cluster is two Ray nodes on this machine (a head and one more worker node, one CPU each), so the
@@ -24,7 +24,8 @@ import pytest
 
 from ray.cluster_utils import Cluster  # the README's test command installs geojax[ray]
 
-from geojax import cli, cluster, store, sweep
+from geojax import cli, store, sweep
+from geojax.sweep import cluster
 
 SPEC = """
 name = "ray"

@@ -1,4 +1,4 @@
-"""The epoch as a sweep axis (``geojax.epoch_axis``): each point is the slot flown from its date.
+"""The epoch as a sweep axis (``geojax.sweep.epochs``): each point is the slot flown from its date.
 
 Checked against a second method: each sample of the sweep against its own ``simulate`` run of the
 ``scenario.started_at`` scenario with the sample's key (separate compilations, one sample each)."""

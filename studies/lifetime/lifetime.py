@@ -4,7 +4,7 @@
                                         [--continuous-years 5] [--out studies/lifetime/results]
 
 1. **Yearly Delta-V over the Moon's node cycle** (``epochs.toml``, one sweep per controller through
-   ``geojax.sweep`` with the epoch as a grid axis, ``geojax.epoch_axis``): li2022 flown one year from 1 January
+   ``geojax.sweep`` with the epoch as a grid axis, ``geojax.sweep.epochs``): li2022 flown one year from 1 January
    12:00 UTC of each year 2027-2045 at the same geographic longitude, 64 draws of the orbit-determination and
    attitude errors per year (``CONTROLLER:N`` runs N draws instead, for the MPC).
 2. **The mission**: the Delta-V of years 2027 ... 2026 + ``--mission-years`` summed draw by draw (draw r of the
@@ -52,7 +52,7 @@ import numpy as np  # noqa: E402
 import geojax  # noqa: E402
 from geojax import scenario, sweep  # noqa: E402
 from geojax.control.effects import V_SYNC_MPS  # noqa: E402
-from geojax.epoch_axis import as_years  # noqa: E402
+from geojax.sweep.epochs import as_years  # noqa: E402
 from geojax.loop.metrics import YEAR_CYCLES  # noqa: E402
 from geojax.loop.rollout import simulate  # noqa: E402
 from geojax.physics.constants import G0_MPS2, SECONDS_PER_DAY, SIDEREAL_DAY_S  # noqa: E402
