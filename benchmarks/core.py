@@ -292,6 +292,8 @@ def main() -> None:
     parser.add_argument("--field", action="store_true",
                         help="only the Earth's field: J2 + C22/S22, EGM2008 2x2, 8x8, 20x20 and the minimal kernel "
                              "(results/core_field.json and .md)")
+    parser.add_argument("--field-baseline", metavar="REV",
+                        help="with --field: also the J2 + C22/S22 step of revision REV, in the same rounds")
     args = parser.parse_args()
     repo = HERE.parent
     if args.field:
@@ -335,17 +337,31 @@ def field_only(args, repo: Path) -> None:
     results = {"command": "python benchmarks/core.py " + " ".join(sys.argv[1:]), "batches": args.batches,
                "rounds": args.rounds, "cycles": args.cycles, "step": {},
                "machine": f"{os.cpu_count()} cores (load average {os.getloadavg()[0]:.1f} at the start"}
-    for round_ in range(args.rounds):
-        print(f"round {round_ + 1} ...", flush=True)
-        for name, rows in _in_subprocess(repo, "measure_field", args)["step"].items():
-            _keep_fastest(results["step"].setdefault(name, {}), rows)
-        _keep_fastest(results["step"].setdefault("minimal", {}), _in_subprocess(repo, "measure_minimal", args)["step"])
+    with tempfile.TemporaryDirectory() as tmp:
+        old = Path(tmp) / "baseline"
+        if args.field_baseline:
+            subprocess.run(["git", "-C", str(repo), "worktree", "add", "--detach", str(old), args.field_baseline],
+                           check=True, capture_output=True)
+        try:
+            for round_ in range(args.rounds):
+                print(f"round {round_ + 1} ...", flush=True)
+                for name, rows in _in_subprocess(repo, "measure_field", args)["step"].items():
+                    _keep_fastest(results["step"].setdefault(name, {}), rows)
+                if args.field_baseline:
+                    _keep_fastest(results["step"].setdefault(f"J2 + C22/S22 @{args.field_baseline}", {}),
+                                  _in_subprocess(old, "measure_engine", args, loop=False)["step"])
+                _keep_fastest(results["step"].setdefault("minimal", {}),
+                              _in_subprocess(repo, "measure_minimal", args)["step"])
+        finally:
+            if args.field_baseline:
+                subprocess.run(["git", "-C", str(repo), "worktree", "remove", "--force", str(old)], check=False)
     results["machine"] += f", {os.getloadavg()[0]:.1f} at the end)"
     lines = ["# The Earth's field in the step", "",
              f"`{results['command']}` on {results['machine']}, one device pinned to one core, li2022 with each "
              "field (Sun, Moon, SRP and conical shadow on), MEE RK4, 96 steps per sidereal day, "
-             f"{args.cycles} cycles, the fastest of {args.rounds} rounds.  ns per right-hand side per sample; "
-             "in brackets: relative to J2 + C22/S22; compile s; fusions (conditionals) of the compiled step.", "",
+             f"{args.cycles} cycles, the fastest of {args.rounds} rounds (each model in turn, then the next "
+             "round).  ns per right-hand side per sample; in brackets: relative to J2 + C22/S22 of this tree; "
+             "compile s; fusions (conditionals) of the compiled step.", "",
              "| batch | " + " | ".join(results["step"]) + " |", "|---:|" + "---:|" * len(results["step"])]
     for batch in args.batches:
         base = results["step"]["J2 + C22/S22"][str(batch)]["ns_per_rhs_per_sample"]
