@@ -48,8 +48,8 @@ def measure_engine(batches, n_cycles: int, loop_days: float) -> dict:
     return {"step": _step_rows({"forces.c22_s22": True}, batches, n_cycles), "loop": _closed_loop(loop_days) if loop_days else {}}
 
 
-def _step_rows(overrides: dict, batches, n_cycles: int) -> dict:
-    """The uncontrolled step of li2022 with ``overrides``, per batch: ``_timed_step``'s row."""
+def _step_rows(overrides: dict, batches, n_cycles: int, timed=None) -> dict:
+    """The uncontrolled step of li2022 with ``overrides``, per batch: ``_timed_step``'s row (or ``timed``'s)."""
     import jax
     import jax.numpy as jnp
 
@@ -76,7 +76,7 @@ def _step_rows(overrides: dict, batches, n_cycles: int) -> dict:
         dynamics = for_lanes(MEE, batch)
         run = jax.jit(jax.vmap(lambda m, kg, d=dynamics: propagate(d, SpacecraftState(m, kg, jnp.asarray(0.0)), env,
                                                                   fm, step_s)[0].orbit))
-        rows[batch] = _timed_step(run, (mee, mass), batch, n_cycles * n_steps, step_s)
+        rows[batch] = (timed or _timed_step)(run, (mee, mass), batch, n_cycles * n_steps, step_s)
     return rows
 
 
@@ -85,9 +85,43 @@ FIELD_MODELS = {"J2 + C22/S22": {"forces.c22_s22": True}, "EGM2008 2x2": {"force
                 "EGM2008 8x8": {"forces.gravity_degree": 8}, "EGM2008 20x20": {"forces.gravity_degree": 20}}
 
 
-def measure_field(batches, n_cycles: int) -> dict:
-    """The step with each force model of ``FIELD_MODELS`` (``--field``)."""
-    return {"step": {name: _step_rows(overrides, batches, n_cycles) for name, overrides in FIELD_MODELS.items()}}
+FIELD_REPEATS = 30  # timed runs of each model, the models alternating
+
+
+def measure_field_papers(batches, n_cycles: int) -> dict:
+    """``measure_field`` of the papers' J2 + C22/S22 step alone (``--field-baseline``: another tree's)."""
+    return measure_field(batches, n_cycles, {"J2 + C22/S22": FIELD_MODELS["J2 + C22/S22"]})
+
+
+def measure_field(batches, n_cycles: int, models: dict = FIELD_MODELS) -> dict:
+    """The step with each force model of ``models`` (``--field``): every model compiled first, then
+    ``FIELD_REPEATS`` runs of each in turn, the fastest kept (on a shared machine the load moves within a
+    model's own runs; alternating lets every model meet the same quiet moments)."""
+    import jax
+
+    pending = {}
+
+    def compiled(fn, args, batch, n_steps_total, step_s):
+        start = time.perf_counter()
+        exe = fn.lower(*args).compile()
+        compile_s = time.perf_counter() - start
+        jax.block_until_ready(exe(*args))  # warm
+        return {"exe": exe, "args": args, "best": float("inf"), "batch": batch, "n": n_steps_total,
+                "step_s": step_s, "row": {"compile_s": compile_s, **step_fusions(exe.as_text())}}
+
+    for name, overrides in models.items():
+        pending[name] = _step_rows(overrides, batches, n_cycles, timed=compiled)
+    for _ in range(FIELD_REPEATS):
+        for rows in pending.values():
+            for run in rows.values():
+                start = time.perf_counter()
+                jax.block_until_ready(run["exe"](*run["args"]))
+                run["best"] = min(run["best"], time.perf_counter() - start)
+    return {"step": {name: {batch: {"ns_per_rhs_per_sample": run["best"] / (4 * run["batch"] * run["n"]) * 1e9,
+                                    "orbit_years_per_s": run["batch"] * run["n"] * run["step_s"] / 86400 / 365.25
+                                    / run["best"], **run["row"]}
+                            for batch, run in rows.items()}
+                     for name, rows in pending.items()}}
 
 
 def _timed_step(fn, args, batch: int, n_steps_total: int, step_s: float) -> dict:
@@ -349,7 +383,7 @@ def field_only(args, repo: Path) -> None:
                     _keep_fastest(results["step"].setdefault(name, {}), rows)
                 if args.field_baseline:
                     _keep_fastest(results["step"].setdefault(f"J2 + C22/S22 @{args.field_baseline}", {}),
-                                  _in_subprocess(old, "measure_engine", args, loop=False)["step"])
+                                  _in_subprocess(old, "measure_field_papers", args)["step"]["J2 + C22/S22"])
                 _keep_fastest(results["step"].setdefault("minimal", {}),
                               _in_subprocess(repo, "measure_minimal", args)["step"])
         finally:
