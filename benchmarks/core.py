@@ -47,8 +47,8 @@ def measure_engine(batches, n_cycles: int, loop_days: float) -> dict:
     return {"step": _step_rows({"forces.c22_s22": True}, batches, n_cycles), "loop": _closed_loop(loop_days) if loop_days else {}}
 
 
-def _step_rows(overrides: dict, batches, n_cycles: int) -> dict:
-    """The uncontrolled step of li2022 with ``overrides``, per batch: ``_timed_step``'s row."""
+def _step_rows(overrides: dict, batches, n_cycles: int, timed=None) -> dict:
+    """The uncontrolled step of li2022 with ``overrides``, per batch: ``_timed_step``'s row (or ``timed``'s)."""
     import jax
     import jax.numpy as jnp
 
@@ -75,7 +75,7 @@ def _step_rows(overrides: dict, batches, n_cycles: int) -> dict:
         dynamics = for_lanes(MEE, batch)
         run = jax.jit(jax.vmap(lambda m, kg, d=dynamics: propagate(d, SpacecraftState(m, kg, jnp.asarray(0.0)), env,
                                                                   fm, step_s)[0].orbit))
-        rows[batch] = _timed_step(run, (mee, mass), batch, n_cycles * n_steps, step_s)
+        rows[batch] = (timed or _timed_step)(run, (mee, mass), batch, n_cycles * n_steps, step_s)
     return rows
 
 
@@ -84,9 +84,43 @@ FIELD_MODELS = {"J2 + C22/S22": {"forces.c22_s22": True}, "EGM2008 2x2": {"force
                 "EGM2008 8x8": {"forces.gravity_degree": 8}, "EGM2008 20x20": {"forces.gravity_degree": 20}}
 
 
-def measure_field(batches, n_cycles: int) -> dict:
-    """The step with each force model of ``FIELD_MODELS`` (``--field``)."""
-    return {"step": {name: _step_rows(overrides, batches, n_cycles) for name, overrides in FIELD_MODELS.items()}}
+FIELD_REPEATS = 30  # timed runs of each model, the models alternating
+
+
+def measure_field_papers(batches, n_cycles: int) -> dict:
+    """``measure_field`` of the papers' J2 + C22/S22 step alone (``--field-baseline``: another tree's)."""
+    return measure_field(batches, n_cycles, {"J2 + C22/S22": FIELD_MODELS["J2 + C22/S22"]})
+
+
+def measure_field(batches, n_cycles: int, models: dict = FIELD_MODELS) -> dict:
+    """The step with each force model of ``models`` (``--field``): every model compiled first, then
+    ``FIELD_REPEATS`` runs of each in turn, the fastest kept (on a shared machine the load moves within a
+    model's own runs; alternating lets every model meet the same quiet moments)."""
+    import jax
+
+    pending = {}
+
+    def compiled(fn, args, batch, n_steps_total, step_s):
+        start = time.perf_counter()
+        exe = fn.lower(*args).compile()
+        compile_s = time.perf_counter() - start
+        jax.block_until_ready(exe(*args))  # warm
+        return {"exe": exe, "args": args, "best": float("inf"), "batch": batch, "n": n_steps_total,
+                "step_s": step_s, "row": {"compile_s": compile_s, **step_fusions(exe.as_text())}}
+
+    for name, overrides in models.items():
+        pending[name] = _step_rows(overrides, batches, n_cycles, timed=compiled)
+    for _ in range(FIELD_REPEATS):
+        for rows in pending.values():
+            for run in rows.values():
+                start = time.perf_counter()
+                jax.block_until_ready(run["exe"](*run["args"]))
+                run["best"] = min(run["best"], time.perf_counter() - start)
+    return {"step": {name: {batch: {"ns_per_rhs_per_sample": run["best"] / (4 * run["batch"] * run["n"]) * 1e9,
+                                    "orbit_years_per_s": run["batch"] * run["n"] * run["step_s"] / 86400 / 365.25
+                                    / run["best"], **run["row"]}
+                            for batch, run in rows.items()}
+                     for name, rows in pending.items()}}
 
 
 def _timed_step(fn, args, batch: int, n_steps_total: int, step_s: float) -> dict:
@@ -281,6 +315,8 @@ def main() -> None:
                         help="only the Earth's field: J2 + C22/S22, EGM2008 2x2, 8x8, 20x20 and the minimal kernel "
                              "(results/core_field.json and .md)")
     harness.add_arguments(parser)
+    parser.add_argument("--field-baseline", metavar="REV",
+                        help="with --field: also the J2 + C22/S22 step of revision REV, in the same rounds")
     args = parser.parse_args()
     run = harness.start(one_core(args.platform))
     repo = HERE.parent
@@ -316,15 +352,29 @@ def main() -> None:
 def field_only(args, run: harness.Run, repo: Path) -> None:
     """``--field``: the step with each of ``FIELD_MODELS`` and the minimal kernel, alternating rounds."""
     results = {"batches": args.batches, "rounds": args.rounds, "cycles": args.cycles, "step": {}}
-    for round_ in range(args.rounds):
-        print(f"round {round_ + 1} ...", flush=True)
-        for name, rows in _in_subprocess(repo, "measure_field", args)["step"].items():
-            _keep_fastest(results["step"].setdefault(name, {}), rows)
-        _keep_fastest(results["step"].setdefault("minimal", {}), _in_subprocess(repo, "measure_minimal", args)["step"])
+    with tempfile.TemporaryDirectory() as tmp:
+        old = Path(tmp) / "baseline"
+        if args.field_baseline:
+            subprocess.run(["git", "-C", str(repo), "worktree", "add", "--detach", str(old), args.field_baseline],
+                           check=True, capture_output=True)
+        try:
+            for round_ in range(args.rounds):
+                print(f"round {round_ + 1} ...", flush=True)
+                for name, rows in _in_subprocess(repo, "measure_field", args)["step"].items():
+                    _keep_fastest(results["step"].setdefault(name, {}), rows)
+                if args.field_baseline:
+                    _keep_fastest(results["step"].setdefault(f"J2 + C22/S22 @{args.field_baseline}", {}),
+                                  _in_subprocess(old, "measure_field_papers", args)["step"]["J2 + C22/S22"])
+                _keep_fastest(results["step"].setdefault("minimal", {}),
+                              _in_subprocess(repo, "measure_minimal", args)["step"])
+        finally:
+            if args.field_baseline:
+                subprocess.run(["git", "-C", str(repo), "worktree", "remove", "--force", str(old)], check=False)
     lines = ["One device pinned to one core, li2022 with each "
              "field (Sun, Moon, SRP and conical shadow on), MEE RK4, 96 steps per sidereal day, "
-             f"{args.cycles} cycles, the fastest of {args.rounds} rounds.  ns per right-hand side per sample; "
-             "in brackets: relative to J2 + C22/S22; compile s; fusions (conditionals) of the compiled step.", "",
+             f"{args.cycles} cycles, the fastest of {args.rounds} rounds (each model in turn, then the next "
+             "round).  ns per right-hand side per sample; in brackets: relative to J2 + C22/S22 of this tree; "
+             "compile s; fusions (conditionals) of the compiled step.", "",
              "| batch | " + " | ".join(results["step"]) + " |", "|---:|" + "---:|" * len(results["step"])]
     for batch in args.batches:
         base = results["step"]["J2 + C22/S22"][str(batch)]["ns_per_rhs_per_sample"]

@@ -64,15 +64,15 @@ def compare_with_reference(field, points, angle=2.1):
     return worst
 
 
-@pytest.mark.parametrize("degree, order", [(2, 0), (2, 2), (3, 1), (5, 5), (8, 8), (8, 3), (12, 12), (13, 6), (20, 20)])
+@pytest.mark.parametrize("degree, order", [(2, 0), (2, 2), (3, 1), (5, 5), (8, 8), (8, 3), (9, 8), (12, 12), (13, 6), (20, 20)])
 def test_field_matches_spherical_gradient(degree, order):
     # 300 points, 6,600-50,000 km: the relative error of the degree-2..N acceleration is below 1e-12, for
-    # the shapes of both evaluations (unrolled to degree 12, scanned beyond).
+    # fields of order at and below the degree.
     assert compare_with_reference(egm2008(degree, order), random_points(300, seed=degree + 100 * order)) <= 1e-12
 
 
 def test_every_degree_to_twenty():
-    # Degrees 2..20 through one compiled shape of each evaluation: the coefficients above degree N set to zero.
+    # Degrees 2..20 through two compiled shapes: the coefficients above degree N set to zero.
     for shape in (8, 20):
         full = egm2008(shape)
         for degree in range(2, shape + 1):
@@ -98,9 +98,9 @@ def test_degree_two_equals_j2_and_c22_s22():
     np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=1e-13, atol=1e-13 * float(jnp.max(jnp.abs(want))))
 
 
-@pytest.mark.parametrize("degree", [4, 13])
+@pytest.mark.parametrize("degree", [4, 8])
 def test_jacobian_matches_finite_differences(degree):
-    # d a / d r by jax.jacfwd (unrolled at 4, scanned at 13) against central differences (step 10 m).
+    # d a / d r by jax.jacfwd against central differences (step 10 m).
     field = jax.tree_util.tree_map(jnp.asarray, egm2008(degree))
     accel = jax.jit(lambda r: geopotential_acceleration(r, 0.3, c.MU_EARTH_M3_S2, c.R_EARTH_M, field))
     jacobian = jax.jit(jax.jacfwd(accel))
@@ -110,8 +110,10 @@ def test_jacobian_matches_finite_differences(degree):
         h = 10.0
         fd = np.stack([(np.asarray(accel(r + h * e)) - np.asarray(accel(r - h * e))) / (2 * h) for e in np.eye(3)], -1)
         np.testing.assert_allclose(jac, fd, rtol=1e-6, atol=1e-7 * np.abs(jac).max())
-        # The field is a gradient: its Jacobian is symmetric.
+        # The field is a gradient: its Jacobian is symmetric; of a harmonic potential (Laplace's equation
+        # outside the Earth): its trace is zero.
         np.testing.assert_allclose(jac, jac.T, atol=1e-12 * np.abs(jac).max())
+        assert abs(np.trace(jac)) <= 1e-12 * np.abs(jac).max()
 
 
 def test_gradient_reaches_coefficients():
@@ -156,6 +158,20 @@ def test_drift_atlas_equilibria_are_the_published_ones(degree):
     stable, unstable, _ = atlas.equilibria(degree, samples=720)
     np.testing.assert_allclose(stable, [-105.3, 75.1], atol=0.5)
     np.testing.assert_allclose(unstable, [-11.5, 161.9], atol=0.5)
+
+
+def test_degree_two_east_west_budget_errors_are_the_published_ones():
+    # Published: a degree-2 field is off by about 19 % of the yearly east-west Delta-V at 96 deg E and by
+    # 24-31 % at 0 deg and 75 deg W (issue 33's sources).  The budget here: |a_east| of the field alone over a
+    # year (studies/force_model/drift_atlas.py), degree 2 against 20.
+    spec = importlib.util.spec_from_file_location(
+        "drift_atlas", Path(__file__).resolve().parents[1] / "studies" / "force_model" / "drift_atlas.py")
+    atlas = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(atlas)
+    error = {lon: abs(atlas.east_west_dv_per_year_mps(lon, 2) / atlas.east_west_dv_per_year_mps(lon, 20) - 1)
+             for lon in (96.0, 0.0, -75.0)}
+    assert abs(error[96.0] - 0.19) <= 0.01
+    assert 0.24 - 0.01 <= error[0.0] <= 0.31 + 0.01 and 0.24 - 0.01 <= error[-75.0] <= 0.31 + 0.01
 
 
 def test_equations_of_motion_differentiate_through_the_field():

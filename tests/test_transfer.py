@@ -464,3 +464,35 @@ def test_the_slew_settles_on_a_moving_target_without_a_limit_cycle():
         angle, speed, target = new_angle, new_speed, target + v * step
     assert float(angle) == pytest.approx(target, abs=1e-9) and float(speed) == pytest.approx(v, abs=1e-12)
     assert variation <= 2 * rate
+
+
+def test_the_moons_shadow_cuts_the_thrust_as_the_earths_does():
+    """A solar eclipse by the Moon (Montenbruck & Gill's conical model with the Moon as the occulting body):
+    the Sun straight above the satellite (so the Earth hides none of it) and the Moon 300,000 km from the
+    satellite on the line to the Sun (its disc, 0.33 deg in radius, covers the Sun's 0.27 deg: umbra).  One
+    step from the start fires its full Delta-V (F/m over the step, to first order in the mass change)
+    without ``moon_shadow``, or with the Moon moved 10 deg off the line, and nothing with it."""
+    from geojax.physics.elements import mee_to_rv_xyz
+    from geojax.physics.forces import Environment
+    from geojax.transfer.rollout import _step, initial_carry
+
+    step = jax.jit(_step, static_argnums=3)
+
+    def one_step(moon_shadow: bool, off_deg: float = 0.0):
+        sc = transfer.load("ma2023-boom", {"forces.moon_shadow": moon_shadow})
+        (x, y, z), _ = mee_to_rv_xyz(*(sc.params.initial.orbit[j] for j in range(6)), c.MU_EARTH_M3_S2)
+        r = np.array([float(x), float(y), float(z)])
+        up = r / np.linalg.norm(r)
+        side = np.cross(up, [0.0, 0.0, 1.0])
+        side /= np.linalg.norm(side)
+        towards_moon = math.cos(math.radians(off_deg)) * up + math.sin(math.radians(off_deg)) * side
+        env3 = Environment(jnp.asarray(np.tile(r + 1.496e11 * up, (3, 1))),
+                           jnp.asarray(np.tile(r + 3.0e8 * towards_moon, (3, 1))),
+                           jnp.zeros(3), jnp.ones(3), jnp.zeros(3))
+        carry, _ = step(initial_carry(sc.params), env3, sc.params, STATIC)
+        return float(carry.craft.dv_mps), float(sc.params.thrust_n) / float(sc.params.initial.mass_kg) * STATIC.step_s
+
+    fired, full = one_step(False)
+    assert fired == pytest.approx(full, rel=1e-4)
+    assert one_step(True, off_deg=10.0)[0] == pytest.approx(full, rel=1e-4)
+    assert one_step(True)[0] == 0.0

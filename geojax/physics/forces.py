@@ -246,22 +246,32 @@ def sunlit_fraction_xyz(x, y, z, env: Environment, fm: ForceModel, boundaries: b
 
 def perturbing_behind_boundary(x, y, z, mass_kg, env: Environment, fm: ForceModel, boundaries: bool = False):
     """``perturbing_xyz`` behind a fusion boundary (``fusion.materialized``, where ``boundaries``) for the
-    equations of motion.  With the field to degree N, (a_x, a_y) cross the boundary as one complex number:
-    XLA's CPU compiler makes one kernel per output of the boundary and copies the whole recursion into each,
-    so two outputs instead of three evaluate it twice instead of three times: the degree-8 MEE step at batch
-    1024, one core, both forms compiled in one process and timed alternately (fastest of 20), ran 106.7 ns
-    per right-hand side per sample against 146.4 (the J2 + C22/S22 step: 48.6); its HLO has 4658 multiplies
-    against 6634.  The papers' model keeps its three real outputs (and its numbers, bit for bit)."""
+    equations of motion.  With the field to degree N the three components cross the boundary as one array
+    [..., 3] (``_one_array``): XLA's CPU compiler makes one kernel per output of the boundary and copies the
+    whole field into each, and one output evaluates it once.  Measured in the degree-8 MEE step at batch 1024,
+    one core, the forms compiled in one process and timed alternately (ns per right-hand side per sample,
+    relative to the J2 + C22/S22 step): three outputs 2.13x, (a_x, a_y) as one complex number and a_z 1.82x
+    (this module's previous form), one array 1.34x (with ``geopotential``'s per-order sums; 1.80x with its
+    previous recursion).  The papers' model keeps its three real outputs (and its numbers, bit for bit)."""
     if fm.gravity is None:
         return materialized(partial(perturbing_xyz, boundaries=boundaries), x, y, z, mass_kg, env, fm,
                             anchor=env.earth_angle_rad, enabled=boundaries)
 
     def packed(*args):
-        ax, ay, az = perturbing_xyz(*args, boundaries=boundaries)
-        return jax.lax.complex(ax, ay), az
+        return _one_array(*perturbing_xyz(*args, boundaries=boundaries))
 
-    axy, az = materialized(packed, x, y, z, mass_kg, env, fm, anchor=env.earth_angle_rad, enabled=boundaries)
-    return jnp.real(axy), jnp.imag(axy), az
+    a = materialized(packed, x, y, z, mass_kg, env, fm, anchor=env.earth_angle_rad, enabled=boundaries)
+    return a[..., 0], a[..., 1], a[..., 2]
+
+
+def _one_array(ax, ay, az):
+    """(a_x, a_y, a_z) -> [..., 3] by selects on the last axis.  Not ``jnp.stack``: a concatenation's kernel
+    evaluates each operand's whole expression in its own branch (measured on a chain of 200 multiply-adds with
+    three outputs, one core: 231 ns per sample stacked, 71 as three outputs, 23 as one array by one-hot
+    products, 19 for one output alone; selects and one-hot products within 10 % of each other in a second run);
+    in one array the three components of an element are one expression, which LLVM evaluates once."""
+    axis = jnp.arange(3)
+    return jnp.where(axis == 0, ax[..., None], jnp.where(axis == 1, ay[..., None], az[..., None]))
 
 
 # Array forms: position [..., 3] in, acceleration [..., 3] out.

@@ -1,17 +1,17 @@
-"""The Earth's field to degree and order N: EGM2008 coefficients and a normalised Cunningham recursion.
+"""The Earth's field to degree and order N: EGM2008 coefficients and Pines' formulation, summed per order.
 
 The acceleration of the degrees 2..N (the central term is ``forces.point_mass_xyz``) is evaluated in the
-Earth-fixed frame R_z(Earth angle) ECI that ``forces.c22_s22_xyz`` uses, by the recursion of Cunningham
-(1970) in the form of Montenbruck & Gill, *Satellite Orbits* (2000), Sec. 3.2.4-3.2.5, eqs. (3.30)-(3.33),
-carried out on normalised terms V_nm N_nm, W_nm N_nm, N_nm = sqrt((2 - delta_m0)(2n + 1)(n - m)! / (n + m)!),
-so that every number stays O((R/r)^(n+1)) and multiplies the normalised C_nm, S_nm directly (the role
-of Holmes & Featherstone's 2002 scaling; to degree 20 nothing comes near an overflow or a cancellation).
-The recursion is non-singular at the poles and uses only x, y, z, r^-2: no trigonometric function.
+Earth-fixed frame R_z(Earth angle) ECI that ``forces.c22_s22_xyz`` uses, as the gradient of the potential in
+Pines' (1973) variables s, t, u = (x, y, z)/r (S. Pines, AIAA J. 11 (1973) 1508-1511; in normalised form
+Lundberg & Schutz, J. Guid. Control Dyn. 11 (1988) 31-38): the derived Legendre functions of u by a
+recursion down each order, the longitude as the powers (s + it)^m, no trigonometric function, no singularity
+at the poles (``geopotential_ecef_xyz``).  The recursion's values are scaled so that none exceeds (R/r)^n in
+magnitude (checked for u in [-1, 1] to degree 20), and every constant (the coefficients' normalisation
+included, below 2.3e7 to degree 20) is folded into per-field weights.
 
 Static structure, traced values: the degree and order are the shape of the coefficient arrays, so the
-recursion's form is fixed at trace time (unrolled term by term to degree 12, a ``lax.scan`` over degrees
-beyond: ``geopotential_ecef_xyz``); the coefficients are array leaves that a sweep can vary and a gradient
-reach.  The constants of the recursion are exact ratios of factorials computed in Python once per shape.
+recursion's form is fixed at trace time (unrolled term by term); the coefficients are array leaves that a
+sweep can vary and a gradient reach.
 
 EGM2008 (Pavlis et al., J. Geophys. Res. 117 (2012) B04406), tide-free, to degree 20, ships as
 ``data/egm2008_n20.txt`` (written by ``data/make_egm2008.py``).  Its reference GM = 3.986004415e14 m^3/s^2
@@ -32,7 +32,6 @@ import jax.numpy as jnp
 import numpy as np
 
 MAX_DEGREE = 20  # the shipped table (data/egm2008_n20.txt)
-UNROLLED_MAX_DEGREE = 12  # see geopotential_ecef_xyz
 
 
 class Geopotential(NamedTuple):
@@ -85,164 +84,138 @@ def geopotential_xyz(x, y, z, cos_angle, sin_angle, mu, r_earth_m, field: Geopot
 
 
 def geopotential_ecef_xyz(x, y, z, mu, r_earth_m, field: Geopotential):
-    """Earth-fixed acceleration of the degrees 2..N at Earth-fixed (x, y, z): M&G eqs. (3.30)-(3.33), normalised.
+    """Earth-fixed acceleration (m/s^2) of the degrees 2..N of ``field`` at Earth-fixed (x, y, z) (m).
 
-    Two evaluations of the same recursion, chosen by the degree (static).  To ``UNROLLED_MAX_DEGREE`` the
-    terms are unrolled one by one and XLA fuses them into a few kernels over the lanes.  Beyond, one
-    ``lax.scan`` step per degree: unrolled, the two-term recursion is a graph whose paths grow as about 1.6^N,
-    and XLA's CPU compilation grew with it (alone, the field at degree 16 ran out of 20 GB while compiling).
-    Measured in the MEE step at batch 1024, one core, both forms in one process, fastest of 10 (ns per
-    right-hand side per sample, compile s; the J2 + C22/S22 step beside it, the machine shared): degree 10
-    unrolled 336 (27.5 s) against the scan's 1866 (14.0 s), step 102; degree 12: 438 (37.4 s) against 2503
-    (9.2 s), step 65; degree 14: 507 (70.6 s, 0.85 GB) against 3125 (15.4 s), step 94.  The unrolled form
-    stops at 12, where its compilation is still under a minute.
+    Pines (1973) with the sums taken per order.  With s, t, u = (x, y, z)/r, rho = R/r and the derived
+    Legendre functions A_nm(u) = d^m P_n/du^m, the potential is U = mu/r sum_nm rho^n A_nm(u) (C_nm Re(s + it)^m
+    + S_nm Im(s + it)^m) (un-normalised C, S).  Its partial derivatives in (s, t, u) at fixed r, and in r,
+    give the acceleration (Pines' eq. for the Cartesian gradient, with Euler's theorem for the radial term):
+
+      a = mu/r^2 (a1 + s a4, a2 + t a4, a3 + u a4),     a4 = -sum rho^n (n + m + 1) A_nm D_nm - u a3,
+      a1 + i a2 = sum_m m (G_m + i H_m) conj((s + it)^(m-1)),   a3 = sum_m Re((G3_m - i H3_m) (s + it)^m),
+
+    where D_nm = C_nm Re(s + it)^m + S_nm Im(s + it)^m, dA_nm/du = A_n,m+1, and G_m, H_m (and the others) are
+    sums over the degree n of rho^n A_nm times C_nm, S_nm: each A_nm enters six sums by one multiply-add each,
+    and the longitude enters once per order, through (s + it)^m.  Against Cunningham's recursion (V_nm and
+    W_nm for every (n, m), to degree N + 1, then six weights per pair; Montenbruck & Gill eqs. 3.30-3.33, this
+    module's previous form) that is half the recursion and no degree N + 1 row; measured alone at degree 8,
+    batch 1024, one core: 32 against 44 ns per evaluation (412 against 563 multiplies in the compiled kernel).
+
+    The functions are carried as Q_nm = rho^n A_nm (n - m)!/(2n - 1)!!, whose recursion down a column,
+    Q_mm = rho^m, Q_m+1,m = u rho Q_mm, Q_nm = u rho Q_n-1,m - k_nm rho^2 Q_n-2,m with
+    k_nm = (n + m - 1)(n - m - 1) / ((2n - 1)(2n - 3)) (from the Legendre recursion
+    (n - m) A_nm = (2n - 1) u A_n-1,m - (n + m - 1) A_n-2,m), has one constant per term and values of order
+    rho^n; every other factor (the normalisation of ``field``, (2n - 1)!!/(n - m)!, m, n + m + 1) is folded into
+    the weights once per field (``_weights``).  Non-singular at the poles, no trigonometric function.
+
+    The degree and order are static (the shape of ``field``): the terms are unrolled, and XLA fuses them into
+    one loop over the lanes; the weights pass an optimisation barrier, since a field known at compile time would
+    otherwise be folded into the loop as literal constants, from which LLVM's x86 back end did not come back
+    (degree 12: more than 9 GB of memory; traced weights: 3 s).
     """
-    if field.degree <= UNROLLED_MAX_DEGREE:
-        return _unrolled(x, y, z, mu, r_earth_m, field)
-    return _scanned(x, y, z, mu, r_earth_m, field)
-
-
-def _unrolled(x, y, z, mu, r_earth_m, field: Geopotential):
-    """The recursion term by term (degree and order static): V[j][i], W[j][i] for j <= N + 1, i <= min(j, M + 1)."""
     degree, order = field.degree, field.order
-    k = _constants(degree, order)
-    t = _tables(field, k)
-    inv_r2 = 1.0 / (x * x + y * y + z * z)
-    rho = r_earth_m * inv_r2
-    xr, yr, zr, rr = x * rho, y * rho, z * rho, r_earth_m * rho
-    # W_j0 = 0 is left out (None).
-    v, w = [[r_earth_m * jnp.sqrt(inv_r2)]], [[None]]
-    acc = [0.0, 0.0, 0.0]
-    for j in range(1, degree + 2):
-        vj, wj = [], []
-        for i in range(min(j, order + 1) + 1):
-            if i == j:  # sectoral, eq. (3.30)
-                a, vp, wp = k.sectoral[j - 1, 0], v[j - 1][j - 1], w[j - 1][j - 1]
-                vj.append(a * (xr * vp - (0.0 if wp is None else yr * wp)))
-                wj.append(a * (yr * vp + (0.0 if wp is None else xr * wp)))
+    k = _recursion_constants(degree, order)
+    w = jax.lax.optimization_barrier(_weights(field))
+    r2 = x * x + y * y + z * z
+    inv_r = 1.0 / jnp.sqrt(r2)
+    s, t, u = x * inv_r, y * inv_r, z * inv_r
+    rho = r_earth_m * inv_r
+    u_rho, rho2 = u * rho, rho * rho
+    # (s + it)^m = Re[m] + i Im[m], m = 0..M
+    re, im = [1.0, s], [0.0, t]
+    for _ in range(2, order + 1):
+        re, im = re + [s * re[-1] - t * im[-1]], im + [s * im[-1] + t * re[-1]]
+    a1 = a2 = a3 = a_radial = 0.0
+    diag = 1.0  # Q_mm = rho^m
+    for m in range(min(order + 1, degree) + 1):  # column m; column M + 1 only feeds order M's a3
+        diag = diag * rho if m else diag
+        g = h = g_radial = h_radial = g3 = h3 = 0.0
+        q1 = q2 = None  # Q_n-1,m and Q_n-2,m
+        for n in range(m, degree + 1):
+            q = diag if n == m else u_rho * q1 if n == m + 1 else u_rho * q1 - k[n, m] * (rho2 * q2)
+            q1, q2 = q, q1
+            if n < 2:
                 continue
-            a, b = k.a[j - 1, i], k.b[j - 1, i]
-            vj.append(a * zr * v[j - 1][i] - (b * rr * v[j - 2][i] if b else 0.0))
-            wj.append(None if i == 0 else a * zr * w[j - 1][i] - (b * rr * w[j - 2][i] if b else 0.0))
-        v.append(vj), w.append(wj)
-        if j >= 3:  # eq. (3.33): this row's share
-            for axis in range(3):
-                for i, (vji, wji) in enumerate(zip(vj, wj)):
-                    acc[axis] = acc[axis] + t.weights_v[axis][j - 1, i] * vji
-                    if wji is not None:
-                        acc[axis] = acc[axis] + t.weights_w[axis][j - 1, i] * wji
-    scale = mu / (r_earth_m * r_earth_m)
-    return tuple(scale * a for a in acc)
+            if m <= order:  # order m's own sums (G_0, H_0 and the sine sums of order 0 multiply zeros)
+                g_radial = g_radial + w.radial_c[n, m] * q
+                if m:
+                    g, h = g + w.own_c[n, m] * q, h + w.own_s[n, m] * q
+                    h_radial = h_radial + w.radial_s[n, m] * q
+            if m:  # dA_n,m-1/du = A_nm: order m - 1's sums for a3
+                g3 = g3 + w.lower_c[n, m - 1] * q
+                if m > 1:
+                    h3 = h3 + w.lower_s[n, m - 1] * q
+        if m:
+            a3 = a3 + g3 * re[m - 1] + (h3 * im[m - 1] if m > 1 else 0.0)
+        if m <= order:
+            a_radial = a_radial + g_radial * re[m] + (h_radial * im[m] if m else 0.0)
+            if m:
+                a1 = a1 + g * re[m - 1] + h * im[m - 1]
+                a2 = a2 + h * re[m - 1] - g * im[m - 1]
+    a4 = -a_radial - u * a3
+    scale = mu * inv_r * inv_r
+    return scale * (a1 + s * a4), scale * (a2 + t * a4), scale * (a3 + u * a4)
 
 
-def _scanned(x, y, z, mu, r_earth_m, field: Geopotential):
-    """The recursion by degree: one ``lax.scan`` step per degree j = 1..N + 1 carries the rows V_j., W_j. over
-    the orders 0..M + 1 (eq. (3.31); the sectoral term of eq. (3.30) is kept beside the rows so that no step
-    indexes by j) and adds the row's share of eq. (3.33) to per-order sums."""
-    tables = _tables(field, _constants(field.degree, field.order))
-    inv_r2 = 1.0 / (x * x + y * y + z * z)
-    rho = r_earth_m * inv_r2
-    xr, yr, zr, rr = x * rho, y * rho, z * rho, r_earth_m * rho
-    v00 = r_earth_m * jnp.sqrt(inv_r2)
-    first = (jnp.arange(field.order + 2) == 0)
-    row0 = jnp.where(first, v00[..., None], 0.0)  # V_0. = (R/r, 0, ...), W_0. = 0
-    zeros = jnp.zeros_like(row0)
-    xr, yr, zr, rr = (q[..., None] for q in (xr, yr, zr, rr))
+class _Weights(NamedTuple):
+    """The multipliers of Q_nm in the per-order sums, [N + 1, M + 1] each, index [n, m]; ``lower_*`` multiply
+    Q_n,m+1 (the derivative of A_nm).  Rows 0 and 1 are not read."""
 
-    def degree_step(carry, t):
-        (v1, w1, v2, w2, vs, ws, acc) = carry  # rows j - 1 and j - 2; the sectoral V, W of row j - 1
-        vs, ws = t.sectoral * (xr * vs - yr * ws), t.sectoral * (yr * vs + xr * ws)
-        v = t.a * zr * v1 - t.b * rr * v2 + t.onehot * vs
-        w = t.a * zr * w1 - t.b * rr * w2 + t.onehot * ws
-        acc = tuple(a + wv * v + ww * w for a, wv, ww in zip(acc, t.weights_v, t.weights_w))
-        return (v, w, v1, w1, vs, ws, acc), None
-
-    carry = (row0, zeros, zeros, zeros, v00[..., None], zeros[..., :1], (zeros, zeros, zeros))
-    (*_, acc), _ = jax.lax.scan(degree_step, carry, tables)
-    scale = mu / (r_earth_m * r_earth_m)
-    return tuple(scale * jnp.sum(a, axis=-1) for a in acc)
+    own_c: jnp.ndarray  # m C_nm f_nm: G_m
+    own_s: jnp.ndarray  # m S_nm f_nm: H_m
+    radial_c: jnp.ndarray  # (n + m + 1) C_nm f_nm
+    radial_s: jnp.ndarray  # (n + m + 1) S_nm f_nm
+    lower_c: jnp.ndarray  # C_nm f_n,m+1: G3_m
+    lower_s: jnp.ndarray  # S_nm f_n,m+1: H3_m
 
 
-class _Constants(NamedTuple):
-    """Per degree j = 1..N + 1 (leading axis) and order i = 0..M + 1 (trailing axis), M&G eqs. (3.30)-(3.31)
-    in normalised terms (V_ji N_ji), and the multipliers of C_nm, S_nm in eq. (3.33)."""
+def _weights(field: Geopotential) -> _Weights:
+    """Batch-invariant: f_nm = N_nm (2n - 1)!!/(n - m)! turns Q_nm into rho^n A_nm times the normalisation N_nm
+    of the coefficients (C_nm = N_nm Cbar_nm); f_n,m+1 = N_nm (2n - 1)!!/(n - m - 1)! (zero for m = n) for the
+    derivative sums."""
+    f = _conversion_factors(field.degree, field.order)
+    c, s = jnp.asarray(field.c_nm), jnp.asarray(field.s_nm)
+    n = np.arange(field.degree + 1)[:, None]
+    m = np.arange(field.order + 1)[None, :]
+    own, lower = f.own, f.lower
+    return _Weights(c * (m * own), s * (m * own), c * ((n + m + 1) * own), s * ((n + m + 1) * own), c * lower,
+                    s * lower)
 
-    a: np.ndarray  # [J, P] (2j - 1)/(j - i) N_ji/N_{j-1,i} for i < j, else 0
-    b: np.ndarray  # [J, P] (j + i - 1)/(j - i) N_ji/N_{j-2,i} for i <= j - 2, else 0
-    sectoral: np.ndarray  # [J, 1] (2j - 1) N_jj/N_{j-1,j-1} for j <= M + 1, else 0
-    onehot: np.ndarray  # [J, P] 1 at i = j (j <= M + 1)
-    # [N + 1, M + 1], index [n, m]: the multipliers of C_nm, S_nm, read at the (j, i) of the V, W they multiply.
-    plus: np.ndarray  # (n, m) -> (n + 1, m + 1): N_nm / N_{n+1,m+1} (times 1/2 for m > 0)
-    minus: np.ndarray  # (n, m) -> (n + 1, m - 1): (n - m + 2)(n - m + 1) / 2 N_nm / N_{n+1,m-1}, m > 0
-    same: np.ndarray  # (n, m) -> (n + 1, m): (n - m + 1) N_nm / N_{n+1,m}
+
+class _Factors(NamedTuple):
+    own: np.ndarray  # [N + 1, M + 1] f_nm
+    lower: np.ndarray  # [N + 1, M + 1] N_nm (2n - 1)!!/(n - m - 1)!, 0 for m = n
 
 
-class _Tables(NamedTuple):
-    """What ``lax.scan`` reads per degree (leading axis j = 1..N + 1)."""
+@functools.lru_cache(maxsize=None)
+def _recursion_constants(degree: int, order: int) -> np.ndarray:
+    """k_nm [N + 1, M + 2] of the column recursion (zero where n < m + 2)."""
+    k = np.zeros((degree + 1, order + 2))
+    for n in range(degree + 1):
+        for m in range(min(n - 2, order + 1) + 1):
+            k[n, m] = (n + m - 1) * (n - m - 1) / ((2 * n - 1) * (2 * n - 3))
+    return k
 
-    a: jnp.ndarray
-    b: jnp.ndarray
-    sectoral: jnp.ndarray
-    onehot: jnp.ndarray
-    weights_v: tuple  # x, y, z multipliers of V_j. [J, P] each
-    weights_w: tuple  # x, y, z multipliers of W_j. [J, P] each
+
+@functools.lru_cache(maxsize=None)
+def _conversion_factors(degree: int, order: int) -> _Factors:
+    own, lower = np.zeros((2, degree + 1, order + 1))
+    for n in range(2, degree + 1):
+        for m in range(min(n, order) + 1):
+            norm = math.sqrt(_norm2(n, m))
+            own[n, m] = norm * float(Fraction(_double_factorial(2 * n - 1), math.factorial(n - m)))
+            if m < n:
+                lower[n, m] = norm * float(Fraction(_double_factorial(2 * n - 1), math.factorial(n - m - 1)))
+    return _Factors(own, lower)
+
+
+def _double_factorial(k: int) -> int:
+    return math.prod(range(k, 0, -2))
 
 
 def _norm2(n: int, m: int) -> Fraction:
     """N_nm^2 = (2 - delta_m0)(2n + 1)(n - m)! / (n + m)!, exactly."""
     return Fraction((1 if m == 0 else 2) * (2 * n + 1) * math.factorial(n - m), math.factorial(n + m))
-
-
-def _ratio(n1, m1, n2, m2) -> float:
-    """N_{n1 m1} / N_{n2 m2}."""
-    return math.sqrt(_norm2(n1, m1) / _norm2(n2, m2))
-
-
-@functools.lru_cache(maxsize=None)
-def _constants(degree: int, order: int) -> _Constants:
-    rows, width = degree + 1, order + 2
-    a, b, onehot = np.zeros((3, rows, width))
-    sectoral = np.zeros((rows, 1))
-    for j in range(1, degree + 2):
-        if j <= order + 1:
-            sectoral[j - 1, 0] = (2 * j - 1) * _ratio(j, j, j - 1, j - 1)
-            onehot[j - 1, j] = 1.0
-        for i in range(min(j - 1, order + 1) + 1):
-            a[j - 1, i] = (2 * j - 1) / (j - i) * _ratio(j, i, j - 1, i)
-            if i <= j - 2:
-                b[j - 1, i] = (j + i - 1) / (j - i) * _ratio(j, i, j - 2, i)
-    plus, minus, same = np.zeros((3, degree + 1, order + 1))
-    for n in range(2, degree + 1):
-        for m in range(min(n, order) + 1):
-            plus[n, m] = _ratio(n, m, n + 1, m + 1) * (1.0 if m == 0 else 0.5)
-            if m > 0:
-                minus[n, m] = 0.5 * (n - m + 2) * (n - m + 1) * _ratio(n, m, n + 1, m - 1)
-            same[n, m] = (n - m + 1) * _ratio(n, m, n + 1, m)
-    return _Constants(a, b, sectoral, onehot, plus, minus, same)
-
-
-def _tables(field: Geopotential, k: _Constants) -> _Tables:
-    """The scan's per-degree inputs; the multipliers of eq. (3.33) per axis, for m >= 0:
-
-    x: -C V_{n+1,m+1} - S W_{n+1,m+1} (halved for m > 0) + (n-m+2)!/(n-m)!/2 (C V_{n+1,m-1} + S W_{n+1,m-1})
-    y: -C W_{n+1,m+1} + S V_{n+1,m+1} (halved for m > 0) + (n-m+2)!/(n-m)!/2 (-C W_{n+1,m-1} + S V_{n+1,m-1})
-    z: (n - m + 1)(-C V_{n+1,m} - S W_{n+1,m})
-    (the S V_{n+1,1} term of m = 0 vanishes with S_n0 = 0), placed at the row j = n + 1 and order i of the
-    V, W they multiply.  Batch-invariant work on [N + 1, M + 2] values (degrees 0 and 1 get zeros).
-    """
-    c, s = jnp.asarray(field.c_nm), jnp.asarray(field.s_nm)
-    cp, sp, cm, sm, cz, sz = c * k.plus, s * k.plus, c * k.minus, s * k.minus, c * k.same, s * k.same
-
-    def placed(values, di):
-        """[n, m] -> row j - 1 = n (j = n + 1), order i = m + di, in an [N + 1, M + 2] array (i < 0 dropped)."""
-        out = jnp.zeros(values.shape[:-1] + (values.shape[-1] + 1,), values.dtype)
-        if di >= 0:
-            return out.at[..., di:di + values.shape[-1]].set(values)
-        return out.at[..., :values.shape[-1] - 1].set(values[..., 1:])
-
-    weights_v = (placed(-cp, 1) + placed(cm, -1), placed(sp, 1) + placed(sm, -1), placed(-cz, 0))
-    weights_w = (placed(-sp, 1) + placed(sm, -1), placed(-cp, 1) + placed(-cm, -1), placed(-sz, 0))
-    return _Tables(k.a, k.b, k.sectoral, k.onehot, weights_v, weights_w)
 
 
 def geopotential_acceleration(r_eci, earth_angle_rad, mu, r_earth_m, field: Geopotential):

@@ -3,8 +3,9 @@
 Each step: the guidance (``steering.steer``) wishes a thrust direction; the thruster (the boom's, or the
 quadrilateral's pair closest to the wish, ``quadrilateral.best_pair``) fires along the direction that body and
 joints reached if the firing rule fires, the misalignment is within its bound, the
-spacecraft is in sunlight (electric propulsion stops in the Earth's shadow: the conical shadow fraction
-scales the thrust) and propellant is left.  The orbit is integrated in MEE with RK4 and the full force
+spacecraft is in sunlight (electric propulsion stops in the Earth's shadow, and in the Moon's with
+``forces.moon_shadow``: the visible fraction of the solar disc, ``forces.sunlit_fraction_xyz``, scales the
+thrust, as it scales the solar radiation pressure) and propellant is left.  The orbit is integrated in MEE with RK4 and the full force
 model (``physics.dynamics.mee_rhs``).  Then, for the next step, the body slews towards the part of the end
 state's wish that the boom cannot reach (``pointing``), with the boom's coupling torque (eq. (8), from the
 joint angles and the thrust of the step) acting on it through eq. (6) (``pointing.slew_over_step``: it shifts
@@ -28,7 +29,7 @@ import jax.numpy as jnp
 
 from geojax.physics.dynamics import SpacecraftState, Thrust, mee_rhs
 from geojax.physics.elements import mee_to_rv_xyz
-from geojax.physics.forces import Environment, ForceModel, shadow_fraction_xyz
+from geojax.physics.forces import Environment, ForceModel, sunlit_fraction_xyz
 from geojax.physics.integrate import rk4_step
 from geojax.transfer import boom, pointing, quadrilateral, steering
 
@@ -203,8 +204,7 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     off_by = pointing.misalignment_rad(jnp.where(efficiency > 0, resultant / jnp.maximum(efficiency, 1e-30), axis),
                                        wished_unit)
     (x, y, z), _ = mee_to_rv_xyz(*(craft.orbit[j] for j in range(6)), mu)
-    sunlit = 1.0 - params.forces.shadow_on * (1.0 - shadow_fraction_xyz(
-        x, y, z, env3.r_sun_eci_m[0], params.forces.r_earth_m))
+    sunlit = sunlit_fraction_xyz(x, y, z, jax.tree_util.tree_map(lambda leaf: leaf[0], env3), params.forces)
     live = (~carry.done) & (craft.mass_kg > params.dry_mass_kg)
     wants = wish.fire * sunlit * live
     aligned = (off_by <= params.max_misalignment_rad) & (efficiency > 0)

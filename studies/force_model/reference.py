@@ -4,7 +4,7 @@ The field is the gradient of the potential in spherical coordinates,
 U = GM/r sum_n (R/r)^n sum_m Pbar_nm(sin phi) (C_nm cos m lambda + S_nm sin m lambda), with the fully
 normalised Legendre functions by the standard forward-column recursion (Holmes & Featherstone, J. Geodesy 76
 (2002), eqs. (11)-(13)) and dPbar_nm/dphi = N_nm/N_n,m+1 Pbar_n,m+1 - m tan(phi) Pbar_nm: a different method
-from geojax's Cunningham recursion in Cartesian terms (``geojax.physics.geopotential``).
+from geojax's Pines formulation in Cartesian terms (``geojax.physics.geopotential``).
 
 The integrator is SciPy's DOP853 on the Cartesian equations of motion at a tight tolerance, with the same Sun
 and Moon as geojax (its Meeus series, sampled hourly and interpolated by cubic splines), the same Earth
