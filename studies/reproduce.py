@@ -36,7 +36,7 @@ STUDIES = {
     "bounds": [("bounds/table.py", []), ("bounds/operational.py", ["--days", "28", "--margin", "0.2"]),
                ("bounds/periodic.py", [])],
     "longrun": [("longrun/predictor_reference.py", [])],
-    "compare": [("compare/windows.py", [])],
+    "compare": [("compare/windows.py", []), ("compare/table.py", ["--stage", "all"])],
 }
 
 
