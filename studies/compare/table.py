@@ -528,7 +528,7 @@ def notes(found: dict, limits: dict) -> list[str]:
         lines.append(f"- The per-axis bound (2021: {axes_2021:.2f}) is above the arms' ({arms['2021']['bound_per_year_mps']:.2f}) "
                      "although its normal pair pushes straight north and south: at Katz's 22.7 mN on 5000 kg (the arms: "
                      "2 x 0.5 N) the north–south ΔV must be spread over wide arcs around the nodes, each m/s changing "
-                     "the inclination by less. The discrete law's own gap to that bound (year 2 against 2021) is not "
+                     "the inclination by less. The discrete law's own gap to that bound is not "
                      "measured further here.")
     if absent:
         lines.append(f"- No {', '.join(absent)} bound: the gimbal's directions are a continuum, so each program is "
