@@ -309,7 +309,8 @@ def table(args) -> dict:
              "Steady state: the mean of years 2 and 3 (366 cycles each, per 365.25 days). Status at every "
              "integration step (0: the box held and every cycle solved). Cost: the batch's wall time after "
              f"compilation per sample-year, on {device_text()} (the batch's size and the load average are in "
-             "`table.json`). Best: the least steady ΔV among the paper's setting and the window candidates that "
+             "`table.json`; load 13–37 on 2 cores, so these differ by batch and moment: the Monte Carlo's sweeps at the "
+             "platform's lane width give the comparable cost, `mc.md`). Best: the least steady ΔV among the paper's setting and the window candidates that "
              "hold the box (status 0). Bound: `geojax bound`, periodic (x(T) = x(0)), the mean of one-year bounds "
              "from the station on 2020-12-31 and 2021-12-31, with the row's own thrusters.", "", head,
              "|" + "---|" * (head.count("|") - 1)]
