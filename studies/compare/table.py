@@ -533,9 +533,10 @@ def notes(found: dict, limits: dict) -> list[str]:
                      "measured further here.")
     if absent:
         lines.append(f"- No {', '.join(absent)} bound: the gimbal's directions are a continuum, so each program is "
-                     "refined by column generation, and at 22.7 mN the year is planned in 90-day stages; its 2021 run "
-                     "was stopped after 70 min at the 270-day stage on the shared CPU of this session (load 20–35), "
-                     "against 44 min for the whole per-axis year. `--stage bounds` computes it.")
+                     "refined by column generation, and at 22.7 mN the year is planned in 90-day stages; in this session "
+                     "its 2021 run was stopped after 70 min at the 270-day stage (load 20–35 on 2 cores), and a second "
+                     "(load 5) had reached its last stage (365 days, flown 51.57 m/s, box 0.0502°) after 20 min when "
+                     "the session ended. `--stage bounds` computes it.")
     return lines
 
 
