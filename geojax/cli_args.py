@@ -44,9 +44,10 @@ def parser() -> argparse.ArgumentParser:
     bnd.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
     bnd.add_argument("--slot-steps", type=int, default=4,
                      help="integration steps per thrust slot (thrust constant in RSW over a slot; default 4: 1 h)")
-    bnd.add_argument("--thrusters", choices=("arms", "gimbal", "fixed4"),
-                     help="thruster geometry: Li's two arms, Katz's gimbal, Gazzino's four fixed NE/NW/SE/SW thrusters "
-                          "(default: gimbal for a lyapunov or zone_nssk scenario, else arms)")
+    bnd.add_argument("--thrusters", choices=("arms", "gimbal", "fixed4", "axes"),
+                     help="thruster geometry: Li's two arms, Katz's gimbal, Gazzino's four fixed NE/NW/SE/SW thrusters, "
+                          "Katz's per-axis pairs (default: the controller's, Controller.bound_geometry: axes for a "
+                          "discrete lyapunov law, gimbal for another lyapunov or a zone_nssk scenario, else arms)")
     bnd.add_argument("--acquisition-days", type=float, default=0.0,
                      help="hold the box from this day on (a start the thrusters cannot hold at once; default 0)")
     bnd.add_argument("--free-end", action="store_true",

@@ -103,7 +103,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         # The thruster geometry the fuel bound uses (geojax.bound.directions): Li's two arms, Katz's gimbal,
         # Gazzino's four fixed NE/NW/SE/SW thrusters (cant_deg from the north-south axis); unset: from the
         # controller (gimbal for lyapunov and zone_nssk, else arms).
-        "layout": Field(str, None, choices=("arms", "gimbal", "fixed4")),
+        "layout": Field(str, None, choices=("arms", "gimbal", "fixed4", "axes")),
         "cant_deg": Field(_NUMBER, 45.0, lower=0.0, lower_inclusive=True, upper=90.0),
     },
     # The [controller] table: `kind` here, the other keys from the controller's module (control.REGISTRY).

@@ -38,7 +38,7 @@ STUDIES = {
                ("bounds/periodic.py", [])],
     "longrun": [("longrun/predictor_reference.py", [])],
     "lifetime": [("lifetime/lifetime.py", [])],
-    "compare": [("compare/windows.py", [])],
+    "compare": [("compare/windows.py", []), ("compare/table.py", ["--stage", "all"])],
 }
 
 

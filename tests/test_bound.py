@@ -1,6 +1,7 @@
 """The minimum-fuel bound (geojax.bound): known answers, duality, the linear model against the flight,
 the bound against the controllers, bad input."""
 
+import math
 import subprocess
 import sys
 
@@ -12,7 +13,7 @@ import pytest
 import geojax
 from geojax import cli
 from geojax.bound import Infeasible, bound, program
-from geojax.bound.directions import arm_direction, arms, fixed4, gimbal
+from geojax.bound.directions import arm_direction, arms, axes, fixed4, geometry_of, gimbal
 from geojax.bound.linear import SlotModel, linearize
 from geojax.bound.run import _uncontrolled
 from geojax.control.effects import V_SYNC_MPS
@@ -61,6 +62,63 @@ def test_linear_drift_with_a_box_costs_what_the_hand_solution_says(geometry):
     # 12 x 1 m/s x 1.06 x 9.5e-6 = 1.2e-4 m/s here, with a capacity far above what is flown).
     assert solution.lower_mps == pytest.approx(need, rel=1e-9 if geometry.exact else 1e-3)
     assert np.all(np.abs(solution.u_mps[:, :2]) < 1e-6 * need) if geometry.name != "arms" else True
+
+
+def two_axis_drift_model(n_slots, steps, drift_lon, drift_lat, v_mps=V_MPS):
+    """``drift_model`` with a second output: the longitude follows state 0, which drifts by ``drift_lon`` per step
+    and moves by u_S / V; the latitude as in ``drift_model``.  The radial Delta-V moves nothing."""
+    model = drift_model(n_slots, steps, drift_lat, v_mps)
+    t = np.arange(n_slots * steps).reshape(n_slots, steps)
+    model.y[..., 0] = drift_lon * t
+    model.b[:, 0, 1] = 1 / v_mps
+    model.c[:, :, 0, 0] = 1.0
+    model.e[:, :, 0, 1] = np.arange(steps) / steps / v_mps
+    return model
+
+
+@pytest.mark.parametrize("lon_deg", [0.0, 30.0, 96.0])
+def test_per_axis_thrusters_pay_the_l1_norm_of_their_earth_fixed_axes(lon_deg):
+    # By hand (Katz 2025, eq. (6): pairs along ECEF x, y, z): the box needs A = V (d_lon 47 - box) of along-track
+    # and B = V (d_lat 47 - box) of out-of-plane Delta-V (as in the one-axis case above); the radial part is free.
+    # At longitude lon the ECEF x and y axes have along-track parts -sin lon and cos lon, so the along-track
+    # Delta-V costs A / max(|sin lon|, |cos lon|) (the pair best aligned, the other's radial part harmless) and
+    # the normal B (z is W).  A gimbal pays the Euclidean sqrt(A^2 + B^2): never more.
+    n_slots, steps, box = 12, 4, 1e-5
+    model = two_axis_drift_model(n_slots, steps, 3e-6, 2e-6)
+    cap, lon = np.full(n_slots, 1.0), np.radians(lon_deg)
+    a_mps, b_mps = V_MPS * (3e-6 * (n_slots * steps - 1) - box), V_MPS * (2e-6 * (n_slots * steps - 1) - box)
+    need = a_mps / max(abs(np.sin(lon)), abs(np.cos(lon))) + b_mps
+    solution = program.solve(model, np.zeros((n_slots, 3)), cap, box, axes(lon), 4.2e7)
+    assert solution.fuel_mps == pytest.approx(need, rel=1e-7)
+    assert solution.lower_mps == pytest.approx(need, rel=1e-7)
+    gimballed = program.solve(model, np.zeros((n_slots, 3)), cap, box, gimbal(), 4.2e7)
+    assert gimballed.lower_mps <= solution.fuel_mps
+    assert gimballed.fuel_mps == pytest.approx(math.hypot(a_mps, b_mps), rel=1e-3)
+
+
+def test_per_axis_shares_cap_each_pair_apart():
+    # The normal pair's budget is its share of F / m per slot: B ~ 0.26 m/s over 12 slots fits a share of 1
+    # (12 m/s) and of 0.05 (0.6 m/s), not of 0.01 (0.12 m/s); the other pairs' shares do not help it.
+    n_slots, steps, box = 12, 4, 1e-5
+    model = drift_model(n_slots, steps, 2e-6)
+    cap = np.full(n_slots, 1.0)
+    need = V_MPS * (2e-6 * (n_slots * steps - 1) - box)
+    for share in (1.0, 0.05):
+        got = program.solve(model, np.zeros((n_slots, 3)), cap, box, axes(0.3, (1.0, 1.0, share)), 4.2e7)
+        assert got.fuel_mps == pytest.approx(need, rel=1e-7)
+    with pytest.raises(Infeasible):
+        program.solve(model, np.zeros((n_slots, 3)), cap, box, axes(0.3, (1.0, 1.0, 0.01)), 4.2e7)
+
+
+def test_katz_discrete_scenario_takes_the_per_axis_pairs_with_its_thresholds():
+    config = geojax.load_scenario("katz2025-discrete").config
+    geometry = geometry_of(config)
+    assert geometry.name == "axes"
+    ctl = config["controller"]
+    assert geometry.shares == pytest.approx([s / ctl["u0_km_per_s2"] for s in ctl["sigma_km_per_s2"]], rel=1e-12)
+    # |sigma| = u0 (thrust_laws.check_thresholds): the shares are a unit vector.
+    assert math.hypot(*geometry.shares) == pytest.approx(1.0, rel=1e-6)
+    assert geometry_of(geojax.load_scenario("katz2025-continuous").config).name == "gimbal"
 
 
 def test_an_impossible_box_is_infeasible_not_a_number():

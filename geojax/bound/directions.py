@@ -24,6 +24,10 @@ Geometries:
 * ``gimbal`` (Katz 2025, Sec. 2): one thruster pointed anywhere; the maximum of g . d is |g|, exact.
 * ``fixed4`` (Gazzino 2016, Sec. 5): four fixed thrusters whose Delta-V points north-east, north-west,
   south-east and south-west (at ``cant_deg`` from the north-south axis, in the S-W plane); exact.
+* ``axes`` (Katz 2025, eq. (6), the discrete law): three thruster pairs along the Earth-fixed x, y and z axes,
+  firing at once, pair i up to sigma_i (its ``shares`` of F / m, sigma_i / u0); the fuel is the L1 norm of the
+  Delta-V in those axes.  A geostationary satellite's RSW frame turns with the Earth, so at the station's
+  longitude lon the axes are fixed in RSW: x = (cos lon, -sin lon, 0), y = (sin lon, cos lon, 0), z = W; exact.
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ class Geometry(NamedTuple):
     one_at_a_time: bool  # the thrusters share one firing budget per slot (time-sharing), else one each
     dark_off: bool  # no firing in Earth shadow
     exact: bool  # the generators span the whole set (no pricing needed)
+    shares: tuple | None = None  # per thruster, its firing budget as a fraction of F / m (None: 1 each)
 
 
 def arm_direction(alpha_rad, beta_rad):
@@ -115,14 +120,37 @@ def fixed4(cant_deg: float = 45.0) -> Geometry:
     return Geometry("fixed4", dirs, [oracle(d) for d in dirs], one_at_a_time=False, dark_off=False, exact=True)
 
 
-GEOMETRIES = ("arms", "gimbal", "fixed4")
+def axes(lon_rad: float, shares=(1.0, 1.0, 1.0)) -> Geometry:
+    """Katz's per-axis thrusters (eq. (6)) at a station of longitude ``lon_rad``: pair i fires +-(ECEF axis i),
+    up to ``shares[i]`` x F / m (sigma_i / u0), all three at once; the generators are the six directions."""
+    c, s = math.cos(lon_rad), math.sin(lon_rad)
+    axes_rsw = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])  # ECEF x, y, z in RSW at the station
+    dirs = [np.stack([a, -a]) for a in axes_rsw]
+
+    def oracle(d):
+        def best(g):
+            dot = g @ d.T  # [S, 2]: the + and - direction of the pair
+            pick = np.argmax(dot, axis=1)
+            return d[pick], dot[np.arange(len(g)), pick]
+        return best
+
+    if len(shares) != 3 or min(shares) <= 0:
+        raise ValueError(f"axes: three positive shares of F / m, got {shares!r}")
+    return Geometry("axes", dirs, [oracle(d) for d in dirs], one_at_a_time=False, dark_off=False, exact=True,
+                    shares=tuple(float(x) for x in shares))
+
+
+GEOMETRIES = ("arms", "gimbal", "fixed4", "axes")
 
 
 def geometry_of(config: dict, name: str | None = None) -> Geometry:
     """The thruster geometry of a scenario's validated ``config``: ``name`` if given, else its
     ``thrusters.layout``, else its controller's ``bound_geometry`` (the gimbal for a Lyapunov law (Katz) or a
-    zone NSSK manipulator (Ye), the arms for Li's planners)."""
+    zone NSSK manipulator (Ye), the per-axis pairs for Katz's discrete law, the arms for Li's planners).  ``axes``
+    takes its shares from the discrete law's thresholds (sigma / u0), or 1 each for another controller."""
     name = name or config["thrusters"].get("layout")
+    controller = config["controller"]
+    discrete = controller["kind"] == "lyapunov" and controller.get("thrust_mode") == "discrete"
     if name is None:
         from geojax.control import lookup
 
@@ -133,4 +161,8 @@ def geometry_of(config: dict, name: str | None = None) -> Geometry:
         t = config["thrusters"]
         return arms(*(math.radians(float(t[k])) for k in ("beta_max_deg", "beta_min_deg", "alpha_max_deg",
                                                            "alpha_min_deg")))
+    if name == "axes":
+        shares = ([float(x) / float(controller["u0_km_per_s2"]) for x in controller["sigma_km_per_s2"]] if discrete
+                  else (1.0, 1.0, 1.0))
+        return axes(math.radians(float(config["station"]["lon_deg"])), shares)
     return gimbal() if name == "gimbal" else fixed4(float(config["thrusters"].get("cant_deg", 45.0)))

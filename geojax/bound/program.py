@@ -8,7 +8,8 @@ and the Delta-V w_kj >= 0 (m/s) flown along each generator direction d_j of each
     minimise    sum_kj w_kj                                   (L1 fuel: m/s of Delta-V)
     subject to  z_{k+1} = Phi_k z_k + B_k (u_k - ubar_k)        (dynamics about the nominal, scaled)
                 u_k = sum_j w_kj d_j                             (what the thrusters deliver)
-                sum_{j of thruster i} w_kj <= cap_ki             (F/m times the slot's firing time; one shared
+                sum_{j of thruster i} w_kj <= cap_ki             (F/m times the slot's firing time, times the
+                                                                  thruster's ``Geometry.shares``; one shared
                                                                   budget when only one thruster fires at a time)
                 |ybar + C z_k + E (u_k - ubar_k)| <= box         (longitude and latitude at every step start)
                 z_S = D^-1 dx_T                                  (optional: ``terminal_dx``, the state at the end)
@@ -75,7 +76,7 @@ def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: flo
     lower, solution, done = -np.inf, None, 0
     for done in range(1, rounds + 1):
         solution = _solve_once(model, u_nominal, cap_mps, box_rad, generators, geometry.one_at_a_time, scale_p_m,
-                               prox, first_boxed_slot, terminal_dx)
+                               prox, first_boxed_slot, terminal_dx, geometry.shares)
         bound, new = _price(solution, cap_mps, geometry)
         lower = max(lower, bound)
         gap = (solution["fuel"] - lower) / max(solution["fuel"], 1e-12)
@@ -88,7 +89,7 @@ def solve(model, u_nominal, cap_mps, box_rad, geometry: Geometry, scale_p_m: flo
 
 
 def _solve_once(model, u_nominal, cap_mps, box_rad, generators, one_at_a_time, scale_p_m, prox=0.0,
-                first_boxed_slot=0, terminal_dx=None) -> dict:
+                first_boxed_slot=0, terminal_dx=None, shares=None) -> dict:
     phi, b, c, e, y = (np.asarray(a) for a in (model.phi, model.b, model.c, model.e, model.y))
     n_slots, n_steps = y.shape[:2]
     scale = np.full(6, STATE_SCALE_REL)
@@ -130,8 +131,8 @@ def _solve_once(model, u_nominal, cap_mps, box_rad, generators, one_at_a_time, s
     # Capacity per thruster, or one shared budget.
     groups = [np.arange(n_w)] if one_at_a_time else np.split(np.arange(n_w), np.cumsum(counts)[:-1])
     cap_rows = []
-    for group in groups:
-        rows = ub.add(n_slots, cap_mps)
+    for group, share in zip(groups, _shares(shares, len(groups))):
+        rows = ub.add(n_slots, share * cap_mps)
         for j in group:
             ub.put(rows, w_of(ks) + j, 1.0)
         cap_rows.append(rows)
@@ -207,14 +208,19 @@ def _price(solution: dict, cap_mps, geometry: Geometry):
         y_cap = solution["y_cap"][0]
         lower += float(np.sum(cap_mps * (np.minimum(0.0, 1.0 - top) - y_cap)))
     else:
-        for (_, top), y_cap in zip(best, solution["y_cap"]):
-            lower += float(np.sum(cap_mps * (np.minimum(0.0, 1.0 - top) - y_cap)))
+        for (_, top), y_cap, share in zip(best, solution["y_cap"], _shares(geometry.shares, len(best))):
+            lower += float(np.sum(share * cap_mps * (np.minimum(0.0, 1.0 - top) - y_cap)))
     new = []
     for i, (direction, _) in enumerate(best):
         y_cap = solution["y_cap"][0 if geometry.one_at_a_time else i]
         reduced = 1.0 - y_cap - np.sum(g * direction, axis=1)
         new.append(_most_improving(direction, cap_mps * np.minimum(reduced, 0.0)))
     return lower, new
+
+
+def _shares(shares, n: int):
+    """Each capacity group's fraction of ``cap_mps`` (``Geometry.shares``; 1 each when None)."""
+    return (1.0,) * n if shares is None else shares
 
 
 def _most_improving(directions, gain, decimals: int = 4):

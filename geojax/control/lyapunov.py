@@ -144,7 +144,8 @@ def controller(mode: str, smooth: bool = False) -> Controller:
     surrogate = None if smooth or mode == "continuous-clipped" else controller(mode, smooth=True)
     # Katz 2025 tunes (k_h, k_e) (Sec. 3, fmincon), k_lambda and lambda_b fixed at Sec. 3.1's values.
     return Controller(stateless_init, no_plan, thrust, FIELDS, surrogate=surrogate,
-                      bound_geometry="gimbal", tuned_fields=("k_h_per_km2_s", "k_e_km2_per_s3"))
+                      bound_geometry="axes" if mode == "discrete" else "gimbal",  # eq. (6): per-axis pairs
+                      tuned_fields=("k_h_per_km2_s", "k_e_km2_per_s3"))
 
 
 def gains(controller: dict) -> "LyapunovGains":
