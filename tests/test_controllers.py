@@ -189,6 +189,7 @@ def test_a_controller_of_ones_own_is_named_by_import_path(tmp_path, monkeypatch,
     assert geometry_of(scenario.load(scenario_path).config).name == "gimbal"
     assert geometry_of(scenario.load("li2022-qffc").config).name == "arms"
     assert geometry_of(scenario.load("katz2025-continuous").config).name == "gimbal"
+    assert geometry_of(scenario.load("katz2025-discrete").config).name == "axes"  # eq. (6): per-axis pairs
     spec = tmp_path / "s.toml"
     spec.write_text(f'scenario = "{scenario_path}"\ncontrollers = ["my_laws:DAMPER"]\n[set]\n"duration.days" = 2.0\n'
                     '[grid]\n"controller.k_inc_per_s" = [1e-6, 1e-4]\n')
