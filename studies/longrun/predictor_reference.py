@@ -217,11 +217,13 @@ def main(argv=None) -> int:
     ap.add_argument("--segments", default="0,30", help="cycles between re-starts of the reference; 0: never")
     ap.add_argument("--out", type=Path, default=HERE / "results")
     ap.add_argument("--name", default="predictor_reference", help="results file of the --years runs")
+    ap.add_argument("--long-name", help="results file of the --long-years runs (default predictor_reference_<N>yr)")
     args = ap.parse_args(argv)
     command = "python studies/longrun/predictor_reference.py " + " ".join(sys.argv[1:] if argv is None else argv)
     args.out.mkdir(parents=True, exist_ok=True)
     for controllers, years, name in ((args.controllers, args.years, args.name),
-                                     (args.long_controllers, args.long_years, f"predictor_reference_{args.long_years}yr")):
+                                     (args.long_controllers, args.long_years,
+                                      args.long_name or f"predictor_reference_{args.long_years}yr")):
         if not controllers:
             continue
         rows = [measure(c, years, int(k)) for c in controllers.split(",") for k in args.segments.split(",")]
