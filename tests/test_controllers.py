@@ -147,38 +147,18 @@ def test_a_propellant_that_cannot_last_one_step_is_refused_at_load(overrides, me
         scenario.load("li2022-qffc", overrides)
 
 
-OWN_MODULE = '''
-import jax.numpy as jnp
-import geojax
-from geojax.control.base import no_plan, stateless_init
 
 
-def thrust(params, plan, t, state, environment):
-    """Damp the daily north-south swing: thrust against the velocity's ECEF z (m/s^2 per m/s)."""
-    accel = jnp.stack([0.0, 0.0, -params.controller["k_inc"] * environment.v_eci_mps[2]])
-    norm = jnp.maximum(jnp.linalg.norm(accel), 1e-30)
-    magnitude = jnp.minimum(norm, params.thrusters["thrust_n"] / state.mass_kg)
-    return geojax.Thrust(accel / norm, magnitude * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
-
-
-DAMPER = geojax.Controller(stateless_init, no_plan, thrust, lanes_cpu=16, bound_geometry="gimbal", fields={
-    "k_inc_per_s": geojax.Field(float, 1e-5, lower=0.0, si="k_inc", transform=geojax.LOG)})
-NOT_A_CONTROLLER = 3
-'''
-
-
-def test_a_controller_of_ones_own_is_named_by_import_path(tmp_path, monkeypatch, capsys):
+def test_a_controller_of_ones_own_is_named_by_import_path(tmp_path, capsys):
     """``controller.kind = "module:NAME"`` in a scenario file and a sweep's ``controllers``, through the command
     line, with the width the controller declares (16 lanes); bad paths are one line, exit 2."""
     import h5py
 
     from geojax import cli
 
-    (tmp_path / "my_laws.py").write_text(OWN_MODULE)
-    monkeypatch.syspath_prepend(str(tmp_path))
     scenario_path = tmp_path / "damped.toml"
     scenario_path.write_text(scenario.to_toml({**scenario.load("li2022").config,
-                                               "controller": {"kind": "my_laws:DAMPER", "k_inc_per_s": 2e-5}}))
+                                               "controller": {"kind": "own_laws:DAMPER", "k_inc_per_s": 2e-5}}))
     assert cli.main(["simulate", str(scenario_path), "--days", "2", "-q", "--out", str(tmp_path / "one.h5")]) == 0
     with h5py.File(tmp_path / "one.h5") as f:
         assert f["metrics/dv_per_year_mps"][()] > 0  # the law fired
@@ -191,15 +171,15 @@ def test_a_controller_of_ones_own_is_named_by_import_path(tmp_path, monkeypatch,
     assert geometry_of(scenario.load("katz2025-continuous").config).name == "gimbal"
     assert geometry_of(scenario.load("katz2025-discrete").config).name == "axes"  # eq. (6): per-axis pairs
     spec = tmp_path / "s.toml"
-    spec.write_text(f'scenario = "{scenario_path}"\ncontrollers = ["my_laws:DAMPER"]\n[set]\n"duration.days" = 2.0\n'
+    spec.write_text(f'scenario = "{scenario_path}"\ncontrollers = ["own_laws:DAMPER"]\n[set]\n"duration.days" = 2.0\n'
                     '[grid]\n"controller.k_inc_per_s" = [1e-6, 1e-4]\n')
     assert cli.main(["sweep", str(spec), "--out", str(tmp_path / "s.h5"), "-q"]) == 0
     with h5py.File(tmp_path / "s.h5") as f:
         dv = f["metrics/dv_per_year_mps"][0, :, 0]
-        assert f.attrs["lanes_per_device"] == "my_laws:DAMPER 16"
+        assert f.attrs["lanes_per_device"] == "own_laws:DAMPER 16"
     assert dv[1] > dv[0] > 0  # a stiffer gain spends more
     capsys.readouterr()
-    for kind, message in [("my_laws:NOT_A_CONTROLLER", "is not a geojax Controller (found int)"),
+    for kind, message in [("own_laws:NOT_A_CONTROLLER", "is not a geojax Controller (found int)"),
                           ("no_such_module:X", "cannot import 'no_such_module'"),
                           ("qfc", "must be a non-empty list of distinct names")]:
         spec.write_text(f'scenario = "{scenario_path}"\ncontrollers = ["{kind}"]\n'

@@ -12,38 +12,17 @@ import pytest
 from geojax import cli, plots, scenario, tune
 from geojax.control import REGISTRY
 
-# A user's inclination damper, outside the package: thrust against the velocity's ECEF z (Li 2022's normal
-# direction), of acceleration k_inc * |v_z| capped at the thrusters' F / m.  Its gain is its only tunable field,
-# with an alias and a unit, and the one a tuning moves by default.
-OWN_MODULE = '''
-import jax.numpy as jnp
-import geojax
-from geojax.control.base import no_plan, stateless_init
-
-
-def thrust(params, plan, t, state, environment):
-    accel = jnp.stack([0.0, 0.0, -params.controller["k_inc"] * environment.v_eci_mps[2]])
-    norm = jnp.maximum(jnp.linalg.norm(accel), 1e-30)
-    magnitude = jnp.minimum(norm, params.thrusters["thrust_n"] / state.mass_kg)
-    return geojax.Thrust(accel / norm, magnitude * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
-
-
-DAMPER = geojax.Controller(stateless_init, no_plan, thrust, fields={
-    "k_inc_per_s": geojax.Field(float, 1e-5, lower=0.0, si="k_inc", transform=geojax.LOG, alias="k_inc",
-                                symbol="k_inc", unit="1/s", doc="inclination damping gain")},
-    tuned_fields=("k_inc_per_s",))
-'''
+# A user's inclination damper, outside the package: tests/own_laws.py (its gain is its only tunable field, with an
+# alias and a unit, and the one a tuning moves by default).
 
 
 @pytest.fixture
-def own_scenario(tmp_path, monkeypatch):
-    """li2022 flown by ``tuned_laws:DAMPER`` (a module in ``tmp_path``), with a 1 deg box that it keeps."""
-    (tmp_path / "tuned_laws.py").write_text(OWN_MODULE)
-    monkeypatch.syspath_prepend(str(tmp_path))
+def own_scenario(tmp_path):
+    """li2022 flown by ``own_laws:DAMPER`` (``tests/own_laws.py``), with a 1 deg box that it keeps."""
     path = tmp_path / "damped.toml"
     config = scenario.load("li2022").config
     path.write_text(scenario.to_toml({**config, "station": {**config["station"], "box_half_width_deg": 1.0},
-                                      "controller": {"kind": "tuned_laws:DAMPER", "k_inc_per_s": 1e-4}}))
+                                      "controller": {"kind": "own_laws:DAMPER", "k_inc_per_s": 1e-4}}))
     return path
 
 
@@ -58,7 +37,7 @@ def test_a_controller_of_ones_own_is_tuned_through_the_command_line(own_scenario
     err = capsys.readouterr().err
     assert "geojax tune: warning: days = 2: the tuning horizon is under half a year" in err
     with h5py.File(tmp_path / "t.h5") as f:
-        assert f.attrs["parameters"] == "controller.k_inc_per_s" and f.attrs["controller"] == "tuned_laws:DAMPER"
+        assert f.attrs["parameters"] == "controller.k_inc_per_s" and f.attrs["controller"] == "own_laws:DAMPER"
         dv = f["iterations/dv_per_year_mps"][()]  # [iteration, start]
         best_gain, best_dv = f["best/k_inc_per_s"][()], f["metrics/dv_per_year_mps"][()]
     assert best_gain < 1e-4 and best_dv < dv[0, 0]
@@ -73,7 +52,7 @@ def test_a_controller_of_ones_own_is_tuned_through_the_command_line(own_scenario
     assert spec.parameters == ["controller.k_inc_per_s"]
     assert [e.name for e in tune.Problem(spec.scenario, ["k_inc"]).entries] == spec.parameters
     # The best point's legend: the key by its Field's symbol and unit (the controller found by its import path).
-    assert plots.label_for("controller.k_inc_per_s", ("tuned_laws:DAMPER",)) == "k_inc (1/s)"
+    assert plots.label_for("controller.k_inc_per_s", ("own_laws:DAMPER",)) == "k_inc (1/s)"
 
 
 def test_the_default_parameters_and_the_horizon_warning_come_from_the_controller(own_scenario):
@@ -83,9 +62,9 @@ def test_the_default_parameters_and_the_horizon_warning_come_from_the_controller
     spec = tune.from_dict({"scenario": str(own_scenario)})
     assert spec.parameters == ["controller.k_inc_per_s"] and spec.days == 365.25
     assert tune.horizon_warning(spec) is None
-    import tuned_laws
+    import own_laws
 
-    planner = dataclasses.replace(tuned_laws.DAMPER, reference_cycles=400)
+    planner = dataclasses.replace(own_laws.DAMPER, reference_cycles=400)
     spec = tune.from_dict({"scenario": str(own_scenario)}, controller=planner)
     assert "shorter than the controller's prediction window (400 cycles)" in tune.horizon_warning(spec)
 
