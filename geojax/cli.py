@@ -23,6 +23,7 @@ flag, where the library's spec key has one) and what is allowed, and exits with 
 
 from __future__ import annotations
 
+import re
 import sys
 import warnings
 from pathlib import Path
@@ -34,7 +35,8 @@ from geojax.sweep.report import summary as sweep_summary, title as sweep_title  
 EXIT_BAD_INPUT = 2
 # The flag of each spec key a library error may name (the library speaks in spec keys, the command line in flags).
 FLAGS = {"bound.slot_steps": "--slot-steps", "bound.acquisition_days": "--acquisition-days",
-         "bound.thrusters": "--thrusters"}
+         "bound.thrusters": "--thrusters", "out": "--out", "resume": "--resume", "chunk": "--chunk",
+         "workers": "--workers", "ray": "--ray"}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -56,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
 
         if not isinstance(err, ClusterError):
             raise
-        print(f"geojax {args.command}: error: {err}", file=sys.stderr)
+        print(f"geojax {args.command}: error: {in_flags(str(err))}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         hint = ""
@@ -72,10 +74,14 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def in_flags(message: str) -> str:
-    """A library error with the spec key it starts with written as its flag ("bound.slot_steps: ..." ->
-    "--slot-steps: ...")."""
+    """A library error in spec keys written in flags: the key it starts with ("bound.slot_steps: ..." ->
+    "--slot-steps: ...") and every setting it names ("resume=True" -> "--resume", "chunk=3" -> "--chunk 3",
+    "out='a.h5'" -> "--out 'a.h5'")."""
     key, colon, rest = message.partition(":")
-    return f"{FLAGS[key]}{colon}{rest}" if colon and key in FLAGS else message
+    text = f"{FLAGS[key]}{colon}{rest}" if colon and key in FLAGS else message
+    return re.sub(r"\b([a-z_.]+)=(\S+?)(?=[\s;,)]|:\s|$)",
+                  lambda m: m[0] if m[1] not in FLAGS else FLAGS[m[1]] + ("" if m[2] == "True" else f" {m[2]}"),
+                  text)
 
 
 def _say(args):
@@ -107,17 +113,13 @@ def _check_outputs(args) -> None:
 
 
 def _propagate(args) -> int:
-    from geojax import scenario, store, uncontrolled
+    from geojax import scenario, uncontrolled
 
     sc = scenario.load(args.scenario, _overrides(args))
     _check_outputs(args)
     result = uncontrolled.propagate_scenario(sc, progress=False if args.quiet else None)
-    for line in result.summary():
-        _say(args)(line)
-    _detail(args)(f"  devices {store.device_description()}; propagated {len(result.cycles.t_s)} cycles to interpolate "
-                  f"the change over exactly {sc.days:g} days")
-    _write(result, args.out, args.plots)
-    return 0
+    return _finish(args, result, f"propagated {len(result.cycles.t_s)} cycles to interpolate the change over "
+                                 f"exactly {sc.days:g} days")
 
 
 def _simulate(args) -> int:
@@ -133,32 +135,33 @@ def _simulate(args) -> int:
 
 
 def _run_simulation(sc, seed: int, out, plots, args) -> int:
-    from geojax import store
     from geojax.loop import rollout
 
     say = _say(args)
     say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; compiling...", flush=True)
     result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"compiled in {s:.1f} s; running...", flush=True))
-    summary = result.summary()
-    say(summary[0])
-    _detail(args)(f"  devices {store.device_description()}; the run is one compiled call (no host callbacks in the "
-                  f"loop), so it reports its times instead of a progress bar")
-    for line in summary[1:]:
-        say(line)
-    _write(result, out, plots)
-    return 0
+    return _finish(args, result, "the run is one compiled call (no host callbacks in the loop), so it reports its "
+                                 "times instead of a progress bar", out, plots)
 
 
-def _write(result, out, plots) -> None:
-    """The run's file (``--out``) and figures (``--plots``), each named as it is written."""
+def _finish(args, result, detail: str, out=None, plots=None) -> int:
+    """Print the run's summary (and with ``-v`` the devices and ``detail``), then write its file (``--out``) and
+    figures (``--plots``), each named as it is written."""
+    from geojax import store
+
+    for line in result.summary():
+        _say(args)(line)
+    _detail(args)(f"  devices {store.device_description()}; {detail}")
+    out, plots = (out, plots) if out or plots else (getattr(args, "out", None), getattr(args, "plots", None))
     if out:
         print(f"wrote {result.save(out)}")
     if plots:
         print("wrote " + " and ".join(map(str, result.plot(plots))))
+    return 0
 
 
 def _bound(args) -> int:
-    from geojax import scenario, store
+    from geojax import scenario
     from geojax.bound import bound
 
     sc = scenario.load(args.scenario, _overrides(args))
@@ -168,24 +171,16 @@ def _bound(args) -> int:
         f"(slots of {args.slot_steps} steps); linearising about the uncontrolled run...", flush=True)
     result = bound(sc, slot_steps=args.slot_steps, thrusters=args.thrusters, acquisition_days=args.acquisition_days,
                    free_end=args.free_end, say=say)
-    for line in result.summary():
-        say(line)
-    _detail(args)(f"  devices {store.device_description()}; {result.wall_s:.1f} s in all")
-    _write(result, args.out, args.plots)
-    return 0
+    return _finish(args, result, f"{result.wall_s:.1f} s in all")
 
 
 def _transfer(args) -> int:
-    from geojax import store, transfer
+    from geojax import transfer
 
     sc = transfer.load(args.scenario)
     _check_outputs(args)
     result = transfer.run(sc, days=args.days)
-    for line in result.summary():
-        _say(args)(line)
-    _detail(args)(f"  devices {store.device_description()}; {result.wall_s:.1f} s with compilation")
-    _write(result, args.out, args.plots)
-    return 0
+    return _finish(args, result, f"{result.wall_s:.1f} s with compilation")
 
 
 def _tune(args) -> int:

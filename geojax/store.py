@@ -98,14 +98,14 @@ def check_output_file(path: str | Path) -> Path:
     creatable.  Checked before a run starts."""
     path = Path(path)
     if path.is_dir():
-        raise ValueError(f"--out {str(path)!r}: is a folder; give a file name")
+        raise ValueError(f"out={str(path)!r}: is a folder; give a file name")
     parent = path.parent
     while not parent.exists():
         parent = parent.parent
     if not parent.is_dir():
-        raise ValueError(f"--out {str(path)!r}: {str(parent)!r} is not a folder")
+        raise ValueError(f"out={str(path)!r}: {str(parent)!r} is not a folder")
     if not os.access(parent, os.W_OK):
-        raise ValueError(f"--out {str(path)!r}: {str(parent)!r} is not writable")
+        raise ValueError(f"out={str(path)!r}: {str(parent)!r} is not writable")
     return path
 
 
@@ -165,13 +165,13 @@ def _other_live_process(pid: int) -> bool:
     return True
 
 
-def read_attrs(path: str | Path, what: str = "--resume") -> dict:
+def read_attrs(path: str | Path, what: str = "resume") -> dict:
     """The attributes of a geojax results file; ``ValueError`` with one line if ``path`` is not one."""
     try:
         with h5py.File(path, "r") as f:
             attrs = dict(f.attrs)
     except OSError:
-        raise ValueError(f"{what}: {str(path)!r} is not an HDF5 file; choose another --out") from None
+        raise ValueError(f"{what}: {str(path)!r} is not an HDF5 file; choose another output file") from None
     if "config_toml" not in attrs:
-        raise ValueError(f"{what}: {str(path)!r} is not a geojax results file; choose another --out")
+        raise ValueError(f"{what}: {str(path)!r} is not a geojax results file; choose another output file")
     return attrs

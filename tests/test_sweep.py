@@ -83,7 +83,7 @@ def test_killed_sweep_resumes_to_the_same_data(straight, tmp_path, monkeypatch):
         sweep.run_sweep(spec, out, chunk=3, progress=False)
     monkeypatch.setattr(store, "atomic_write", real_write)
     assert not out.exists()
-    with pytest.raises(ValueError, match="pass --resume"):
+    with pytest.raises(ValueError, match="pass resume=True"):
         sweep.run_sweep(spec, out, chunk=3, progress=False)
     with pytest.raises(ValueError, match="cut into chunks of 3"):  # the cut on disk is kept
         sweep.run_sweep(spec, out, resume=True, chunk=2, progress=False)

@@ -27,14 +27,13 @@ problem's linear model (weak duality, ``bound.program``); how it moves with the 
 from __future__ import annotations
 
 import time
-from pathlib import Path
 from typing import Callable, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.bound import program
+from geojax.bound import program, report
 from geojax.bound.directions import Geometry, geometry_of
 from geojax.bound.linear import SlotModel, linearize
 from geojax.control.base import Controller, no_plan, stateless_init
@@ -79,23 +78,8 @@ class BoundResult(NamedTuple):
     config_toml: str = ""
     epoch_tt_s: float = float("nan")
 
-    def save(self, path) -> Path:
-        """Write the file ``geojax bound --out`` writes (``bound.report``); returns its path."""
-        from geojax.bound import report
-
-        return report.save(self, path)
-
-    def summary(self) -> list[str]:
-        """The lines ``geojax bound`` prints after the program."""
-        from geojax.bound import report
-
-        return report.summary(self)
-
-    def plot(self, folder) -> list[Path]:
-        """Draw the plan (Delta-V per slot) and the flown box into ``folder``; returns the figure's path in a list."""
-        from geojax.bound import report
-
-        return report.plot(self, folder)
+    # What ``geojax bound`` writes (``--out``), prints and draws (``--plots``): its report's functions.
+    save, summary, plot = report.save, report.summary, report.plot
 
 
 def bound(sc: Scenario, *, slot_steps: int = 4, thrusters: str | None = None, acquisition_days: float = 0.0,

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import functools
 import time
-from pathlib import Path
 from typing import NamedTuple
 
 import jax
@@ -53,17 +52,8 @@ class Result(NamedTuple):
         """The per-cycle records in edge units (``/cycles``) of a single rollout."""
         return cycle_table(self.records)
 
-    def save(self, path) -> Path:
-        """Write the file ``geojax simulate --out`` writes (``loop.report``); returns its path."""
-        return report.save(self, path)
-
-    def summary(self, paper: bool = True) -> list[str]:
-        """The lines ``geojax simulate`` prints: status and metrics, with ``paper`` beside a paper's numbers."""
-        return report.summary(self, paper)
-
-    def plot(self, folder) -> list[Path]:
-        """Draw the figures ``geojax simulate --plots`` draws into ``folder``; returns their paths."""
-        return report.plot(self, folder)
+    # What ``geojax simulate`` writes (``--out``), prints and draws (``--plots``): its report's functions.
+    save, summary, plot = report.save, report.summary, report.plot
 
 
 def rollout(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,

@@ -37,7 +37,7 @@ CONNECT_TIMEOUT_S = 5.0
 
 class ClusterError(RuntimeError):
     """The cluster could not finish the sweep (every worker lost, a chunk failing everywhere); the chunks
-    done are saved and ``--resume`` continues."""
+    done are saved and ``resume=True`` (``--resume``) continues."""
 
 
 @contextlib.contextmanager
@@ -50,7 +50,7 @@ def connected(address: str):
     try:
         import ray
     except ImportError:
-        raise ValueError('--ray: Ray is not installed; pip install "geojax[ray]"') from None
+        raise ValueError('ray: Ray is not installed; pip install "geojax[ray]"') from None
     if ray.is_initialized():
         yield ray
         return
@@ -66,7 +66,7 @@ def connected(address: str):
     except (ConnectionError, RuntimeError, ValueError, TimeoutError) as err:
         first = (str(err).strip().splitlines() or [type(err).__name__])[0]
         hint = "; start one with `ray start --head`" if address == "auto" else ""
-        raise ValueError(f"--ray {address}: {first}{hint}") from None
+        raise ValueError(f"ray={address}: {first}{hint}") from None
     try:
         yield ray
     finally:
@@ -77,11 +77,11 @@ def _check_reachable(address: str) -> None:
     """Fail fast, in one line, where nothing listens at ``address`` (Ray itself retries for 20-30 s)."""
     host, _, port = address.removeprefix("ray://").rpartition(":")
     if not host or not port.isdigit() or not 0 < int(port) < 65536:
-        raise ValueError(f"--ray {address}: expected local, auto, HOST:PORT or ray://HOST:PORT")
+        raise ValueError(f"ray={address}: expected local, auto, HOST:PORT or ray://HOST:PORT")
     try:
         socket.create_connection((host.strip("[]"), int(port)), timeout=CONNECT_TIMEOUT_S).close()
     except OSError as err:
-        raise ValueError(f"--ray {address}: cannot reach {host}:{port} ({err.strerror or err})") from None
+        raise ValueError(f"ray={address}: cannot reach {host}:{port} ({err.strerror or err})") from None
 
 
 class ChunkWorker:
@@ -116,7 +116,7 @@ def placements(nodes: list[dict], workers: int | None) -> list[tuple[str, int, f
     alive = sorted((n for n in nodes if n.get("Alive") and n.get("Resources", {}).get("CPU", 0) >= 1),
                    key=lambda n: n["NodeID"])
     if not alive:
-        raise ValueError("--ray: the cluster has no alive node with a CPU")
+        raise ValueError("ray: the cluster has no alive node with a CPU")
     if workers is None:
         placed = []
         for node in alive:
@@ -179,7 +179,7 @@ def run_chunks(sweep, todo: list[tuple[str, int, int]], save, bar, workers: int 
         note()
         while pending or inflight:
             if not live:
-                raise ClusterError("every Ray worker was lost; the chunks done are saved: --resume continues")
+                raise ClusterError("every Ray worker was lost; the chunks done are saved: resume=True continues")
             for w in sorted(live):
                 while pending and sum(1 for v, _ in inflight.values() if v == w) < QUEUED_PER_WORKER:
                     task = pending.popleft()
@@ -195,7 +195,7 @@ def run_chunks(sweep, todo: list[tuple[str, int, int]], save, bar, workers: int 
                     attempts[task] += 1
                     if attempts[task] >= MAX_ATTEMPTS:
                         raise ClusterError(f"chunk {task[0]} from sample {task[1]} failed {attempts[task]} times; "
-                                           f"last: {str(err).splitlines()[0]}; --resume continues") from None
+                                           f"last: {str(err).splitlines()[0]}; resume=True continues") from None
                     live.discard(w)
                     pending.appendleft(task)
                     note()

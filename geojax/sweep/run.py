@@ -36,21 +36,21 @@ def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | 
     """
     out = store.check_output_file(out)
     if workers is not None and ray is None:
-        raise ValueError("--workers: only with --ray (a local sweep uses this process's devices)")
+        raise ValueError("workers: only with ray=ADDRESS (a local sweep uses this process's devices)")
     if workers is not None and not 1 <= workers <= 10_000:
-        raise ValueError(f"--workers: must be from 1 to 10000, got {workers}")
+        raise ValueError(f"workers: must be from 1 to 10000, got {workers}")
     parts = out.with_name(out.name + ".parts")
     digest = hashlib.sha256(sweep.text.encode()).hexdigest()
     if chunk is not None and chunk < 1:
-        raise ValueError(f"--chunk: must be >= 1, got {chunk}")
+        raise ValueError(f"chunk: must be >= 1, got {chunk}")
     if (out.exists() or parts.exists()) and not resume:
         where = str(out) if out.exists() else f"{str(parts)!r} (an unfinished sweep)"
-        raise ValueError(f"--out {str(out)!r}: {where} exists; pass --resume to continue it or choose another file")
+        raise ValueError(f"out={str(out)!r}: {where} exists; pass resume=True to continue it or choose another file")
     store.remove_stale(out)
     store.remove_stale(parts)
     if out.exists():
         if store.read_attrs(out).get("config_toml") != sweep.text:
-            raise ValueError(f"--resume: {str(out)!r} holds the results of a different sweep file")
+            raise ValueError(f"resume: {str(out)!r} holds the results of a different sweep file")
         if parts.exists():  # killed while removing its parts after the file was written
             store.discard_folder(parts)
         return out  # finished earlier
@@ -86,14 +86,14 @@ def _resumed_chunk(parts: Path, digest: str, chunk: int | None) -> int:
         saved_digest = (parts / "sweep.sha256").read_text().strip()
         started = int((parts / "chunk").read_text())
     except (OSError, ValueError):
-        raise ValueError(f"--resume: {str(parts)!r} is not the parts folder of a geojax sweep; "
-                         f"remove it or choose another --out") from None
+        raise ValueError(f"resume: {str(parts)!r} is not the parts folder of a geojax sweep; "
+                         f"remove it or choose another output file") from None
     if saved_digest != digest:
-        raise ValueError(f"--resume: {str(parts)!r} belongs to a different sweep file")
+        raise ValueError(f"resume: {str(parts)!r} belongs to a different sweep file")
     # The chunks on disk fix the cut: a resumed sweep keeps it, whatever the device count.
     if chunk is not None and chunk != started:
-        raise ValueError(f"--chunk: the unfinished sweep in {str(parts)!r} was cut into chunks of {started}; "
-                         f"resume with --chunk {started} or without --chunk")
+        raise ValueError(f"chunk: the unfinished sweep in {str(parts)!r} was cut into chunks of {started}; "
+                         f"resume with chunk={started} or with no chunk given")
     store.remove_stale_in(parts)  # chunk files a killed run was writing
     return started
 

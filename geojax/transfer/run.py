@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import time
-from pathlib import Path
 from typing import NamedTuple
 
 import jax
@@ -12,7 +11,7 @@ import numpy as np
 
 from geojax.physics.constants import G0_MPS2, SECONDS_PER_DAY
 from geojax.physics.propagate import environment_grid
-from geojax.transfer import pointing
+from geojax.transfer import pointing, report
 from geojax.transfer.rollout import STATUS_MEANINGS, Static, TransferParams, transfer
 from geojax.transfer.scenario import TransferScenario
 
@@ -23,23 +22,8 @@ class TransferResult(NamedTuple):
     wall_s: float
     scenario: TransferScenario | None = None  # what its file records (``transfer.report``)
 
-    def save(self, path) -> Path:
-        """Write the file ``geojax transfer --out`` writes (``transfer.report``); returns its path."""
-        from geojax.transfer import report
-
-        return report.save(self, path)
-
-    def summary(self, paper: bool = True) -> list[str]:
-        """The lines ``geojax transfer`` prints, with ``paper`` beside Ma & Kong 2023's numbers."""
-        from geojax.transfer import report
-
-        return report.summary(self, paper)
-
-    def plot(self, folder) -> list[Path]:
-        """Draw the orbit and mass against time into ``folder``; returns the figure's path in a list."""
-        from geojax.transfer import report
-
-        return report.plot(self, folder)
+    # What ``geojax transfer`` writes (``--out``), prints and draws (``--plots``): its report's functions.
+    save, summary, plot = report.save, report.summary, report.plot
 
 
 def static_for(sc: TransferScenario, days: float | None = None, record_every_s: float = SECONDS_PER_DAY) -> Static:
