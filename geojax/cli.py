@@ -184,7 +184,7 @@ def _transfer(args) -> int:
 
 
 def _tune(args) -> int:
-    from geojax import scenario, tune
+    from geojax import tune
 
     spec = tune.load(args.file)
     _check_outputs(args)
@@ -193,16 +193,11 @@ def _tune(args) -> int:
         warnings.simplefilter("always", tune.ShortHorizonWarning)
         warnings.showwarning = lambda message, *rest: print(f"geojax tune: warning: {message}", file=sys.stderr)
         result = tune.tune(spec, out=args.out, verbose=not args.quiet)
-    say(f"{spec.scenario.name}: {result.message}; {result.wall_s:.1f} s wall")
+    for line in result.summary():
+        say(line)
     if result.best_params is None:
-        say("  no feasible point: every iterate left the box with the exact law")
         print(f"wrote {args.out}")
         return 1
-    fields = scenario.controller_fields(spec.scenario.config["controller"], spec.controller)
-    for name, value in tune.reported(result.best_params, fields).items():
-        say(f"  {name:24s} {value:.6g}")
-    say(f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept "
-        f"(constraint lon {result.best_constraint[0]:+.4f}, lat {result.best_constraint[1]:+.4f})")
     fault = tune.tuned_scenario_fault(spec, result.best_params)
     if fault is not None:  # the descent kept each key in its bounds, not the scenario's joint checks
         print(f"wrote {args.out} and {tune.tuned_scenario_path(args.out)}")

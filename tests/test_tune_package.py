@@ -3,6 +3,7 @@ tuning file's documentation built from its Fields; the short-horizon warning."""
 
 import ast
 import dataclasses
+import re
 import sys
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import pytest
 
 from geojax import cli, plots, scenario, tune
 from geojax.control import REGISTRY
+from test_result_files import assert_same_file
 
 # A user's inclination damper, outside the package: tests/own_laws.py (its gain is its only tunable field, with an
 # alias and a unit, and the one a tuning moves by default).
@@ -34,7 +36,9 @@ def test_a_controller_of_ones_own_is_tuned_through_the_command_line(own_scenario
     file = tmp_path / "t.toml"
     file.write_text(f'scenario = "{own_scenario}"\nparameters = ["k_inc"]\ndays = 2.0\nstarts = 2\niterations = 2\n')
     assert cli.main(["tune", str(file), "--out", str(tmp_path / "t.h5")]) == 0
-    err = capsys.readouterr().err
+    printed = capsys.readouterr()
+    err = printed.out.splitlines(), printed.err
+    printed, err = err
     assert "geojax tune: warning: days = 2: the tuning horizon is under half a year" in err
     with h5py.File(tmp_path / "t.h5") as f:
         assert f.attrs["parameters"] == "controller.k_inc_per_s" and f.attrs["controller"] == "own_laws:DAMPER"
@@ -49,6 +53,16 @@ def test_a_controller_of_ones_own_is_tuned_through_the_command_line(own_scenario
     # The figure: the name as the file wrote it, the unit as the Field declares it.
     assert cli.main(["plot", str(tmp_path / "t.h5"), "--out", str(tmp_path / "fig"), "-q"]) == 0
     spec = tune.load(file)
+    # A Python user's tuning writes the command's file and prints its lines (a result owns its file).
+    with pytest.warns(tune.ShortHorizonWarning):
+        result = tune.tune(spec, verbose=False)
+    assert result.save(tmp_path / "library.h5") == tmp_path / "library.h5"
+    assert_same_file(tmp_path / "t.h5", tmp_path / "library.h5")
+    assert (tmp_path / "library-tuned.toml").read_text() == (tmp_path / "t-tuned.toml").read_text()
+    untimed = lambda lines: [re.sub(r"[0-9.]+ s wall", "", line) for line in lines]  # noqa: E731
+    assert untimed(result.summary()) == untimed(printed[-len(result.summary()) - 1:-1])
+    figure, = result.plot(tmp_path / "fig")
+    assert figure.name == "li2022-convergence.png" and figure.stat().st_size > 10_000
     assert spec.parameters == ["controller.k_inc_per_s"]
     assert [e.name for e in tune.Problem(spec.scenario, ["k_inc"]).entries] == spec.parameters
     # The best point's legend: the key by its Field's symbol and unit (the controller found by its import path).

@@ -26,6 +26,7 @@ from geojax.tune import adam, sqp
 from geojax.tune.objective import Problem
 from geojax.tune.space import LOG_BOUND, start_points, to_theta
 from geojax.tune.spec import TuneSpec, horizon_warning
+from geojax.tune import write as write_mod
 from geojax.tune.write import write
 
 # The optimisers, by the tuning file's ``method``: each ``run(Run) -> status message``.
@@ -49,6 +50,11 @@ class TuneResult:
     starts: np.ndarray
     message: str
     wall_s: float
+    spec: TuneSpec | None = None  # what its file records (``save``)
+    problem: Problem | None = None
+
+    # What ``geojax tune`` writes (``--out``), prints and draws (``geojax plot``): ``geojax.tune.write``'s.
+    save, summary, plot = write_mod.save, write_mod.summary, write_mod.plot
 
 
 def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool = True) -> TuneResult:
@@ -66,9 +72,9 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
     wall_s = run_.elapsed()
     best_params = None if best["theta"] is None else run_.problem.params(jnp.asarray(best["theta"]))
     result = TuneResult(best["theta"], best["dv"], best["g"], best_params, _stack(run_.hist), run_.hist["theta"][0],
-                        message, wall_s)
+                        message, wall_s, spec, run_.problem)
     if out:
-        write(out, spec, run_.problem, run_.hist, result.starts, best, message, wall_s)
+        result.save(out)
     return result
 
 

@@ -31,6 +31,15 @@ TUNE_DIMS = {"iterations": ("iteration", "start"), "iterations/theta": ("iterati
 
 def write(out, spec, problem, hist, theta_starts, best, message: str, wall_s: float) -> None:
     """Write the tuning's HDF5 file (atomically) and, once it has ended with a feasible point, the tuned scenario."""
+    groups, attrs = contents(spec, problem, hist, theta_starts, best, message)
+    store.write_h5(out, groups, scenario_mod.to_toml(spec.scenario.config), wall_s, attrs=attrs, dims=TUNE_DIMS)
+    if best["theta"] is not None and message != "running":
+        params = problem.params(jnp.asarray(best["theta"]))
+        store.atomic_write(tuned_scenario_path(out), tuned_scenario_toml(spec, params, best["dv"]).encode())
+
+
+def contents(spec, problem, hist, theta_starts, best, message: str) -> tuple[dict, dict]:
+    """(groups, attributes) of the tuning's file: the iterations so far, the starts, and the best point found."""
     groups = {"iterations": {k: np.stack(v) for k, v in hist.items()}, "starts": {"theta": np.asarray(theta_starts)}}
     groups["iterations"]["active"] = groups["iterations"]["active"].astype(np.int8)
     if best["theta"] is not None:
@@ -42,9 +51,47 @@ def write(out, spec, problem, hist, theta_starts, best, message: str, wall_s: fl
     attrs = {"kind": "tune", "scenario": spec.scenario.name, "parameters": ",".join(spec.parameters),
              "status": message, "tune_toml": spec.text,
              "controller": spec.scenario.controller}
-    store.write_h5(out, groups, scenario_mod.to_toml(spec.scenario.config), wall_s, attrs=attrs, dims=TUNE_DIMS)
-    if best["theta"] is not None and message != "running":
-        store.atomic_write(tuned_scenario_path(out), tuned_scenario_toml(spec, params, best["dv"]).encode())
+    return groups, attrs
+
+
+def save(result, path) -> Path:
+    """Write the file ``geojax tune --out`` writes (and, where a point kept the box, the tuned scenario beside it,
+    ``tuned_scenario_path``); returns the file's path."""
+    spec, problem = _made_by_tune(result)
+    write(path, spec, problem, result.history, result.starts, _best(result), result.message, result.wall_s)
+    return Path(path)
+
+
+def summary(result) -> list[str]:
+    """What ``geojax tune`` prints after the run: how it ended, and the best point's values and Delta-V."""
+    spec, _ = _made_by_tune(result)
+    lines = [f"{spec.scenario.name}: {result.message}; {result.wall_s:.1f} s wall"]
+    if result.best_params is None:
+        return lines + ["  no feasible point: every iterate left the box with the exact law"]
+    fields = scenario_mod.controller_fields(spec.scenario.config["controller"], spec.controller)
+    lines += [f"  {name:24s} {value:.6g}" for name, value in reported(result.best_params, fields).items()]
+    g = result.best_constraint
+    return lines + [f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept "
+                    f"(constraint lon {g[0]:+.4f}, lat {g[1]:+.4f})"]
+
+
+def plot(result, folder) -> list[Path]:
+    """The convergence figure ``geojax plot`` draws of the tuning's file, ``FOLDER/NAME-convergence.png``;
+    returns its path in a list."""
+    spec, problem = _made_by_tune(result)
+    groups, attrs = contents(spec, problem, result.history, result.starts, _best(result), result.message)
+    attrs["config_toml"] = scenario_mod.to_toml(spec.scenario.config)
+    return [figure(groups, attrs, Path(folder) / f"{spec.scenario.name}-convergence.png")]
+
+
+def _best(result) -> dict:
+    return {"theta": result.best_theta, "dv": result.best_dv_per_year_mps, "g": result.best_constraint}
+
+
+def _made_by_tune(result):
+    if result.spec is None or result.problem is None:
+        raise ValueError("spec: this TuneResult does not carry its tuning; make it with geojax.tune.tune")
+    return result.spec, result.problem
 
 
 def tuned_scenario_path(out) -> Path:
