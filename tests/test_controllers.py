@@ -170,6 +170,13 @@ def test_a_controller_of_ones_own_is_named_by_import_path(tmp_path, capsys):
     assert geometry_of(scenario.load("li2022-qffc").config).name == "arms"
     assert geometry_of(scenario.load("katz2025-continuous").config).name == "gimbal"
     assert geometry_of(scenario.load("katz2025-discrete").config).name == "axes"  # eq. (6): per-axis pairs
+    # ... and the bound flies it: the least fuel over 2 days with the gimbal the controller declares; the box
+    # holds for 2 days uncontrolled, so the free-end bound is zero (a conservation check: no drift to undo).
+    assert cli.main(["bound", str(scenario_path), "--days", "2", "--free-end", "-q", "--out",
+                     str(tmp_path / "bound.h5")]) == 0
+    with h5py.File(tmp_path / "bound.h5") as f:
+        assert f.attrs["geometry"] == "gimbal" and f["metrics/bound_per_year_mps"][()] < 1e-3
+        assert f["metrics/gap_percent"][()] == 0.0
     spec = tmp_path / "s.toml"
     spec.write_text(f'scenario = "{scenario_path}"\ncontrollers = ["own_laws:DAMPER"]\n[set]\n"duration.days" = 2.0\n'
                     '[grid]\n"controller.k_inc_per_s" = [1e-6, 1e-4]\n')
