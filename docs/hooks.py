@@ -14,12 +14,15 @@ of the repository (``studies/README.md``) inlined as it is.  The generated parts
 * ``modules-geojax``, ``modules-studies``, ``modules-benchmarks``: every file of the folder with the first
   paragraph of its docstring.
 
-An unknown name or a missing file fails the build (``mkdocs build --strict`` in the tests).
+An unknown name or a missing file fails the build (``mkdocs build --strict`` in the tests), and so does a number
+of ours in a page's tables that no results file of its section holds (``docs/number_sources.py``): the pages'
+numbers are checked by the build against the files the scripts wrote.
 """
 
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import io
 import re
 from pathlib import Path
@@ -29,7 +32,22 @@ MARKER = re.compile(r"^<!-- (generated|include): (\S+) -->$", re.M)
 
 
 def on_page_markdown(markdown: str, page, config, files) -> str:
-    return MARKER.sub(lambda m: _expand(m.group(1), m.group(2), page.file.src_path), markdown)
+    where = page.file.src_path
+    # The tables as written (the page and the files it includes; the generated parts come from the code) hold no
+    # number of ours that their results files do not.
+    written = MARKER.sub(lambda m: _expand(m.group(1), m.group(2), where) if m.group(1) == "include" else "", markdown)
+    misses = _number_sources().unsourced(written, where)
+    if misses:
+        raise ValueError("numbers without a results file:\n" + "\n".join(misses))
+    return MARKER.sub(lambda m: _expand(m.group(1), m.group(2), where), markdown)
+
+
+def _number_sources():
+    """``docs/number_sources.py``, loaded by path (the docs folder is not a package)."""
+    spec = importlib.util.spec_from_file_location("number_sources", Path(__file__).with_name("number_sources.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def _expand(kind: str, name: str, where: str) -> str:

@@ -37,3 +37,24 @@ def test_the_generated_tables_follow_the_code():
         assert f'kind = "{name}"' in controllers
         for key in lookup(name).FIELDS:
             assert f"| `controller.{key}` |" in controllers
+
+
+def test_the_build_refuses_a_number_of_ours_that_no_results_file_holds():
+    """The build checks the tables as written (``docs/number_sources.py``): a cell copied from the results file
+    its section names renders; the same cell with a number no file holds fails the build."""
+    from types import SimpleNamespace
+
+    import pytest
+
+    sys.path.insert(0, str(ROOT / "docs"))
+    try:
+        import hooks
+    finally:
+        sys.path.remove(str(ROOT / "docs"))
+    page = SimpleNamespace(file=SimpleNamespace(src_path="page.md"))
+    source = "studies/li2022/results/uncontrolled_year.md"
+    number = next(n for n in hooks._number_sources().NUMBER.findall((ROOT / source).read_text()) if len(n) >= 6)
+    table = f"## A section\n\nFrom `{source}`:\n\n| case | geojax |\n|---|---|\n| row | {number} |\n"
+    assert hooks.on_page_markdown(table, page, None, None) == table
+    with pytest.raises(ValueError, match="numbers without a results file"):
+        hooks.on_page_markdown(table.replace(number, "123.456789"), page, None, None)
