@@ -425,9 +425,14 @@ def monte_carlo(args) -> dict:
     chosen = json.loads((args.out / "table.json").read_text())["rows"]
     folder = args.out / "mc"
     folder.mkdir(parents=True, exist_ok=True)
+    # ``--only-mc``: the other rows' Monte Carlo as an earlier run left it in mc.json (their sweeps not flown again)
+    earlier = json.loads((args.out / "mc.json").read_text()) if args.only_mc and (args.out / "mc.json").exists() else {}
     summary = {}
     for row in rows():
-        if row.geometry is None or (args.only_mc and row.name not in args.only_mc):
+        if row.geometry is None:
+            continue
+        if args.only_mc and row.name not in args.only_mc:
+            summary.update({k: v for k, v in earlier.items() if v["row"] == row.name})
             continue
         reps = args.mpc_reps if row.name == "mpc" else args.reps
         setting = chosen[row.name]["best"]["setting"]
