@@ -274,4 +274,3 @@ def _check_orbit(orbit: dict) -> None:
         raise ValueError(f"orbit.{extra[0]}: not used when orbit.elements = {kind!r}; give only {', '.join(needed)}")
     if kind == "mee" and math.hypot(orbit["f"], orbit["g"]) >= 1:
         raise ValueError(f"orbit.f, orbit.g: eccentricity sqrt(f^2 + g^2) must be < 1, got {math.hypot(orbit['f'], orbit['g']):g}")
-

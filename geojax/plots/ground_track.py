@@ -23,4 +23,3 @@ def libration_rad(true_lon_rad, f, g, h, k):
     """(true minus mean longitude, latitude) at true longitude L, first order in MEE (f, g, h, k)."""
     s, c = np.sin(true_lon_rad), np.cos(true_lon_rad)
     return 2 * (f * s - g * c), 2 * (h * s - k * c)
-

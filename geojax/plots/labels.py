@@ -86,4 +86,3 @@ def _scaled(name: str, unit: str, *arrays):
     """The label and ``arrays`` in the power of ten that suits them (``decade``)."""
     power = decade(*arrays)
     return _label(name, unit, power), [np.asarray(a, float) / 10.0**power for a in arrays]
-

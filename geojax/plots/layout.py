@@ -61,4 +61,3 @@ def _legend_above(ax) -> None:
     """The legend in a band above the axes, so it covers no data."""
     ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=1, frameon=False, borderaxespad=0.0,
               handlelength=1.8, fontsize=7)
-

@@ -115,7 +115,6 @@ def plot_station_keeping(cycles, reference, target, path: str | Path, title: str
     return _save(fig, ax, title, path, dpi)
 
 
-
 @styled
 def plot_feedback(steps, box_half_width_deg: float, path_stem: str | Path, title: str = "", dpi: int = 150,
                   fmt: str = "png") -> list[Path]:
@@ -193,7 +192,6 @@ def plot_bound(slots, box_half_width_deg: float, path: str | Path, title: str = 
     return _save(fig, ax, title, path, dpi)
 
 
-
 def _run_days(t_s) -> float:
     """The days a run of equally spaced samples at ``t_s`` covers: their count times their spacing."""
     t_s = np.asarray(t_s, float)
@@ -202,4 +200,3 @@ def _run_days(t_s) -> float:
 
 def _days_text(days: float) -> str:
     return f"{days:.0f}" if days >= 2.0 else f"{days:.1f}"
-

@@ -74,4 +74,3 @@ def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv
     handles, _ = ax.get_legend_handles_labels()
     ax.legend(handles=handles + bands, loc="best", fontsize="small")
     return _save(fig, [ax], title, path, dpi)
-
