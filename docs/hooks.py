@@ -3,7 +3,7 @@
 A page asks for one with a line of its own, ``<!-- generated: NAME -->``, or ``<!-- include: PATH -->`` for a file
 of the repository (``studies/README.md``) inlined as it is.  The generated parts:
 
-* ``scenario-keys``: every table and key of a scenario file from ``geojax.scenario.SCHEMA`` (the ``Field``
+* ``scenario-keys``: every table and key of a scenario file from ``geojax.scenario_schema.SCHEMA`` (the ``Field``
   declarations the loader validates with): type, default, allowed range or choices, the ``Params`` leaf it becomes
   and whether ``geojax tune`` can move it;
 * ``controller-keys``: the ``[controller]`` keys of every registered controller, from each module's ``FIELDS``;
@@ -96,7 +96,7 @@ HEADER = ["| key | type | default | allowed | Params leaf (SI) | tunable |", "|-
 
 
 def scenario_keys() -> str:
-    from geojax.scenario import SCHEMA
+    from geojax.scenario_schema import SCHEMA
 
     out = []
     for table, fields in SCHEMA.items():

@@ -4,7 +4,7 @@ A ``Field`` is one key of a scenario table: its TOML type, default and bounds
 (checked at load, the only place validation happens), and, for a key that
 becomes an array leaf of the engine's ``Params`` pytree, its SI name and unit
 conversion and, where it can be tuned, its transform to an unconstrained
-variable.  The scenario tables of ``geojax.scenario.SCHEMA`` and each
+variable.  The scenario tables of ``geojax.scenario_schema.SCHEMA`` and each
 controller's ``FIELDS`` are made of them, and everything else follows from
 them (with a key's ``alias``, ``unit`` and one-line ``doc``, read by the tuner, the figures and the
 documentation's key tables, ``docs/hooks.py``): validation, the ``Params`` leaves, the leaf a sweep axis

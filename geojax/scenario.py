@@ -6,6 +6,9 @@ A scenario file has the tables ``epoch``, ``orbit``, ``station``, ``spacecraft``
 is reported as a ``ValueError`` whose message names the field and what is
 allowed, e.g. ``spacecraft.mass_kg: must be > 0, got -1.0``; the CLI prints that
 line and exits with status 2.
+
+The keys and their bounds are declared in ``geojax.scenario_schema``, the initial state and force model a
+scenario sets are built by ``geojax.scenario_physics``, and ``geojax.scenario_toml`` writes a table back as TOML.
 """
 
 from __future__ import annotations
@@ -15,165 +18,40 @@ import importlib.resources
 import math
 from pathlib import Path
 
-import jax.numpy as jnp
 import numpy as np
 
+from geojax import scenario_physics
 from geojax.physics import constants as c
-from geojax.physics.elements import cartesian_to_mee, kepler_to_mee
 from geojax.physics.forces import ForceModel
-from geojax.physics.geopotential import MAX_DEGREE as MAX_GRAVITY_DEGREE, egm2008
-from geojax.physics.frames import ecef_to_eci, earth_rotation_angle_rad
-from geojax.params import LOG, REQUIRED, Field, check_table, degrees
+from geojax.physics.frames import earth_rotation_angle_rad
+from geojax.params import Field, check_table
 from geojax.physics.propulsion import arm_limits_deg
 from geojax.physics.time import TT_MINUS_TAI_S, parse_utc, tai_minus_utc_s, tt_seconds_from_utc
+from geojax.scenario_schema import EPHEMERIS_UTC_RANGE, ORBIT_KEYS, SCHEMA
+from geojax.scenario_toml import to_toml
 
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from geojax.params import NUMBER as _NUMBER  # noqa: E402
-
-
-
-MAX_ORBIT_KM = 2.0e6  # beyond Earth's Hill sphere (1.5e6 km)
-MAX_ANGLE_RAD, MAX_ANGLE_DEG = 1.0e3, 1.0e5  # about 160 and 280 turns: more is a unit slip
-MAX_MASS_KG = 1.0e6  # twice the ISS
-MAX_DAYS = 36526.0  # a hundred years
-# The UTC dates a run may span, by ephemeris: from the leap-second table's start (``physics.time``) to the end of
-# the years the Meeus series are checked over against ERFA (tests/test_ephemeris.py, 2000-2050), or to the end of
-# the DE421 kernel (JD 2524624.5, 2200-02-02).
-EPHEMERIS_UTC_RANGE = {"meeus": ("1999-01-01", "2051-01-01"), "de421": ("1999-01-01", "2200-02-01")}
-
-SCHEMA: dict[str, dict[str, Field]] = {
-    "": {"name": Field(str, REQUIRED), "description": Field(str, "")},
-    "epoch": {
-        "utc": Field(str, REQUIRED, symbol="epoch", unit="year"),  # a sweep axis of dates is drawn in years
-        "ut1_minus_utc_s": Field(_NUMBER, 0.0, lower=-0.9, upper=0.9),
-    },
-    "orbit": {
-        "elements": Field(str, REQUIRED, choices=("mee", "kepler", "station_offset")),
-        # elements = "mee": Li 2022, eq. (5)
-        # Bounds catch unit slips, not physics: an orbit beyond Earth's Hill sphere (1.5e6 km), |h|, |k| of
-        # 100 (i = 178.9 deg, near the retrograde singularity of MEE), angles of tens of turns.
-        "p_km": Field(_NUMBER, None, lower=0.0, upper=MAX_ORBIT_KM),
-        "f": Field(_NUMBER, None, lower=-1.0, upper=1.0), "g": Field(_NUMBER, None, lower=-1.0, upper=1.0),
-        "h": Field(_NUMBER, None, lower=-100.0, upper=100.0), "k": Field(_NUMBER, None, lower=-100.0, upper=100.0),
-        "L_rad": Field(_NUMBER, None, lower=-MAX_ANGLE_RAD, upper=MAX_ANGLE_RAD),
-        # elements = "kepler"
-        "a_km": Field(_NUMBER, None, lower=0.0, upper=MAX_ORBIT_KM),
-        "e": Field(_NUMBER, None, lower=0.0, upper=1.0, lower_inclusive=True),
-        "i_deg": Field(_NUMBER, None, lower=0.0, upper=180.0, lower_inclusive=True),
-        "raan_deg": Field(_NUMBER, None, lower=-MAX_ANGLE_DEG, upper=MAX_ANGLE_DEG),
-        "argp_deg": Field(_NUMBER, None, lower=-MAX_ANGLE_DEG, upper=MAX_ANGLE_DEG),
-        "true_anomaly_deg": Field(_NUMBER, None, lower=-MAX_ANGLE_DEG, upper=MAX_ANGLE_DEG),
-        # elements = "station_offset": at the station, displaced in ECEF, with the station's inertial velocity
-        "offset_ecef_km": Field(list, None, length=3),
-    },
-    "station": {
-        "lon_deg": Field(_NUMBER, REQUIRED, lower=-180.0, upper=360.0, lower_inclusive=True, si="lon_rad",
-                         to_si=degrees),
-        "radius_km": Field(_NUMBER, 42164.16, lower=0.0, upper=MAX_ORBIT_KM, si="radius_m", to_si=1e3),
-        # Target mean e and i vectors, MEE (f, g) and (h, k) (Li 2022 eq. (10)): e < 1, i < 90 deg.
-        "ex": Field(_NUMBER, 0.0, lower=-1.0, upper=1.0, si="ex"), "ey": Field(_NUMBER, 0.0, lower=-1.0, upper=1.0, si="ey"),
-        "ix": Field(_NUMBER, 0.0, lower=-1.0, upper=1.0, si="ix"), "iy": Field(_NUMBER, 0.0, lower=-1.0, upper=1.0, si="iy"),
-        # The box: a sample whose sub-satellite point leaves +-this in longitude or latitude at any step
-        # start gets status 2 or 3 (``geojax.loop.metrics``).
-        "box_half_width_deg": Field(_NUMBER, 0.05, lower=0.0, upper=90.0, si="box_half_width_rad", to_si=degrees),
-    },
-    "spacecraft": {
-        "mass_kg": Field(_NUMBER, REQUIRED, lower=0.0, upper=MAX_MASS_KG),
-        # The mass without propellant: the thrusters stop when it is reached (status 5).  0: no limit set.
-        "dry_mass_kg": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=MAX_MASS_KG, si="dry_mass_kg"),
-        "srp_area_m2": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6),
-        # The SRP model's reflectivity eta (Li 2022 eq. (4)); the default is the force model's (Li's 0.6).
-        "reflectivity": Field(_NUMBER, ForceModel._field_defaults["reflectivity"], lower=0.0, upper=1.0 + 1e-12,
-                              lower_inclusive=True),
-    },
-    "thrusters": {
-        "count": Field(int, 2, lower=1, upper=65, lower_inclusive=True),
-        "thrust_n": Field(_NUMBER, REQUIRED, lower=0.0, upper=1e5, si="thrust_n", transform=LOG),
-        "isp_s": Field(_NUMBER, REQUIRED, lower=0.0, upper=1e6, si="isp_s", transform=LOG),
-        # Robotic-arm limits, Li 2022 eq. (1); defaults: the "normal" level of Table 1.
-        "beta_max_deg": Field(_NUMBER, 70.0, si="beta_max_rad", to_si=degrees, symbol="β_max"),
-        "beta_min_deg": Field(_NUMBER, 0.0, si="beta_min_rad", to_si=degrees, symbol="β_min"),
-        "alpha_max_deg": Field(_NUMBER, 60.0, si="alpha_max_rad", to_si=degrees, symbol="α_max"),
-        "alpha_min_deg": Field(_NUMBER, 30.0, si="alpha_min_rad", to_si=degrees, symbol="α_min"),
-        "min_burn_s": Field(_NUMBER, 30.0, lower=0.0, lower_inclusive=True, upper=c.SIDEREAL_DAY_S, si="min_burn_s"),
-        # The thruster geometry the fuel bound uses (geojax.bound.directions): Li's two arms, Katz's gimbal,
-        # Gazzino's four fixed NE/NW/SE/SW thrusters (cant_deg from the north-south axis); unset: from the
-        # controller (gimbal for lyapunov and zone_nssk, else arms).
-        "layout": Field(str, None, choices=("arms", "gimbal", "fixed4", "axes")),
-        "cant_deg": Field(_NUMBER, 45.0, lower=0.0, lower_inclusive=True, upper=90.0),
-    },
-    # The [controller] table: `kind` here, the other keys from the controller's module (control.REGISTRY).
-    "controller": {"kind": Field(str, "none")},
-    # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors (0.3 m, 5e-5 m/s, 0.05 deg).
-    "errors": {
-        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_rv", symbol="H_rv"),
-        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_att", symbol="H_att"),
-        # How the attitude error enters (control.burns; studies/ablation/li_attitude_error.py): its yaw and pitch
-        # parts scaled (1: eq. (47) as printed), one draw shared by a cycle's two burns instead of one each, and
-        # the burns' magnitudes re-fitted to the directions flown (the plan knows the error) instead of kept.
-        "att_yaw": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="att_yaw"),
-        "att_pitch": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="att_pitch"),
-        "att_shared": Field(bool, False, si="att_shared"),
-        "att_known": Field(bool, False, si="att_known"),
-        # How the determination error enters (loop.simulate.measured_mee; studies/ablation/li_fig17_width.py): its
-        # position and velocity parts scaled (1: eq. (48) as printed, 3 sigma per component).
-        "rv_r": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="rv_r"),
-        "rv_v": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="rv_v"),
-    },
-    "forces": {
-        "j2": Field(bool, True),
-        "c22_s22": Field(bool, False),
-        "sun": Field(bool, True),
-        "moon": Field(bool, True),
-        "srp": Field(bool, True),
-        # The Earth's shadow ("conical": umbra and penumbra, Montenbruck & Gill Sec. 3.4.2); moon_shadow adds the
-        # Moon as an occulting body (same model): both cut SRP and the thrusters' sunlit windows.
-        "shadow": Field(str, "conical", choices=("conical", "none")),
-        "moon_shadow": Field(bool, False),
-        # Sun and Moon: "meeus" (analytic series, geojax.physics.ephemeris) or "de421" (JPL DE421 through
-        # jplephem), evaluated once per scenario on the environment grid.
-        "ephemeris": Field(str, "meeus", choices=("meeus", "de421")),
-        "srp_pressure_n_m2": Field(_NUMBER, ForceModel._field_defaults["srp_pressure_1au_n_m2"], lower=0.0, lower_inclusive=True, upper=1e-2),
-        # The Earth's field to degree and order N (EGM2008, tide-free, shipped to degree 20): replaces `j2` and
-        # `c22_s22` where given (those stay for the papers' models).  Order: default the degree, 0 <= M <= N.
-        "gravity_degree": Field(int, None, lower=2, upper=MAX_GRAVITY_DEGREE + 1, lower_inclusive=True),
-        "gravity_order": Field(int, None, lower=0, upper=MAX_GRAVITY_DEGREE + 1, lower_inclusive=True),
-    },
-    "integration": {
-        "step_s": Field(_NUMBER, 900.0, lower=0.0, upper=c.SIDEREAL_DAY_S + 1.0),
-        "dynamics": Field(str, "mee", choices=("mee", "cartesian")),
-    },
-    "duration": {"days": Field(_NUMBER, 365.25, lower=0.0, upper=MAX_DAYS)},
-}
-
-_ORBIT_KEYS = {
-    "mee": ("p_km", "f", "g", "h", "k", "L_rad"),
-    "kepler": ("a_km", "e", "i_deg", "raan_deg", "argp_deg", "true_anomaly_deg"),
-    "station_offset": ("offset_ecef_km",),
-}
+__all__ = ["SCHEMA", "Scenario", "ScenarioFile", "available", "controller_fields", "from_dict", "load", "read_text",
+           "read_toml_file", "started_at", "to_toml", "with_overrides"]
 
 
 @dataclasses.dataclass(frozen=True)
-class Scenario:
-    """A validated scenario.  ``config`` is the full table, defaults filled in."""
+class ScenarioFile:
+    """A validated scenario file, station keeping (``Scenario``) or transfer (``transfer.TransferScenario``):
+    ``config`` is its full table, defaults filled in; its epoch as TT seconds (``epoch_tt_s``) and the TT - UT1
+    offset there (``tt_minus_ut1_s``, s)."""
 
     config: dict
     epoch_tt_s: float
     tt_minus_ut1_s: float
-    initial_mee: np.ndarray  # [6], ECI of the epoch
-    force_model: ForceModel
 
     @property
     def name(self) -> str:
         return self.config["name"]
-
-    @property
-    def mass_kg(self) -> float:
-        return float(self.config["spacecraft"]["mass_kg"])
 
     @property
     def step_s(self) -> float:
@@ -182,6 +60,18 @@ class Scenario:
     @property
     def days(self) -> float:
         return float(self.config["duration"]["days"])
+
+
+@dataclasses.dataclass(frozen=True)
+class Scenario(ScenarioFile):
+    """A validated station-keeping scenario: the file's table and epoch, its initial state and force model."""
+
+    initial_mee: np.ndarray  # [6], ECI of the epoch
+    force_model: ForceModel
+
+    @property
+    def mass_kg(self) -> float:
+        return float(self.config["spacecraft"]["mass_kg"])
 
     @property
     def dynamics(self) -> str:
@@ -290,8 +180,8 @@ def from_dict(raw: dict, controller=None) -> Scenario:
     epoch_tt_s = tt_seconds_from_utc(utc)
     tt_minus_ut1_s = TT_MINUS_TAI_S + tai_minus_utc_s(utc.date()) - config["epoch"]["ut1_minus_utc_s"]
     _check_ephemeris_range(utc, config)
-    initial_mee = _initial_mee(config, epoch_tt_s, tt_minus_ut1_s)
-    return Scenario(config, epoch_tt_s, tt_minus_ut1_s, initial_mee, _force_model(config))
+    initial_mee = scenario_physics.initial_mee(config, epoch_tt_s, tt_minus_ut1_s)
+    return Scenario(config, epoch_tt_s, tt_minus_ut1_s, initial_mee, scenario_physics.force_model(config))
 
 
 def _validate(raw: dict, controller=None) -> dict:
@@ -375,80 +265,12 @@ def controller_fields(table, controller=None) -> dict[str, Field]:
 
 def _check_orbit(orbit: dict) -> None:
     kind = orbit["elements"]
-    needed = _ORBIT_KEYS[kind]
+    needed = ORBIT_KEYS[kind]
     missing = [k for k in needed if orbit[k] is None]
     if missing:
         raise ValueError(f"orbit.{missing[0]}: missing (required when orbit.elements = {kind!r})")
-    extra = [k for keys in _ORBIT_KEYS.values() for k in keys if k not in needed and orbit[k] is not None]
+    extra = [k for keys in ORBIT_KEYS.values() for k in keys if k not in needed and orbit[k] is not None]
     if extra:
         raise ValueError(f"orbit.{extra[0]}: not used when orbit.elements = {kind!r}; give only {', '.join(needed)}")
     if kind == "mee" and math.hypot(orbit["f"], orbit["g"]) >= 1:
         raise ValueError(f"orbit.f, orbit.g: eccentricity sqrt(f^2 + g^2) must be < 1, got {math.hypot(orbit['f'], orbit['g']):g}")
-
-
-def _initial_mee(config: dict, epoch_tt_s: float, tt_minus_ut1_s: float) -> np.ndarray:
-    orbit, station = config["orbit"], config["station"]
-    kind = orbit["elements"]
-    if kind == "mee":
-        return np.array([orbit["p_km"] * 1e3, orbit["f"], orbit["g"], orbit["h"], orbit["k"], orbit["L_rad"]])
-    if kind == "kepler":
-        return np.asarray(
-            kepler_to_mee(
-                orbit["a_km"] * 1e3, orbit["e"], math.radians(orbit["i_deg"]), math.radians(orbit["raan_deg"]),
-                math.radians(orbit["argp_deg"]), math.radians(orbit["true_anomaly_deg"]),
-            )
-        )
-    # station_offset: Katz 2025, Sec. 3.1: "a deviation of 2 km in each ECEF
-    # axis from the desired station, and the correct velocity of the desired
-    # orbit", read as the station's own inertial velocity omega x r_station.
-    lon = math.radians(station["lon_deg"])
-    radius_m = station["radius_km"] * 1e3
-    station_ecef = np.array([radius_m * math.cos(lon), radius_m * math.sin(lon), 0.0])
-    angle = earth_rotation_angle_rad(epoch_tt_s, epoch_tt_s, tt_minus_ut1_s)
-    r_eci = ecef_to_eci(jnp.asarray(station_ecef + np.array(orbit["offset_ecef_km"]) * 1e3), angle)
-    v_eci = jnp.cross(jnp.array([0.0, 0.0, c.OMEGA_EARTH_RAD_S]), ecef_to_eci(jnp.asarray(station_ecef), angle))
-    return np.asarray(cartesian_to_mee(r_eci, v_eci, c.MU_EARTH_M3_S2))
-
-
-def _force_model(config: dict) -> ForceModel:
-    forces, craft = config["forces"], config["spacecraft"]
-    on = lambda flag: float(bool(flag))  # noqa: E731
-    return ForceModel(
-        j2_on=on(forces["j2"]),
-        c22_on=on(forces["c22_s22"]),
-        sun_on=on(forces["sun"]),
-        moon_on=on(forces["moon"]),
-        srp_on=on(forces["srp"]),
-        srp_pressure_1au_n_m2=forces["srp_pressure_n_m2"],
-        reflectivity=craft["reflectivity"],
-        srp_area_m2=craft["srp_area_m2"],
-        shadow_on=on(forces["shadow"] == "conical"),
-        moon_radius_m=c.R_MOON_M if forces.get("moon_shadow") else None,
-        gravity=None if forces.get("gravity_degree") is None else egm2008(forces["gravity_degree"],
-                                                                         forces.get("gravity_order")),
-    )
-
-
-def to_toml(config: dict) -> str:
-    """Serialise a validated scenario table back to TOML (for HDF5 ``config_toml``)."""
-    lines = [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in config.items() if not isinstance(v, dict)]
-    for table, values in config.items():
-        if isinstance(values, dict):
-            lines.append(f"\n[{_toml_key(table)}]")
-            lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in values.items() if v is not None]
-    return "\n".join(lines) + "\n"
-
-
-def _toml_key(key: str) -> str:
-    """A bare key where TOML allows one, else quoted (``"thrusters.beta_max_deg"`` is one key, not a path)."""
-    return key if key and all(c.isalnum() or c in "_-" for c in key) else _toml_value(key)
-
-
-def _toml_value(value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    return repr(value)

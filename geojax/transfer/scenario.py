@@ -21,7 +21,9 @@ from geojax.physics import constants as c
 from geojax.physics.dynamics import SpacecraftState
 from geojax.physics.elements import kepler_to_mee
 from geojax.physics.time import TT_MINUS_TAI_S, parse_utc, tai_minus_utc_s, tt_seconds_from_utc
-from geojax.scenario import SCHEMA as SK_SCHEMA, _force_model, tomllib
+from geojax.scenario import ScenarioFile, tomllib
+from geojax.scenario_physics import force_model
+from geojax.scenario_schema import SCHEMA as SK_SCHEMA
 from geojax.transfer.boom import JointLimits, MpcWeights
 from geojax.transfer.quadrilateral import pair_axis_efficiency
 from geojax.transfer.rollout import TransferParams
@@ -103,25 +105,10 @@ SCHEMA: dict[str, dict[str, Field]] = {
 
 
 @dataclasses.dataclass(frozen=True)
-class TransferScenario:
-    """A validated transfer.  ``config`` is the full table, defaults filled in."""
+class TransferScenario(ScenarioFile):
+    """A validated transfer: the file's table and epoch (``ScenarioFile``) and the rollout's parameters."""
 
-    config: dict
-    epoch_tt_s: float
-    tt_minus_ut1_s: float
     params: TransferParams
-
-    @property
-    def name(self) -> str:
-        return self.config["name"]
-
-    @property
-    def step_s(self) -> float:
-        return float(self.config["integration"]["step_s"])
-
-    @property
-    def days(self) -> float:
-        return float(self.config["duration"]["days"])
 
     @property
     def layout(self) -> str:
@@ -233,7 +220,7 @@ def _params(config: dict) -> TransferParams:
     three = lambda x: jnp.full(3, float(x))  # noqa: E731
     return TransferParams(
         initial=SpacecraftState(jnp.asarray(mee), f(craft["mass_kg"]), f(0.0)),
-        forces=_force_model({"forces": config["forces"], "spacecraft": craft}),
+        forces=force_model({"forces": config["forces"], "spacecraft": craft}),
         dry_mass_kg=f(craft["dry_mass_kg"]), thrust_n=f(thr["thrust_n"]), isp_s=f(thr["isp_s"]), pair_efficiency=pairs,
         r_geo_m=f(end["radius_km"] * 1e3), a_tol_m=f(end["a_tol_km"] * 1e3), e_end=f(end["e_end"]),
         i_end_rad=rad(end["i_end_deg"]), deadband_m=f(end["deadband_km"] * 1e3),

@@ -1,0 +1,76 @@
+"""A sweep's figure: its metric against its first swept parameter, mean and spread over the repetitions, one
+line per controller, unstable points marked (``plot_sweep``; several sweeps on one axis: ``plot_sweeps``)."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from geojax.plots.labels import _label, _quantity, decade
+from geojax.plots.style import _save, styled
+
+
+@styled
+def plot_sweep(groups, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
+               label: str = "", dpi: int = 150) -> Path:
+    """A sweep's metric against its first swept parameter: mean and spread (min-max) over the
+    repetitions, one line per controller (and per value of any further axis), unstable points
+    (status 2) marked with a cross.  ``groups`` are the groups of a ``geojax sweep`` file."""
+    return plot_sweeps([(label, groups)], axes_names, path, metric, title, dpi=dpi)
+
+
+def _numeric(values) -> np.ndarray:
+    """A swept axis as numbers: dates (an ``epoch.utc`` axis) as decimal years."""
+    values = np.asarray(values)
+    if values.dtype.kind in "SUO":
+        from geojax.sweep.epochs import as_years
+
+        return as_years(values)
+    return values.astype(float)
+
+
+@styled
+def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
+                dpi: int = 150) -> Path:
+    """``plot_sweep`` for several sweeps over the same parameter on one axis: ``runs`` is [(label, groups)]."""
+    from matplotlib.patches import Patch
+
+    fig, ax = plt.subplots(figsize=(5.0, 3.4), constrained_layout=True)
+    param = axes_names[1]
+    x_power = decade(*(_numeric(g["grid"][param.replace(".", "__")]) for _, g in runs))
+    y_power = decade(*(np.asarray(g["metrics"][metric], float) for _, g in runs))
+    grid_values, bands = set(), []
+    for prefix, groups in runs:
+        values = np.asarray(groups["metrics"][metric], float) / 10.0**y_power  # [controller, grid..., reps]
+        status = np.asarray(groups["status"]["code"])
+        controllers = [c.decode() if isinstance(c, bytes) else str(c) for c in groups["grid"]["controller"]]
+        x = _numeric(groups["grid"][param.replace(".", "__")]) / 10.0**x_power
+        grid_values.update(x.tolist())
+        for i, controller in enumerate(controllers):
+            v = values[i].reshape(len(x), -1, values.shape[-1])  # [x, other axes, reps]
+            s = status[i].reshape(v.shape)
+            for j in range(v.shape[1]):
+                name = " ".join(filter(None, [prefix, controller, f"#{j}" if v.shape[1] > 1 else ""]))
+                stable = np.where(s[:, j] == 2, np.nan, v[:, j])
+                bad = np.any(s[:, j] == 2, axis=-1)
+                with warnings.catch_warnings():  # a point whose every repetition is unstable has no spread
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    mean, low, high = (f(stable, axis=-1) for f in (np.nanmean, np.nanmin, np.nanmax))
+                    unstable = np.nanmean(np.where(np.isfinite(v[bad, j]), v[bad, j], np.nan), axis=-1)
+                line, = ax.plot(x, mean, "o-", ms=3.5, label=f"{name}: mean")
+                if v.shape[-1] > 1:
+                    ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, lw=0)
+                    bands.append(Patch(color=line.get_color(), alpha=0.2, lw=0,
+                                       label=f"{name}: min–max of {v.shape[-1]} repetitions"))
+                if bad.any():
+                    ax.plot(x[bad], unstable, "x", color=line.get_color(), ms=8, mew=1.5, label=f"{name}: unstable")
+    if len(grid_values) <= 12:  # the ticks on the grid's values, not between them
+        ax.set_xticks(sorted(grid_values), [f"{v:g}" for v in sorted(grid_values)])
+    names = [c.decode() if isinstance(c, bytes) else str(c) for _, g in runs for c in g["grid"]["controller"]]
+    ax.set(xlabel=_label(*_quantity(param, names), x_power), ylabel=_label(*_quantity(metric), y_power))
+    handles, _ = ax.get_legend_handles_labels()
+    ax.legend(handles=handles + bands, loc="best", fontsize="small")
+    return _save(fig, [ax], title, path, dpi)
