@@ -1,7 +1,7 @@
 """Issue 32, item 4: the propellant of a 15-year mission of Li's satellite at 96 deg E, and the year-to-year swing.
 
     python studies/lifetime/lifetime.py [--controllers qffc,fompc:8,mpc:2] [--mission-years 15]
-                                        [--continuous-years 5] [--out studies/lifetime/results]
+                                        [--continuous-years 5] [--out studies/lifetime/results] [--reuse]
 
 1. **Yearly Delta-V over the Moon's node cycle** (``epochs.toml``, one sweep per controller through
    ``geojax.sweep`` with the epoch as a grid axis, ``geojax.sweep.epochs``): li2022 flown one year from 1 January
@@ -38,7 +38,6 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -211,29 +210,48 @@ def main(argv=None) -> int:
     ap.add_argument("--mission-years", type=int, default=15)
     ap.add_argument("--continuous-years", type=int, default=5, help="0: skip the continuous-run check")
     ap.add_argument("--out", type=Path, default=HERE / "results")
+    ap.add_argument("--reuse", action="store_true",
+                    help="take the uncontrolled drift, the continuous-run check and the rows of the controllers not "
+                         "named from OUT/lifetime.json instead of flying them again (the HDF5 files are not in git); "
+                         "the command recorded is the one that flies every row")
     args = ap.parse_args(argv)
-    command = "python studies/lifetime/lifetime.py " + " ".join(sys.argv[1:] if argv is None else argv)
     args.out.mkdir(parents=True, exist_ok=True)
+    earlier = json.loads((args.out / "lifetime.json").read_text()) if args.reuse else None
     base = scenario.load("li2022-qffc")
     mass, isp = base.mass_kg, float(base.config["thrusters"]["isp_s"])
     beta_max = float(base.config["thrusters"]["beta_max_deg"])
-    drift, unc = uncontrolled(args.out)
-    epochs = [str(v)[:19] for v in unc["epoch.utc"].values]
+    if earlier:
+        drift, epochs, unc_timing = (np.asarray(earlier["uncontrolled_di_deg_per_year"]), earlier["epochs_utc"],
+                                     earlier["uncontrolled_timing"])
+    else:
+        drift, unc = uncontrolled(args.out)
+        epochs, unc_timing = [str(v)[:19] for v in unc["epoch.utc"].values], sweep_timing(unc)
     starts = [dt.datetime.fromisoformat(e) for e in epochs]
     years = as_years(epochs)
     closed_form = node_drift_deg_per_year(starts)
     floor = V_SYNC_MPS * np.radians(drift) / np.sin(np.radians(beta_max))
-    rows = {}
-    for item in args.controllers.split(","):
-        name, _, reps = item.partition(":")
+    named = dict(item.partition(":")[::2] for item in args.controllers.split(","))
+    rows = {name: row for name, row in (earlier or {}).get("controllers", {}).items() if name not in named}
+    for name, reps in named.items():
         ds = geojax.open_results(run_epochs(name, int(reps) if reps else None, args.out))
         rows[name] = {"timing": sweep_timing(ds), "mission": mission(ds, args.mission_years, mass, isp),
                       "yearly": yearly(ds)}
-    check = continuous_check(args.continuous_years, args.out) if args.continuous_years else None
-    result = {"command": command.strip(), "epochs_utc": epochs, "mass_kg": mass, "isp_s": isp,
+    rows = {name: rows[name] for name in sorted(rows, key=list(SCENARIO).index)}
+    if earlier:
+        check = earlier["continuous"]
+    else:
+        check = continuous_check(args.continuous_years, args.out) if args.continuous_years else None
+    file_draws = sweep.load(SWEEP_FILE).repetitions  # a controller named without ":N"
+    draws = ",".join(name if row["mission"]["draws"] == file_draws else f"{name}:{row['mission']['draws']}"
+                     for name, row in rows.items())
+    command = (f"python studies/lifetime/lifetime.py --controllers {draws}"
+               + (f" --mission-years {args.mission_years}" if args.mission_years != 15 else "")
+               + (f" --continuous-years {len(check['starts_utc'])}" if check and len(check["starts_utc"]) != 5 else
+                  " --continuous-years 0" if not check else ""))
+    result = {"command": command, "epochs_utc": epochs, "mass_kg": mass, "isp_s": isp,
               "mission_years": args.mission_years, "uncontrolled_di_deg_per_year": drift.tolist(),
               "soop_ye_eq7_di_deg_per_year": closed_form.tolist(), "floor_dv_per_year_mps": floor.tolist(),
-              "uncontrolled_timing": sweep_timing(unc), "controllers": rows, "continuous": check}
+              "uncontrolled_timing": unc_timing, "controllers": rows, "continuous": check}
     (args.out / "lifetime.json").write_text(json.dumps(result, indent=1) + "\n")
     (args.out / "lifetime.md").write_text(report(result))
     figure(years, rows, drift, floor, args.out / "lifetime.png")
