@@ -354,15 +354,16 @@ def widths(args) -> dict:
     shown = [r for r in rows() if r.geometry is not None]  # zone NSSK holds no box here (table.md)
     found = {r.name: [search(r, b, args.years, args.out) for b in args.widths] for r in shown}
     arms = next(r for r in shown if r.geometry == "arms")
+    wanted = args.widths if args.bound_widths == [] else (args.bound_widths or [])
     limits = {}
     for b in args.widths:
-        if b == 0.05 or args.bound_widths:
-            steady = bound_of("arms", arms, args.out, b, compute=args.bound_widths)["steady_per_year_mps"]
-            if steady is not None:
-                limits[b] = steady
+        steady = bound_of("arms", arms, args.out, b, compute=b in wanted)["steady_per_year_mps"]
+        if steady is not None:
+            limits[b] = steady
     lines = [f"# Steady-state ΔV against the box half-width: li2022, {args.years} years from 2020-01-01, no errors", "",
              f"`python studies/compare/table.py --stage widths --widths {' '.join(f'{b:g}' for b in args.widths)}"
-             f"{' --bound-widths' if args.bound_widths else ''}`. Each cell: the best setting's steady ΔV (m/s/yr) "
+             f"{' --bound-widths ' + ' '.join(f'{b:g}' for b in limits if b != 0.05) if len(limits) > 1 else ''}`. "
+             "Each cell: the best setting's steady ΔV (m/s/yr) "
              "by the table's search at that box; * no candidate holds the box (the least excursion shown, its status "
              "after the slash). Figure: `widths.png`.", "",
              "| controller | " + " | ".join(f"±{b:g}°" for b in args.widths) + " |", "|---|" + "---:|" * len(args.widths)]
@@ -556,7 +557,9 @@ def main(argv=None) -> int:
                     "--stage widths), for a first look; the tables come from the stages")
     ap.add_argument("--only-mc", nargs="+", help="the Monte Carlo of these rows only")
     ap.add_argument("--mpc-reps", type=int, default=64, help="the MPC's Monte Carlo samples (default 64)")
-    ap.add_argument("--bound-widths", action="store_true", help="compute the arms' bound at every width (slow)")
+    ap.add_argument("--bound-widths", type=float, nargs="*", default=None,
+                    help="compute the arms' bound at these widths, or with no value at every width (slow: 12-70 min "
+                         "per year here); bounds computed earlier (results/bounds/) are shown in any case")
     ap.add_argument("--out", type=Path, default=HERE / "results")
     args = ap.parse_args(argv)
     if args.stage == "bounds":
