@@ -156,6 +156,13 @@ def continuous_check(years: int, out: Path) -> dict:
             "continuous_wall_s": long["wall_s"], "fresh_timing": sweep_timing(fresh)}
 
 
+def percentiles_by_number(row: dict) -> dict:
+    """A row read back from JSON with its percentiles keyed by number again (JSON keys are strings)."""
+    mission_row = {k: {int(p): v for p, v in value.items()} if k in ("dv_total_mps", "propellant_kg") else value
+                   for k, value in row["mission"].items()}
+    return {**row, "mission": mission_row}
+
+
 def mission(ds, years: int, mass_kg: float, isp_s: float) -> dict:
     """The mission of the first ``years`` epochs, draw by draw."""
     dv = ds.dv_per_year_mps.values[0, :years, :]  # [year, draw], per 365.25 days
@@ -231,7 +238,8 @@ def main(argv=None) -> int:
     closed_form = node_drift_deg_per_year(starts)
     floor = V_SYNC_MPS * np.radians(drift) / np.sin(np.radians(beta_max))
     named = dict(item.partition(":")[::2] for item in args.controllers.split(","))
-    rows = {name: row for name, row in (earlier or {}).get("controllers", {}).items() if name not in named}
+    rows = {name: percentiles_by_number(row) for name, row in (earlier or {}).get("controllers", {}).items()
+            if name not in named}
     for name, reps in named.items():
         ds = geojax.open_results(run_epochs(name, int(reps) if reps else None, args.out))
         rows[name] = {"timing": sweep_timing(ds), "mission": mission(ds, args.mission_years, mass, isp),
