@@ -62,7 +62,7 @@ def test_a_controller_written_in_a_test_runs_through_simulate_sweep_and_tune(tmp
     assert result.history["theta"].shape[-1] == 2
 
 
-def status_sweep(tmp_path, grid: str, name: str, controller: str = "qffc", days: float = 4.0):
+def status_sweep(tmp_path, grid: str, name: str, controller: str = "qffc", days: float = 3.0):
     path = tmp_path / f"{name}.toml"
     path.write_text(f'scenario = "li2022-qffc"\ncontrollers = ["{controller}"]\nrepetitions = 2\nseed = 1\n'
                     f'[set]\n"duration.days" = {days}\n[grid]\n{grid}\n')
@@ -91,7 +91,8 @@ def test_sweeps_over_srp_area_and_an_initial_state_dispersion(tmp_path):
     at the scenario's own area it must give the single run's Delta-V (shared reference), and without SRP
     another.  A dispersed initial position gives each repetition its own orbit and Delta-V, no other error."""
     path = tmp_path / "srp.toml"
-    path.write_text('scenario = "li2022-qffc"\nrepetitions = 1\n[set]\n"duration.days" = 3.0\n'
+    # 3 days, 2 points x 2 repetitions, a reference per lane: the program of the station sweep above (compiled once)
+    path.write_text('scenario = "li2022-qffc"\nrepetitions = 2\nseed = 1\n[set]\n"duration.days" = 3.0\n'
                     '[grid]\n"spacecraft.srp_area_m2" = [200.0, 0.0]\n')
     spec = sweep.load(path)
     with h5py.File(sweep.run_sweep(spec, tmp_path / "srp.h5", progress=False)) as f:

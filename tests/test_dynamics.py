@@ -1,6 +1,8 @@
 """Equations of motion: eq. (6) against the Cartesian chain rule, conservation laws,
 MEE against Cartesian propagation, J2 nodal regression against its closed form."""
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -38,7 +40,13 @@ def run(dynamics, fm, step_s, days, mee0=MEE0):
     h = c.SIDEREAL_DAY_S / n
     env = environment_grid(EPOCH, EPOCH, 69.3612, h, days, n)
     state = SpacecraftState(dynamics.from_mee(mee0, MU), jnp.asarray(5000.0), jnp.asarray(0.0))
-    return jax.jit(lambda s: propagate_cycles(dynamics, s, env, fm, h))(state)
+    return _propagate(state, env, fm, dynamics=dynamics, h=h)
+
+
+@functools.partial(jax.jit, static_argnames=("dynamics", "h"))
+def _propagate(state, env, fm, dynamics, h):
+    """The force model an argument, as in the loop: the forces at a step size and length are one program."""
+    return propagate_cycles(dynamics, state, env, fm, h)
 
 
 def energy_and_momentum(r, v):

@@ -1,5 +1,7 @@
 """Thrust windows inside fixed steps: exact Delta-V and mass, second-order orbit error."""
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -24,7 +26,13 @@ def burn(steps_per_day, start_s, duration_s, direction=(0.0, 1.0, 0.0)):
     window = ThrustWindow(jnp.asarray(start_s), jnp.asarray(start_s + duration_s), jnp.asarray(direction),
                           jnp.asarray(THRUST), jnp.asarray(ISP))
     state = SpacecraftState(GEO, jnp.asarray(M0), jnp.asarray(0.0))
-    final, _ = jax.jit(lambda s: propagate_cycles(MEE, s, env, TWO_BODY, h, lambda t, hh: window_thrust(window, t, hh)))(state)
+    return _one_day(state, env, window, h)
+
+
+@functools.partial(jax.jit, static_argnames="h")
+def _one_day(state, env, window, h):
+    """One day at step ``h`` under ``window`` (an argument: every window at a step size is one compiled program)."""
+    final, _ = propagate_cycles(MEE, state, env, TWO_BODY, h, lambda t, hh: window_thrust(window, t, hh))
     return final
 
 

@@ -130,11 +130,12 @@ def test_rows_follow_the_qffc_burn_effect_and_the_drift(planning):
 def test_padding_the_horizon_changes_nothing(planning):
     """A horizon of 6 padded to 10 cycles plans what a program of exactly 6 cycles plans (the mask)."""
     plans = {}
+    plan = jax.jit(mpc.plan, static_argnames="shape")  # one compiled program per horizon, as in the loop
     for n_max in (6, 10):
         shape = mpc.Shape(n_max=n_max)
-        burns, solution, _ = mpc.plan(planning["x0"], planning["target"], planning["ref"][:n_max + 1], 0.3,
-                                      planning["limits"], planning["accel"], planning["cycle_s"],
-                                      {**planning["leaves"], "horizon": jnp.asarray(6)}, planning["station"], shape)
+        burns, solution, _ = plan(planning["x0"], planning["target"], planning["ref"][:n_max + 1], 0.3,
+                                  planning["limits"], planning["accel"], planning["cycle_s"],
+                                  {**planning["leaves"], "horizon": jnp.asarray(6)}, planning["station"], shape=shape)
         plans[n_max] = (float(solution.objective), np.asarray(burns.dv_rsw_mps))
     # both certified to the solver's duality gap, tolerance x (1 + |objective|) (``lp.certify``)
     gap = planning["leaves"]["tolerance"] * (1 + abs(plans[6][0]))

@@ -63,7 +63,7 @@ def test_closed_form_split_is_the_least_v1_plus_v2():
     # closed-form equal-pitch split clipped to the pitch limits, at the raise the solve picked.
     limits = arm_limits_deg(*PRESETS_DEG["strong"])
     dx, l_start = random_deviations(50, seed=3)
-    sol = jax.vmap(lambda d, l0: qffc.solve(d, l0, limits))(dx, l_start)
+    sol = jax.jit(jax.vmap(lambda d, l0: qffc.solve(d, l0, limits)))(dx, l_start)
     for j in np.flatnonzero(np.asarray(sol.feasible)):
         in_plane = np.asarray(sol.dv_rsw_mps[j, :, :2])
         v_n = float(sol.dv_rsw_mps[j, 1, 2] - sol.dv_rsw_mps[j, 0, 2])
@@ -82,7 +82,8 @@ def test_given_north_south_total_scales_the_inclination_correction():
     limits = arm_limits_deg(*PRESETS_DEG["normal"])
     dx, l_start = random_deviations(100, seed=4)
     fraction = jnp.asarray(np.random.default_rng(5).uniform(0.0, 1.5, 100))
-    sol = jax.vmap(lambda d, l0, w: qffc.solve(d, l0, limits, v_n_mps=w * qffc.full_correction_mps(d)))(dx, l_start, fraction)
+    sol = jax.jit(jax.vmap(lambda d, l0, w: qffc.solve(d, l0, limits, v_n_mps=w * qffc.full_correction_mps(d))))(
+        dx, l_start, fraction)
     keep = np.asarray(sol.feasible)
     assert keep.mean() > 0.9
     achieved = jax.vmap(qffc.effect)(sol, l_start)[keep]
@@ -154,17 +155,16 @@ def test_structured_search_finds_the_raise_the_exhaustive_search_finds():
     cases = {**PRESETS_DEG, "beta-min-40": (70.0, 40.0, 90.0, 90.0), "yaw-10": (70.0, 0.0, 10.0, 10.0),
              "vertical": (90.0, 30.0, 45.0, 5.0)}
     rng = np.random.default_rng(7)
+    # The limits are arguments (traced, as in the closed loop), so each search is compiled once for every case.
+    solved = {search: jax.jit(jax.vmap(lambda d, l0, w, limits, search=search: qffc.solve(
+        d, l0, limits, v_n_mps=w * qffc.full_correction_mps(d), search=search), in_axes=(0, 0, 0, None)))
+        for search in ("structured", "all")}
     for name, preset in cases.items():
         limits = arm_limits_deg(*preset)
         dx, l_start = random_deviations(4000, seed=len(name))
         dx = dx * jnp.asarray(rng.choice([1.0, 10.0], (4000, 1)))
         fraction = jnp.asarray(rng.uniform(0.0, 2.0, 4000))
-
-        def solved(search):
-            return jax.jit(jax.vmap(lambda d, l0, w: qffc.solve(d, l0, limits, v_n_mps=w * qffc.full_correction_mps(d),
-                                                                search=search)))(dx, l_start, fraction)
-
-        fast, every = solved("structured"), solved("all")
+        fast, every = (solved[search](dx, l_start, fraction, limits) for search in ("structured", "all"))
         assert 0.3 < float(jnp.mean(every.feasible)) and float(jnp.mean(every.vdt_raise_mps > 0)) > 0.1, name
         for field in ("feasible", "vdt_raise_mps", "dv_rsw_mps", "alpha_rad", "beta_rad"):
             np.testing.assert_array_equal(getattr(fast, field), getattr(every, field), err_msg=f"{name}: {field}")
