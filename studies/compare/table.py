@@ -537,6 +537,20 @@ def notes(found: dict, limits: dict) -> list[str]:
                      "2 x 0.5 N) the north–south ΔV must be spread over wide arcs around the nodes, each m/s changing "
                      "the inclination by less. The discrete law's own gap to that bound is not "
                      "measured further here.")
+    gimbal = limits.get("gimbal", {})
+    if gimbal.get("steady_per_year_mps"):
+        years = gimbal["years"]
+        continuous, constant = (best[name]["dv_steady_per_year_mps"] for name in ("katz-continuous", "katz-constant"))
+        lines.append(f"- The gimbal's bound (Katz's continuous and constant laws: 22.7 mN pointed anywhere; "
+                     f"2021 / 2022: {years['2021']['bound_per_year_mps']:.2f} / {years['2022']['bound_per_year_mps']:.2f}, "
+                     f"mean {gimbal['steady_per_year_mps']:.2f}; {years['2021']['wall_s'] / 60:.0f} and "
+                     f"{years['2022']['wall_s'] / 60:.0f} min here, column generation in 90-day stages) is within "
+                     f"{100 * abs(gimbal['steady_per_year_mps'] / limits['arms']['steady_per_year_mps'] - 1):.1f} % of "
+                     f"the arms' ({limits['arms']['steady_per_year_mps']:.2f}) and below the per-axis pairs' "
+                     f"({limits['axes']['steady_per_year_mps']:.2f}): the "
+                     f"continuous law's {continuous:.2f} (+{100 * (continuous / gimbal['steady_per_year_mps'] - 1):.1f} %) "
+                     f"and the constant law's {constant:.2f} (+{100 * (constant / gimbal['steady_per_year_mps'] - 1):.1f} %) "
+                     "are the laws' distance from the least fuel, not their thrusters'.")
     if absent:
         lines.append(f"- No {', '.join(absent)} bound: the gimbal's directions are a continuum, so each program is "
                      "refined by column generation, and at 22.7 mN the year is planned in 90-day stages; in this session "
