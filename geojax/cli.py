@@ -119,7 +119,7 @@ def _propagate(args) -> int:
     _check_outputs(args)
     result = uncontrolled.propagate_scenario(sc, progress=False if args.quiet else None)
     return _finish(args, result, f"propagated {len(result.cycles.t_s)} cycles to interpolate the change over "
-                                 f"exactly {sc.days:g} days")
+                                 f"exactly {sc.days:g} days", args.out, args.plots)
 
 
 def _simulate(args) -> int:
@@ -144,7 +144,7 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
                                  "times instead of a progress bar", out, plots)
 
 
-def _finish(args, result, detail: str, out=None, plots=None) -> int:
+def _finish(args, result, detail: str, out, plots) -> int:
     """Print the run's summary (and with ``-v`` the devices and ``detail``), then write its file (``--out``) and
     figures (``--plots``), each named as it is written."""
     from geojax import store
@@ -152,7 +152,6 @@ def _finish(args, result, detail: str, out=None, plots=None) -> int:
     for line in result.summary():
         _say(args)(line)
     _detail(args)(f"  devices {store.device_description()}; {detail}")
-    out, plots = (out, plots) if out or plots else (getattr(args, "out", None), getattr(args, "plots", None))
     if out:
         print(f"wrote {result.save(out)}")
     if plots:
@@ -171,7 +170,7 @@ def _bound(args) -> int:
         f"(slots of {args.slot_steps} steps); linearising about the uncontrolled run...", flush=True)
     result = bound(sc, slot_steps=args.slot_steps, thrusters=args.thrusters, acquisition_days=args.acquisition_days,
                    free_end=args.free_end, say=say)
-    return _finish(args, result, f"{result.wall_s:.1f} s in all")
+    return _finish(args, result, f"{result.wall_s:.1f} s in all", args.out, args.plots)
 
 
 def _transfer(args) -> int:
@@ -180,7 +179,7 @@ def _transfer(args) -> int:
     sc = transfer.load(args.scenario)
     _check_outputs(args)
     result = transfer.run(sc, days=args.days)
-    return _finish(args, result, f"{result.wall_s:.1f} s with compilation")
+    return _finish(args, result, f"{result.wall_s:.1f} s with compilation", args.out, args.plots)
 
 
 def _tune(args) -> int:
