@@ -48,6 +48,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_BAD_INPUT
+    if args.no_cache:
+        from geojax.compilation import use_cache
+
+        use_cache(False)
     try:
         return COMMANDS[args.command](args) or 0
     except ValueError as err:
@@ -137,9 +141,18 @@ def _simulate(args) -> int:
 def _run_simulation(sc, seed: int, out, plots, args) -> int:
     from geojax.loop import rollout
 
+    from geojax.compilation import Compilations, waiting_note
+    from geojax.loop.setup import cycle_count, cycle_slots
+
     say = _say(args)
-    say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; compiling...", flush=True)
-    result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"compiled in {s:.1f} s; running...", flush=True))
+    say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; compiling the environment, the reference run and "
+        f"the closed loop for {cycle_slots(cycle_count(sc.days))} cycles (every duration up to that many cycles runs "
+        f"the same program)...", flush=True)
+    _detail(args)(f"  {waiting_note()}", flush=True)
+    with Compilations() as log:
+        result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"closed loop ready in {s:.1f} s; "
+                                                                      f"running...", flush=True))
+    say(f"  {log.summary()}")
     return _finish(args, result, "the run is one compiled call (no host callbacks in the loop), so it reports its "
                                  "times instead of a progress bar", out, plots)
 

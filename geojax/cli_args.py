@@ -23,6 +23,10 @@ def parser() -> argparse.ArgumentParser:
     talk.add_argument("-q", "--quiet", action="store_true", help="print only the files written (and errors)")
     talk.add_argument("-v", "--verbose", action="store_true",
                       help="also print compilation times, devices and where each number comes from")
+    common.add_argument("--no-cache", action="store_true",
+                        help="compile every program afresh and keep none (default: compiled programs are kept in "
+                             "$GEOJAX_CACHE_DIR or the user's cache folder and reused by later runs; "
+                             "GEOJAX_NO_CACHE=1 does the same as this flag)")
 
     def command(name, **kw):
         return sub.add_parser(name, parents=[common], **kw)
