@@ -91,15 +91,17 @@ def test_every_link_and_named_file_resolves_inside_the_repository(page):
     """Every relative link of README.md, docs/*.md and studies/**/README.md is a file or folder of the repository
     (none escapes its root), every file path named in backticks exists (looked up from the root, the page's folder,
     ``geojax/`` and the studies' folders, as the pages write them; NAME-like placeholders skipped), and no page
-    points at the folders beside the repository (``../shared``), which a clone does not have."""
+    points at the folders beside the repository (``../shared``) or cites an issue ("issue 32"), which a clone's
+    reader cannot open."""
     text = page.read_text()
     assert "../shared" not in text
+    assert not re.search(r"\bissues? \d", text, re.I), re.search(r".*\bissues? \d.*", text, re.I).group(0)[:200]
     misses = []
     for target in _links(text):
         path = (page.parent / target).resolve()
         if not path.is_relative_to(ROOT) or not path.exists():
             misses.append(f"link {target}")
-    for named in re.findall(r"`([\w./-]+/[\w.-]+\.(?:py|toml|md|json))`", text):
+    for named in re.findall(r"(?<!\[)`([\w./-]+/[\w.-]+\.(?:py|toml|md|json))`", text):
         if re.search(r"[A-Z]{3,}", named):
             continue
         where = [ROOT, page.parent, ROOT / "geojax", ROOT / "studies", *(ROOT / "studies").iterdir()]
