@@ -7,7 +7,8 @@ import argparse
 import geojax
 
 DAYS_HELP = ("duration in solar days (default: the scenario's); the run is that many sidereal-day cycles, "
-             "rounded (20 days: 20 cycles), the same in propagate, simulate, sweep and tune")
+             "rounded (20 days: 20 cycles), the same in propagate, bound and simulate (a sweep file sets it as "
+             "\"duration.days\" in [set], a tuning file as days)")
 
 
 def parser() -> argparse.ArgumentParser:

@@ -47,7 +47,8 @@ DESCRIPTIONS = {
     "lon_deg": "one-cycle mean longitude (east)",
     "ex": "one-cycle mean eccentricity vector, x (MEE f)", "ey": "one-cycle mean eccentricity vector, y (MEE g)",
     "ix": "one-cycle mean inclination vector, x (MEE h)", "iy": "one-cycle mean inclination vector, y (MEE k)",
-    "dv_mps": "delta-V used so far", "t_s": "time since the start of the run",
+    "dv_mps": "delta-V delivered: in /cycles/, within that cycle (not a running total); in a transfer's "
+              "/records/, used so far; in /metrics/, over the whole run", "t_s": "time since the start of the run",
     "dlon_deg": "longitude - station longitude", "lat_deg": "latitude",
     "ux_mps2": "delivered acceleration, ECEF x", "uy_mps2": "delivered acceleration, ECEF y",
     "uz_mps2": "delivered acceleration, ECEF z",
