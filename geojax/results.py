@@ -237,7 +237,11 @@ def held(ds):
 def summary_table(ds, metric: str = "dv_per_year_mps", over: str | tuple[str, ...] = "repetition"):
     """A ``Dataset`` of ``metric``'s statistics over the axes ``over`` (default the repetitions; a file without
     them: every sample axis) per remaining coordinate (controller, grid point): ``samples``, ``failed`` (status
-    not 0) and the ``mean``, ``std``, ``min``, ``max`` over the samples that held (``held_statistics``)."""
+    not 0) and ``held_mean``, ``held_std``, ``held_min``, ``held_max``, over the samples that held
+    (``held_statistics``; NaN where none held).
+
+    >>> summary_table(geojax.open_results("fig09.h5")).sel(controller="qffc")[["failed", "held_mean"]]
+    """
     import xarray as xr
 
     if "status" not in ds:
@@ -250,7 +254,9 @@ def summary_table(ds, metric: str = "dv_per_year_mps", over: str | tuple[str, ..
         *(ds.sizes[d] for d in kept), -1)
     stats = held_statistics(flat(ds[metric]), flat(ds.status))
     units = ds[metric].attrs.get("units", "")
-    variables = {name: xr.Variable(kept, value, {"units": units} if name not in ("samples", "failed") else {})
-                 for name, value in stats._asdict().items()}
+    counts = {"samples": stats.samples, "failed": stats.failed}
+    variables = {**{name: xr.Variable(kept, value) for name, value in counts.items()},
+                 **{f"held_{name}": xr.Variable(kept, getattr(stats, name), {"units": units})
+                    for name in ("mean", "std", "min", "max")}}
     return xr.Dataset(variables, coords={d: ds[d] for d in kept if d in ds.coords},
                       attrs={"metric": metric, "over": ",".join(over)})

@@ -230,8 +230,9 @@ def absolute_errors(errors: dict) -> dict:
     ``sigma3_att_deg``) turned into the multipliers the loop reads, so the loop and every default number are
     unchanged.  Where a group's multipliers are left at their defaults (``h_rv`` 0, ``rv_r`` and ``rv_v`` 1;
     ``h_att`` 0, ``att_yaw`` and ``att_pitch`` 1), the multiplier becomes the largest given part's multiple of
-    its nominal and each part's scale its own multiple over that (1 where the parts keep the nominal ratio, so
-    ``sigma3_r_m = 0.6``, ``sigma3_v_mps = 1e-4`` is ``h_rv = 2``; a part not given is 0).  Where they are set
+    its nominal (to 12 significant digits) and each part's scale its own multiple over that (1 where the parts
+    keep the nominal ratio, so ``sigma3_r_m = 0.6``, ``sigma3_v_mps = 1e-4`` is ``h_rv = 2`` exactly, the same
+    numbers bit for bit; a part not given is 0).  Where they are set
     too, each given part must be what they make (1e-9 relative), else ``ValueError`` naming both."""
     errors = dict(errors)
     for parts in ERROR_PARTS.values():
@@ -249,8 +250,8 @@ def absolute_errors(errors: dict) -> dict:
                                      f"{nominal:g} {unit} (Li 2022 eq. (48)) = {implied:g} {unit}; give one of them")
             continue
         ratios = {scale: 0.0 for scale in scales}
-        for (_, _, scale, nominal, _), value in given:
-            ratios[scale] = value / nominal
+        for (_, _, scale, nominal, _), value in given:  # 12 digits: 0.15 deg is H 3, not 2.9999999999999996
+            ratios[scale] = float(f"{value / nominal:.12g}")
         errors[multiplier] = max(ratios.values())
         if errors[multiplier] > 0:
             errors.update({scale: ratio / errors[multiplier] for scale, ratio in ratios.items()})
