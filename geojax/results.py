@@ -27,14 +27,13 @@ from geojax.loop.metrics import STATUS_OK, STATUS_TEXT
 
 # Unit of a dataset by the end of its name (the project's naming rule: the name says the unit).
 UNIT_SUFFIXES = (
-    ("_per_year_mps", "m/s/yr"), ("_s_per_orbit", "s/orbit"), ("_deg_per_day", "deg/day"), ("_mps2", "m/s^2"), ("_mps", "m/s"),
-    ("_deg", "deg"), ("_rad", "rad"), ("_km", "km"), ("_kg", "kg"), ("_m2", "m^2"), ("_m", "m"), ("_s", "s"),
-    ("_n", "N"), ("_days", "days"),
+    ("_per_year_mps", "m/s/yr"), ("_s_per_orbit", "s/orbit"), ("_deg_per_day", "deg/day"), ("_mps2", "m/s^2"),
+    ("_mps", "m/s"), ("_deg", "deg"), ("_rad", "rad"), ("_km", "km"), ("_kg", "kg"), ("_m2", "m^2"), ("_m", "m"),
+    ("_s", "s"), ("_n", "N"), ("_days", "days"),
 )
 DIMENSIONLESS = {"ex", "ey", "ix", "iy", "max_abs_de", "max_abs_di", "duty_fraction", "duty_x", "duty_y", "duty_z",
-                 "ns_fraction",
-                 "burns_per_thruster_per_orbit", "burns_total", "cycles_without_solution", "code", "active",
-                 "loss", "step_norm", "theta", "temperature", "trust_radius", "constraint", "constraint_lon",
+                 "ns_fraction", "burns_per_thruster_per_orbit", "burns_total", "cycles_without_solution", "code",
+                 "active", "loss", "step_norm", "theta", "temperature", "trust_radius", "constraint", "constraint_lon",
                  "constraint_lat", "status"}
 DESCRIPTIONS = {
     "dv_per_year_mps": "delta-V per year of the whole run",
@@ -52,7 +51,8 @@ DESCRIPTIONS = {
                   "so 1e-4 is 0.0115 deg of inclination)",
     "duty_fraction": "fraction of the run's time a thruster fires (a planner's burns, eclipse suspensions left out)",
     **{f"duty_{axis}": f"fraction of the steps whose thrust has an ECEF {axis} component (Katz 2025's duty of "
-                       f"per-axis thrusters; for thrust in any other direction, the firing fraction)" for axis in "xyz"},
+                       f"per-axis thrusters; for thrust in any other direction, the firing fraction)"
+       for axis in "xyz"},
     "dv_ns_per_year_mps": "north-south (out-of-plane, RSW W) component of the delta-V per year (a planner's burns)",
     "dv_ew_per_year_mps": "east-west (in-plane, RSW R and S) component of the delta-V per year (a planner's burns); "
                           "with dv_ns_per_year_mps it adds up to more than dv_per_year_mps where burns combine both",

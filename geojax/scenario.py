@@ -219,7 +219,8 @@ def _validate(raw: dict, controller=None) -> dict:
 # nominal 3 sigma of eq. (48)); a part's 3 sigma is multiplier x scale x nominal (loop.simulate.measured_mee,
 # control.burns.attitude_error_rad).
 ERROR_PARTS = {
-    "rv": (("sigma3_r_m", "h_rv", "rv_r", NOMINAL_3SIGMA_R_M, "m"), ("sigma3_v_mps", "h_rv", "rv_v", NOMINAL_3SIGMA_V_MPS, "m/s")),
+    "rv": (("sigma3_r_m", "h_rv", "rv_r", NOMINAL_3SIGMA_R_M, "m"),
+           ("sigma3_v_mps", "h_rv", "rv_v", NOMINAL_3SIGMA_V_MPS, "m/s")),
     "att": (("sigma3_att_deg", "h_att", "att_yaw", NOMINAL_3SIGMA_ATT_DEG, "deg"),
             ("sigma3_att_deg", "h_att", "att_pitch", NOMINAL_3SIGMA_ATT_DEG, "deg")),
 }

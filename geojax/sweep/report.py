@@ -58,7 +58,8 @@ def _point(dv, dlon, dlat, j: int, status, meanings) -> str:
         return f"all {n} failed ({counts}): no statistics"
     spread = f" ± {dv.std[j]:.2f}" if n - failed > 1 else ""
     held = f"{n - failed} held" if failed else "all ok"
-    text = (f"ΔV {dv.mean[j]:.2f}{spread} m/s/yr, max |δλ| {dlon.max[j]:.4f}°, max |δφ| {dlat.max[j]:.4f}°; {held}")
+    text = (f"ΔV {dv.mean[j]:.2f}{spread} m/s/yr, max |δλ| {dlon.max[j]:.4f}°, max |δφ| {dlat.max[j]:.4f}°; "
+            f"{held}")
     return text + (f", {failed} failed ({counts})" if failed else "")
 
 

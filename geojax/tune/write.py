@@ -71,10 +71,11 @@ def summary(result) -> list[str]:
     fields = scenario_mod.controller_fields(spec.scenario.config["controller"], spec.controller)
     lines += [f"  {name:24s} {value:.6g}" for name, value in reported(result.best_params, fields).items()]
     box_deg = spec.scenario.config["station"]["box_half_width_deg"]
-    lon_deg, lat_deg = excursion_deg(result.best_constraint, box_deg)
+    g = result.best_constraint
+    lon_deg, lat_deg = excursion_deg(g, box_deg)
     return lines + [f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept: largest "
-                    f"|δλ| {lon_deg:.4f}°, |δφ| {lat_deg:.4f}° of ±{box_deg:g}° (constraints (excursion / box)² - 1: "
-                    f"lon {result.best_constraint[0]:+.4f}, lat {result.best_constraint[1]:+.4f})"]
+                    f"|δλ| {lon_deg:.4f}°, |δφ| {lat_deg:.4f}° of ±{box_deg:g}° "
+                    f"(constraints (excursion / box)² - 1: lon {g[0]:+.4f}, lat {g[1]:+.4f})"]
 
 
 def excursion_deg(constraint, box_half_width_deg: float):
