@@ -20,7 +20,9 @@ from geojax.control.base import Controller, keeps_steps
 from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
 from geojax.loop import report
-from geojax.loop.setup import Batch, controller_of, prepare, reference, unstack
+from geojax import traced
+from geojax.loop.setup import STATIC_KEYS, Batch, controller_of, prepare, reference, unstack
+from geojax.params import static_settings
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
 from geojax.physics.propagate import Dynamics, for_lanes
@@ -45,6 +47,7 @@ class Result(NamedTuple):
     step_s: float
     wall_s: float  # compilation included
     compile_s: float = float("nan")  # measured where ``on_compiled`` was given
+    run_s: float = float("nan")  # the compiled closed loop's and metrics' run alone, where ``on_compiled`` was given
     scenario: Scenario | None = None  # a single rollout's
     seed: int | None = None  # a single rollout's, None where it was given a key
 
@@ -153,17 +156,29 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     args = (pad_lanes(params, lanes), pad_lanes(keys, lanes), batch.shared, _reference_env(batch))
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, lanes),
                   keep_steps=keep_steps)
-    compile_s = float("nan")
+    compile_s = run_s = float("nan")
+    summarized = dict(n_cycles=batch.n_cycles, step_s=batch.step_s,
+                      steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1])
+    # A registered controller's programs are kept traced between runs (``geojax.traced``); a user's are not.
+    identity = None if controller is not None else (
+        scenarios[0].controller, repr(sorted(static_settings(scenarios[0].config["controller"],
+                                                              batch.controller.fields).items())),
+        scenarios[0].dynamics, lanes, keep_steps, batch.step_s, *(key(scenarios[0]) for key in STATIC_KEYS.values()))
     if on_compiled is None:
-        final, records = closed_loop_batch(*args, **static)
+        final, records = traced.call(closed_loop_batch, "closed_loop", identity, *args, **static)
+        metrics = traced.call(metrics_batch, "metrics", identity, args[0], final, records, **summarized)
     else:
         begun = time.perf_counter()
-        compiled = closed_loop_batch.lower(*args, **static).compile()
+        loop_program = traced.compiled(closed_loop_batch, "closed_loop", identity, *args, **static)
         compile_s = time.perf_counter() - begun
         on_compiled(compile_s)
-        final, records = compiled(*args)
-    metrics = metrics_batch(args[0], final, records, batch.n_cycles, batch.step_s,
-                            batch.shared.env.earth_angle_rad.shape[1])
+        begun = time.perf_counter()
+        final, records = jax.block_until_ready(loop_program(*args))
+        run_s = time.perf_counter() - begun
+        metrics_program = traced.compiled(metrics_batch, "metrics", identity, args[0], final, records, **summarized)
+        begun = time.perf_counter()
+        metrics = jax.block_until_ready(metrics_program(args[0], final, records))
+        run_s += time.perf_counter() - begun
     to_numpy = lambda tree: jax.tree_util.tree_map(lambda x: np.asarray(x)[:n], tree)  # noqa: E731
     metrics = to_numpy(metrics)
     status = metrics.pop("status")
@@ -172,7 +187,7 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
                       None if records.steps is None else
                       jax.tree_util.tree_map(lambda x: x[:, :batch.n_cycles], records.steps))
     return Result(metrics, status, records, to_numpy(final), jax.tree_util.tree_map(np.asarray, params),
-                  batch.step_s, time.perf_counter() - start, compile_s)
+                  batch.step_s, time.perf_counter() - start, compile_s, run_s)
 
 
 def lane_slots(n: int) -> int:

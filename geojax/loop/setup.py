@@ -22,6 +22,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from geojax import traced
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.control import lookup, none
 from geojax.control.base import Controller
@@ -134,7 +135,9 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     segments = reference_segments(env, n_cycles, width, segment_cycles) if width else None
     ref = None
     if width and not per_sample:
-        ref = _reference_jit(params[0], segments, step_s=step_s, dynamics=dynamics, width=width)
+        identity = (first.dynamics, step_s, width, *(key(first) for key in STATIC_KEYS.values()))
+        ref = traced.call(_reference_jit, "reference", identity, params[0], segments, step_s=step_s, dynamics=dynamics,
+                          width=width)
     shared = Shared(cycles_env, ref)
     if pad:
         # The environment and the reference are computed for the run's cycles as they always were (small
