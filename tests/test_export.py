@@ -277,3 +277,13 @@ def test_save_oem_refuses_unknown_frames_and_time_systems(run, tmp_path):
         run.save_oem(tmp_path / "a.oem", frame="GCRF")
     with pytest.raises(ValueError, match="time_system: must be one of UTC, TT"):
         run.save_oem(tmp_path / "a.oem", time_system="GPS")
+
+
+def test_a_burn_planned_in_the_shadow_starts_when_the_shadow_ends():
+    """``burns.firing_start_s`` against a sunlit clock written by hand: 10 s steps, the third and fourth in
+    shadow (the clock stands at 20 s), the fifth half sunlit."""
+    from geojax.control.burns import firing_start_s
+
+    clock = jnp.array([0.0, 10.0, 20.0, 20.0, 20.0, 25.0, 35.0])
+    starts = firing_start_s(clock, jnp.array([15.0, 20.0, 22.5, 0.0]), 10.0)
+    np.testing.assert_allclose(starts, [15.0, 40.0, 45.0, 0.0])
