@@ -3,7 +3,7 @@
     geojax demo [--out DIR]
     geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5] [--plots DIR]
     geojax simulate SCENARIO [--controller KIND] [--horizon N] [--days D] [--step S] [--seed S] [--h-rv H] [--h-att H]
-                    [--out FILE.h5] [--plots DIR]
+                    [--out FILE.h5] [--plots DIR] [--oem FILE]
     geojax bound SCENARIO [--days D] [--step S] [--slot-steps N] [--thrusters arms|gimbal|fixed4]
                  [--acquisition-days D] [--free-end] [--out FILE.h5] [--plots DIR]
     geojax transfer SCENARIO [--days D] [--out FILE.h5] [--plots DIR]
@@ -35,7 +35,7 @@ from geojax.sweep.report import summary as sweep_summary, title as sweep_title  
 EXIT_BAD_INPUT = 2
 # The flag of each spec key a library error may name (the library speaks in spec keys, the command line in flags).
 FLAGS = {"bound.slot_steps": "--slot-steps", "bound.acquisition_days": "--acquisition-days",
-         "bound.thrusters": "--thrusters", "out": "--out", "resume": "--resume", "chunk": "--chunk",
+         "bound.thrusters": "--thrusters", "out": "--out", "oem": "--oem", "resume": "--resume", "chunk": "--chunk",
          "workers": "--workers", "ray": "--ray"}
 
 
@@ -111,6 +111,8 @@ def _check_outputs(args) -> None:
 
     if getattr(args, "out", None):
         check_output_file(args.out)
+    if getattr(args, "oem", None):
+        check_output_file(args.oem, "oem")
     if getattr(args, "plots", None):
         plots = Path(args.plots)
         if plots.exists() and not plots.is_dir():
@@ -154,8 +156,11 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
         result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"closed loop ready in {s:.1f} s; "
                                                                       f"running...", flush=True))
     say(f"  {log.summary()}")
-    return _finish(args, result, "the run is one compiled call (no host callbacks in the loop), so it reports its "
+    code = _finish(args, result, "the run is one compiled call (no host callbacks in the loop), so it reports its "
                                  "times instead of a progress bar", out, plots)
+    if getattr(args, "oem", None):
+        print("wrote " + " and ".join(map(str, result.save_oem(args.oem))))
+    return code
 
 
 def _finish(args, result, detail: str, out, plots) -> int:

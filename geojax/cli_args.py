@@ -80,6 +80,9 @@ def parser() -> argparse.ArgumentParser:
                      "and pitch in deg (errors.sigma3_att_deg: sets H_att)")
     sim.add_argument("--out", help="write /metrics and /cycles to this HDF5 file")
     sim.add_argument("--plots", help="folder for the figures")
+    sim.add_argument("--oem", metavar="FILE", help="write the true state at each cycle start and the end as a CCSDS "
+                     "OEM 2.0 (EME2000, UTC; XML where FILE ends in .xml, else KVN) and a planner's burns as "
+                     "FILE's stem + -burns.csv (start, firing time, RTN Delta-V), for Orekit, GMAT or STK")
 
     tune = command("tune", help="tune controller gains by gradients through the rollout (Katz 2025)")
     tune.add_argument("file", help="a tuning file (TOML; its keys: geojax.tune.spec)")

@@ -93,19 +93,19 @@ def read_h5(path: str | Path) -> tuple[dict[str, dict[str, np.ndarray]], dict]:
     return groups, attrs
 
 
-def check_output_file(path: str | Path) -> Path:
+def check_output_file(path: str | Path, name: str = "out") -> Path:
     """``ValueError`` unless ``path`` can be written as a results file: not a folder, its parent a folder or
-    creatable.  Checked before a run starts."""
+    creatable.  Checked before a run starts; the error names the setting ``name``."""
     path = Path(path)
     if path.is_dir():
-        raise ValueError(f"out={str(path)!r}: is a folder; give a file name")
+        raise ValueError(f"{name}={str(path)!r}: is a folder; give a file name")
     parent = path.parent
     while not parent.exists():
         parent = parent.parent
     if not parent.is_dir():
-        raise ValueError(f"out={str(path)!r}: {str(parent)!r} is not a folder")
+        raise ValueError(f"{name}={str(path)!r}: {str(parent)!r} is not a folder")
     if not os.access(parent, os.W_OK):
-        raise ValueError(f"out={str(path)!r}: {str(parent)!r} is not writable")
+        raise ValueError(f"{name}={str(path)!r}: {str(parent)!r} is not writable")
     return path
 
 

@@ -246,3 +246,63 @@ def test_axis_labels_come_from_the_fields(tmp_path, monkeypatch):
     assert label_for("controller.thrust_frac_n", ["laws_with_units:LAW"]) == "thrust_frac_n"  # declared unitless
     assert label_for("controller.gain_x", ["laws_with_units:LAW"]) == "g (1/s)"
     assert label_for("controller.thrust_frac_n") == "thrust_frac (N)"  # no controller named: the suffix's unit
+
+
+def _sweep_two_keys():
+    groups = _sweep()
+    groups["grid"]["errors__h_rv"] = np.array([1.0, 2.0])
+    groups["metrics"]["dv_per_year_mps"] = np.repeat(groups["metrics"]["dv_per_year_mps"][:, :, None], 2, 2)
+    groups["metrics"]["dv_per_year_mps"][:, :, 1] += 5.0
+    groups["status"]["code"] = np.repeat(groups["status"]["code"][:, :, None], 2, 2)
+    return groups
+
+
+def test_a_sweep_over_two_keys_names_the_second_by_its_values_and_keeps_the_legend_off_the_bands(
+        tmp_path, closed_figures):
+    """Each line of a two-key sweep is named by the second key's symbol and value (not a running number), the
+    legend sits beside the axes (its box clear of the axes' box), and the title names both keys."""
+    from geojax import cli
+
+    keys = ["controller", "controller.di_max", "errors.h_rv"]
+    plots.plot_sweep(_sweep_two_keys(), keys, tmp_path / "sweep.png")
+    (fig,) = closed_figures
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert texts[:2] == ["qffc, H_rv = 1: mean", "qffc, H_rv = 2: mean"]
+    assert "fompc, H_rv = 1: unstable" in texts and not any("#" in t for t in texts)
+    legend, frame = ax.get_legend().get_window_extent(), ax.get_window_extent()
+    assert legend.x0 >= frame.x1 and legend.x1 <= fig.bbox.x1 + 1  # beside the axes, inside the figure
+    attrs = {"name": "grid2", "base_scenario_toml": '[duration]\ndays = 30\n'}
+    assert cli.sweep_title(attrs, keys) == "controller.di_max × errors.h_rv: grid2, 30 days"
+
+
+def test_demo_labels_say_each_unit_once_insets_have_tick_values_and_thrust_names_its_frame(tmp_path,
+                                                                                          closed_figures):
+    plots.plot_cycles(_cycles(), tmp_path / "c.png")
+    plots.plot_station_keeping(_cycles(), _reference(), TARGET, tmp_path / "sk.png", box_half_width_deg=0.05)
+    plots.plot_feedback(_steps(), 0.05, tmp_path / "katz")
+    cycles, station_keeping, _, thrust = closed_figures
+    for fig in closed_figures:
+        fig.canvas.draw()
+        for ax in fig.axes:
+            for label in (ax.get_xlabel(), ax.get_ylabel()):
+                assert all(label.count(unit) <= 1 for unit in ("km", "deg", "m/s")), label
+    assert cycles.axes[2].get_ylabel() == "mean a − 42164.17 (km)"
+    insets = [inset for ax in station_keeping.axes for inset in ax.child_axes]
+    assert len(insets) == 2
+    for inset in insets:  # values on both axes, besides the magnification
+        for axis in (inset.xaxis, inset.yaxis):
+            shown = [t.get_text() for t in axis.get_ticklabels() if t.get_visible() and t.get_text()]
+            shown += [t.label2.get_text() for t in axis.get_major_ticks() if t.label2.get_visible()]
+            assert len([t for t in shown if t]) >= 2
+    assert "ECEF" in thrust.axes[0].get_title(loc="left")
+
+
+def test_run_titles_name_the_controller_once():
+    from geojax import scenario
+    from geojax.loop.report import run_title
+
+    assert run_title(scenario.load("li2022-qffc")) == "li2022-qffc"
+    assert run_title(scenario.load("katz2025-constant")) == "katz2025-constant"
+    assert run_title(scenario.load("li2022", {"controller.kind": "fompc"})) == "li2022, fompc"

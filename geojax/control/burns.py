@@ -47,6 +47,7 @@ class BurnPlan(NamedTuple):
     directions_rsw: jnp.ndarray  # [2, 3] unit velocity increments, attitude errors included
     prediction: jnp.ndarray  # [6] predicted mean elements at the end of the cycle, without burns
     ns_fraction: jnp.ndarray  # [] north-south correction flown, as a fraction of the QFFC's (1 for the QFFC)
+    start_s: jnp.ndarray  # [2] when each burn starts firing, s from the cycle start (after the shadow it met)
 
 
 def fly(params, burns, prediction, ns_fraction, estimate, context, key) -> BurnPlan:
@@ -63,8 +64,22 @@ def fly(params, burns, prediction, ns_fraction, estimate, context, key) -> BurnP
     burn_s = jnp.where((burn_s >= thrusters["min_burn_s"]) & burns.feasible, burn_s, 0.0)
     start = jnp.clip(t_mid - burn_s / 2, 0.0, cycle_s - burn_s)
     clock = sunlit_clock(sunlit_fraction(context.env, params.station["lon_rad"], context.force_model), step_s)
-    clock_start = jnp.interp(start, jnp.arange(n_steps + 1) * step_s, clock)
-    return BurnPlan(burns, burn_s, clock, clock_start, directions, prediction, ns_fraction)
+    grid = jnp.arange(n_steps + 1) * step_s
+    clock_start = jnp.interp(start, grid, clock)
+    return BurnPlan(burns, burn_s, clock, clock_start, directions, prediction, ns_fraction,
+                    firing_start_s(clock, clock_start, step_s))
+
+
+def firing_start_s(clock, clock_start, step_s):
+    """When burns [k] that start at sunlit-clock times ``clock_start`` begin firing, s from the cycle start: the
+    first time ``clock`` [n_steps + 1] (sunlit time at the step boundaries) passes ``clock_start``, linear within
+    a step.  A start planned in the shadow, where the clock stands still, fires when the shadow ends: the last
+    boundary at or below ``clock_start`` (``jnp.interp`` leaves a flat stretch of ``xp`` undefined)."""
+    n_steps = clock.shape[0] - 1
+    j = jnp.clip(jnp.searchsorted(clock, clock_start, side="right") - 1, 0, n_steps - 1)
+    rise = clock[j + 1] - clock[j]
+    within = jnp.where(rise > 0, (clock_start - clock[j]) / jnp.where(rise > 0, rise, 1.0), 0.0)
+    return (j + jnp.clip(within, 0.0, 1.0)) * step_s
 
 
 def attitude_error_rad(errors, key):
@@ -106,7 +121,8 @@ def record(plan: BurnPlan) -> dict:
     """Per-cycle records of a planner (read by ``loop.metrics``)."""
     fired_s = jnp.maximum(jnp.minimum(plan.burn_s, plan.clock[-1] - plan.clock_start), 0.0)
     return {"burns": plan.burns, "fired_s": fired_s, "prediction": plan.prediction,
-            "ns_fraction": plan.ns_fraction, "solved": plan.burns.feasible, "directions_rsw": plan.directions_rsw}
+            "ns_fraction": plan.ns_fraction, "solved": plan.burns.feasible, "directions_rsw": plan.directions_rsw,
+            "start_s": plan.start_s}
 
 
 def sunlit_fraction(env_steps, station_lon_rad, fm):

@@ -123,9 +123,15 @@ def plot(result, folder: str | Path) -> list[Path]:
     track and thrust (``NAME-ground-track.png``, ``NAME-thrust.png``), else its cycles and station keeping
     (``NAME.png``, ``NAME-station-keeping.png``)."""
     sc = scenario_of(result)
+    return draw(groups(result), sc.config["station"]["box_half_width_deg"], Path(folder) / sc.name, run_title(sc))
+
+
+def run_title(sc: Scenario) -> str:
+    """A run's figure title: the scenario's name, then its controller (a Katz 2025 law's thrust mode) where the
+    name does not already say it ("li2022-qffc", "li2022, fompc", "katz2025-constant")."""
     mode = sc.config["controller"].get("thrust_mode")  # Katz 2025's laws name theirs
-    title = f"{sc.name}, {mode} thrust" if result.records.steps is not None and mode else f"{sc.name}, {sc.controller}"
-    return draw(groups(result), sc.config["station"]["box_half_width_deg"], Path(folder) / sc.name, title)
+    what = f"{mode} thrust" if mode else sc.controller
+    return sc.name if (mode or sc.controller) in sc.name else f"{sc.name}, {what}"
 
 
 def draw(groups: dict, box_half_width_deg: float, stem: Path, title: str, fmt: str = "png",

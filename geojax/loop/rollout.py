@@ -19,6 +19,7 @@ import numpy as np
 from geojax.control.base import Controller, keeps_steps
 from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
+from geojax.export import trajectory
 from geojax.loop import report
 from geojax import traced
 from geojax.loop.setup import STATIC_KEYS, Batch, controller_of, prepare, reference, unstack
@@ -57,6 +58,7 @@ class Result(NamedTuple):
 
     # What ``geojax simulate`` writes (``--out``), prints and draws (``--plots``): its report's functions.
     save, summary, plot = report.save, report.summary, report.plot
+    save_oem = trajectory.save_oem  # CCSDS OEM of the states at the cycle starts, and the burns as CSV
 
 
 def rollout(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,

@@ -25,18 +25,22 @@ def _padded(values, factor: float = 1.5):
 
 
 def _zoom(ax, x, y, all_x, all_y, size: float = 0.38):
-    """A zoomed inset of the path (x, y), its magnification written in it, in the corner of ``ax`` holding the
-    fewest of the points (all_x, all_y); the zoomed region is marked on ``ax``."""
+    """A zoomed inset of the path (x, y), with its tick values and its magnification written in it, in the
+    corner of ``ax`` holding the fewest of the points (all_x, all_y); the zoomed region is marked on ``ax``."""
     (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
     u, v = (np.asarray(all_x) - x0) / (x1 - x0), (np.asarray(all_y) - y0) / (y1 - y0)
     corners = [(0.02, 0.02), (1 - size - 0.02, 0.02), (0.02, 1 - size - 0.02), (1 - size - 0.02, 1 - size - 0.02)]
     crowd = [np.sum((u > cx - 0.05) & (u < cx + size + 0.05) & (v > cy - 0.05) & (v < cy + size + 0.05))
              for cx, cy in corners]
-    inset = ax.inset_axes([*corners[int(np.argmin(crowd))], size, size])
+    corner = corners[int(np.argmin(crowd))]
+    inset = ax.inset_axes([*corner, size, size])
     inset.plot(x, y, "C0", lw=0.8)
     _square(inset, x, y, 1.3)
-    # Tick labels would crowd a box this small; its magnification says the scale instead.
-    inset.tick_params(labelbottom=False, labelleft=False, length=2, direction="in")
+    # Tick values in the parent's units, small, on the inset's sides towards the parent's middle (outside sides
+    # would fall on the parent's own tick labels).
+    left, bottom = corner[0] < 0.5, corner[1] < 0.5
+    inset.tick_params(labelsize=5, length=2, pad=1, direction="in", labelbottom=not bottom, labeltop=bottom,
+                      labelleft=not left, labelright=left, bottom=True, top=True, left=True, right=True)
     inset.xaxis.set_major_locator(MaxNLocator(3))
     inset.yaxis.set_major_locator(MaxNLocator(3))
     zoom = float(f"{(x1 - x0) / np.ptp(inset.get_xlim()):.2g}")

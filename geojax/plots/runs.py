@@ -17,6 +17,8 @@ from geojax.plots.style import FORMATS, _save, styled
 
 DAY_S = 86400.0
 UNCONTROLLED_DAYS = 30.0  # the uncontrolled ground track shown beside a closed loop (Li 2022 Fig. 4)
+# The frame of the thrust figure's u_x, u_y, u_z (the loop records the delivered acceleration in it).
+ECEF_AXES = "delivered thrust acceleration u, Earth-fixed (ECEF) axes: x to the Greenwich meridian, z to the pole"
 INSET_RATIO = 0.2  # the controlled path gets a zoomed inset when it spans less than this of the uncontrolled one
 
 
@@ -35,7 +37,7 @@ def plot_cycles(cycles: dict[str, np.ndarray], path: str | Path, title: str = ""
     label, (drift,) = _scaled("drift", "deg/day", cycles["drift_deg_per_day"])
     ax[1].plot(days, drift)
     ax[1].set(xlabel="days", ylabel=label)
-    label, (da,) = _scaled("mean a − 42164.17 km", "km", (np.asarray(cycles["a_m"]) - 42164.17e3) / 1e3)
+    label, (da,) = _scaled("mean a − 42164.17", "km", (np.asarray(cycles["a_m"]) - 42164.17e3) / 1e3)
     ax[2].plot(days, da)
     ax[2].set(xlabel="days", ylabel=label)
     for a, (x, y, xname, yname) in zip(ax[3:5], [("ex", "ey", "e_x", "e_y"), ("ix", "iy", "i_x = h", "i_y = k")]):
@@ -121,7 +123,7 @@ def plot_feedback(steps, box_half_width_deg: float, path_stem: str | Path, title
     """Katz 2025 Figs. 1-7 from a feedback run (``/steps`` of ``geojax simulate --out``: t_s, dlon_deg, lat_deg and
     the delivered ECEF acceleration ux_mps2, uy_mps2, uz_mps2): the ground track (λ − λ_d, latitude) inside the
     box, to ``{path_stem}-ground-track.{fmt}``; the acceleration per axis and its norm over the run and a two-day
-    close-up of the z axis mid-run (Fig. 5), in µm/s² on one scale for the three axes, to
+    close-up of the z axis mid-run (Fig. 5), in µm/s² on one scale for the three axes, the frame named above, to
     ``{path_stem}-thrust.{fmt}``."""
     if fmt not in FORMATS:
         raise ValueError(f"fmt: one of {', '.join(FORMATS)}, got {fmt!r}")
@@ -143,6 +145,7 @@ def plot_feedback(steps, box_half_width_deg: float, path_stem: str | Path, title
                                ["u_x", "u_y", "u_z", "|u|"]):
         a.plot(days, series, lw=0.4)
         a.set(xlabel="days", ylabel=f"{name} (µm/s²)")
+    axes[0].set_title(ECEF_AXES, loc="left")
     for a in axes[[1, 2, 4]]:  # one scale for the three axes: a component at rounding level (1e-16) reads as zero
         a.sharey(axes[0])
     mid = days[len(days) // 2]

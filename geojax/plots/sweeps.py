@@ -1,6 +1,7 @@
 """A sweep's figure: its metric against its first swept parameter, mean and spread over the repetitions that held
-(status 0), one line per controller, the points where samples failed marked and counted (``plot_sweep``; several
-sweeps on one axis: ``plot_sweeps``)."""
+(status 0), one line per controller and point of the further swept keys (named by their values), the points where
+samples failed marked and counted, the legend beside the axes (``plot_sweep``; several sweeps on one axis:
+``plot_sweeps``)."""
 
 from __future__ import annotations
 
@@ -40,7 +41,7 @@ def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv
     """``plot_sweep`` for several sweeps over the same parameter on one axis: ``runs`` is [(label, groups)]."""
     from matplotlib.patches import Patch
 
-    fig, ax = plt.subplots(figsize=(5.0, 3.4), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(7.2, 3.4), constrained_layout=True)
     param = axes_names[1]
     x_power = decade(*(_numeric(g["grid"][param.replace(".", "__")]) for _, g in runs))
     y_power = decade(*(np.asarray(g["metrics"][metric], float) for _, g in runs))
@@ -51,11 +52,12 @@ def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv
         controllers = [c.decode() if isinstance(c, bytes) else str(c) for c in groups["grid"]["controller"]]
         x = _numeric(groups["grid"][param.replace(".", "__")]) / 10.0**x_power
         grid_values.update(x.tolist())
+        further = _further_points(groups["grid"], axes_names[2:], controllers)
         for i, controller in enumerate(controllers):
             v = values[i].reshape(len(x), -1, values.shape[-1])  # [x, other axes, reps]
             s = status[i].reshape(v.shape)
             for j in range(v.shape[1]):
-                name = " ".join(filter(None, [prefix, controller, f"#{j}" if v.shape[1] > 1 else ""]))
+                name = " ".join(filter(None, [prefix, controller])) + (f", {further[j]}" if further else "")
                 stats = held_statistics(v[:, j], s[:, j])
                 bad = stats.failed > 0
                 line, = ax.plot(x, stats.mean, "o-", ms=3.5, label=f"{name}: mean (held)")
@@ -75,5 +77,21 @@ def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv
     names = [c.decode() if isinstance(c, bytes) else str(c) for _, g in runs for c in g["grid"]["controller"]]
     ax.set(xlabel=_label(*_quantity(param, names), x_power), ylabel=_label(*_quantity(metric), y_power))
     handles, _ = ax.get_legend_handles_labels()
-    ax.legend(handles=handles + bands, loc="best", fontsize="small")
+    # beside the axes, not on them: a legend inside covers the bands wherever it is put
+    ax.legend(handles=handles + bands, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
+              frameon=False, fontsize="small")
     return _save(fig, [ax], title, path, dpi)
+
+
+def _further_points(grid, keys: list[str], controllers) -> list[str]:
+    """The points of the swept axes after the first, in the grid's order (the last varying fastest), each named by
+    its keys' symbols and values ("Δi_max = 4e-05, H_rv = 2"); [] for a sweep over one key."""
+    import itertools
+
+    named = []
+    for key in keys:
+        symbol, unit = _quantity(key, controllers)
+        values = [v.decode() if isinstance(v, bytes) else v for v in np.asarray(grid[key.replace(".", "__")]).tolist()]
+        named.append([f"{symbol} = {v:g}{' ' + unit if unit else ''}" if isinstance(v, (int, float))
+                      else f"{symbol} = {v}" for v in values])
+    return [", ".join(point) for point in itertools.product(*named)] if keys else []

@@ -64,8 +64,8 @@ def _point(dv, dlon, dlat, j: int, status, meanings) -> str:
 
 
 def title(attrs, axes: list[str]) -> str:
-    """What a sweep figure shows: its swept key, the sweep's name and the run's length
-    ("thrusters.beta_max_deg: fig09, 365.25 days")."""
+    """What a sweep figure shows: its swept keys, the sweep's name and the run's length
+    ("thrusters.beta_max_deg: fig09, 365.25 days"; "thrusters.beta_max_deg × errors.h_rv: ...")."""
     from geojax import scenario
 
     days = ""
@@ -74,4 +74,4 @@ def title(attrs, axes: list[str]) -> str:
         days = f", {base['duration']['days']:g} days"
     except (ValueError, KeyError, TypeError):
         pass
-    return f"{axes[1]}: {attrs.get('name', 'sweep')}{days}"
+    return f"{' × '.join(axes[1:])}: {attrs.get('name', 'sweep')}{days}"

@@ -1,0 +1,191 @@
+"""A single rollout's trajectory and burns for a cross-check in another tool (Orekit, GMAT, STK): ``save_oem``.
+
+**States.**  The loop keeps no Cartesian state per step; it records, per control cycle, the true osculating
+``boundary`` = (lon, a, f, g, h, k) at the cycle start (``control.predictor.boundary_elements``: lon is the
+mean longitude l = L - 2 f sin L + 2 g cos L less the Earth angle).  ``cycle_states`` inverts that map exactly
+(Newton on L, then p = a (1 - f**2 - g**2)) with the Earth angle at the cycle start, and appends the final
+state: one true state per sidereal day and the end, the states a propagator with the burn list
+reproduces cycle by cycle.  They are samples of a closed loop, not nodes to interpolate between (a day apart).
+
+**Frame and time.**  geojax's ECI is the mean equator and equinox of the scenario epoch
+(``physics.ephemeris``).  ``frame="EME2000"`` (the default, what Orekit, GMAT and STK read without
+configuration) turns it to the mean equator and equinox of J2000.0 by the IAU 1976 precession of the epoch
+(``ephemeris.precession_from_j2000``, the rotation geojax itself applies to DE421's ICRF positions);
+``frame="MOD"`` writes it as it is, REF_FRAME = MOD with REF_FRAME_EPOCH = the scenario epoch (a reader that
+takes MOD as mean *of date* would be off by the 50"/yr precession since the epoch).  Epochs are geojax's TT
+(``time_system="TT"``) or UTC by the leap seconds of ``physics.time`` (default).
+
+**Burns.**  A planner's records (``control.burns.record``) give each burn's firing start in its cycle, firing
+time and unit velocity increment in RSW (= CCSDS RTN: radial, transverse, normal), attitude errors included;
+a burn's Delta-V is the rocket equation over its firing time from the mass left by the burns before it, at
+the thrust and Isp of the scenario.  A feedback law thrusts per step, not in burns: it has no burn list.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime as dt
+from pathlib import Path
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+from geojax.export.oem import Covariance, Metadata, write_oem
+from geojax.physics.constants import G0_MPS2
+from geojax.physics.elements import mee_to_cartesian
+from geojax.physics.ephemeris import precession_from_j2000
+from geojax.physics.frames import earth_rotation_angle_rad
+from geojax.physics.propagate import DYNAMICS, steps_per_cycle
+from geojax.physics.time import TT_MINUS_TAI_S, tai_minus_utc_s
+
+FRAMES = ("EME2000", "MOD")
+TIME_SYSTEMS = ("UTC", "TT")
+J2000_TT = dt.datetime(2000, 1, 1, 12)  # J2000.0 as a TT calendar date
+BURN_COLUMNS = ("cycle", "thruster", "start_utc", "start_tt_s", "duration_s", "dv_mps", "dv_r_mps", "dv_t_mps",
+                "dv_n_mps")
+
+
+class Burns(NamedTuple):
+    """A run's fired burns [m], in time order."""
+
+    cycle: np.ndarray  # [m] int, control cycle from 0
+    thruster: np.ndarray  # [m] int, 1 or 2 (Li 2022: 1 fires southwards, 2 northwards)
+    start_tt_s: np.ndarray  # [m] TT seconds since J2000.0 at which it starts firing
+    duration_s: np.ndarray  # [m] firing time (a burn suspended in the Earth's shadow spans longer)
+    dv_rtn_mps: np.ndarray  # [m, 3] Delta-V along R, T, N (held fixed in RTN through the burn)
+
+
+def save_oem(result, path: str | Path, *, frame: str = "EME2000", time_system: str = "UTC",
+             object_name: str | None = None, object_id: str | None = None, xml: bool | None = None,
+             burns_csv: bool = True, covariances: tuple[Covariance, ...] = ()) -> list[Path]:
+    """Write a single rollout's states as a CCSDS OEM at ``path`` (XML where it ends in ``.xml``, or as ``xml``
+    says; else KVN) and, for a planner, its burns beside it as ``STEM-burns.csv`` (``BURN_COLUMNS``; the
+    columns are described in docs/results-files.md).
+
+    ``frame``: EME2000 or MOD (of the scenario epoch); ``time_system``: UTC or TT; ``object_name`` /
+    ``object_id``: default the scenario's name; ``covariances``: a navigation filter's, in km and s (none
+    in geojax yet).  Returns the paths written.
+    """
+    from geojax import __version__
+    from geojax.loop.report import scenario_of
+
+    if frame not in FRAMES:
+        raise ValueError(f"frame: must be one of {', '.join(FRAMES)}, got {frame!r}")
+    if time_system not in TIME_SYSTEMS:
+        raise ValueError(f"time_system: must be one of {', '.join(TIME_SYSTEMS)}, got {time_system!r}")
+    sc = scenario_of(result)
+    t_tt_s, r_m, v_mps = cycle_states(result)
+    if frame == "EME2000":
+        to_j2000 = precession_from_j2000(sc.epoch_tt_s)  # J2000 -> epoch; its transpose back, here on rows
+        r_m, v_mps = r_m @ to_j2000, v_mps @ to_j2000
+    epochs = [calendar(t, time_system) for t in t_tt_s]
+    epoch_text = calendar(sc.epoch_tt_s, time_system)
+    path = Path(path)
+    burns = run_burns(result)
+    written_burns = path.with_name(f"{path.stem}-burns.csv") if burns is not None and burns_csv else None
+    comments = (f"geojax {__version__}: scenario {sc.name}, controller {sc.controller}, "
+                f"{'seed ' + str(result.seed) if result.seed is not None else 'a given key'}",)
+    frame_note = (f"REF_FRAME EME2000: geojax's ECI (mean equator and equinox of {epoch_text} {time_system}) "
+                  f"turned by the IAU 1976 precession" if frame == "EME2000" else
+                  f"REF_FRAME MOD: mean equator and equinox of REF_FRAME_EPOCH, fixed (not of date)")
+    data_comments = ("True states at each control-cycle start (one sidereal day apart) and at the end of the run;",
+                     "samples of the closed loop, not nodes to interpolate between.",
+                     *([f"Burns: {written_burns.name} (RTN Delta-V, m/s)"] if written_burns else []))
+    metadata = Metadata(object_name or sc.name, object_id or sc.name, frame, time_system, epochs[0], epochs[-1],
+                        ref_frame_epoch=epoch_text if frame == "MOD" else None, comments=(frame_note,))
+    states_km = np.concatenate([r_m, v_mps], axis=1) / 1e3
+    written = [write_oem(path, metadata, epochs, states_km, covariances=covariances, comments=comments,
+                         data_comments=data_comments, xml=xml)]
+    if written_burns:
+        written.append(write_burns_csv(written_burns, burns))
+    return written
+
+
+def cycle_states(result) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(t_tt_s [n + 1], r_eci_m [n + 1, 3], v_eci_mps [n + 1, 3]): the true state at each of the n cycle starts
+    (from the ``boundary`` records) and at the end (``result.final``), geojax ECI."""
+    from geojax.loop.report import scenario_of
+
+    sc = scenario_of(result)
+    boundary = np.asarray(result.records.cycles.boundary, dtype=float)
+    n_cycles = len(boundary)
+    n_steps = steps_per_cycle(sc.step_s)
+    # the loop's environment grid times, start + (2 k n_steps) (step_s / 2), the same numbers
+    t_tt_s = sc.epoch_tt_s + np.arange(n_cycles + 1) * n_steps * result.step_s
+    angle = np.asarray(_earth_angle_rad(t_tt_s[:-1], sc.epoch_tt_s, sc.tt_minus_ut1_s))
+    mu = float(result.params.forces.mu_m3_s2)
+    r, v = (np.asarray(x) for x in mee_to_cartesian(mee_of_boundary(boundary, angle), mu))
+    final = np.asarray(DYNAMICS[sc.dynamics].to_cartesian(np.asarray(result.final.orbit), mu))
+    return t_tt_s, np.vstack([r, final[:3]]), np.vstack([v, final[3:]])
+
+
+# Compiled, as in the loop's environment grid: the same numbers (run eagerly they differ by 6e-12 rad, 0.2 mm
+# along the orbit, XLA's rounding of the day count differing from NumPy's).
+_earth_angle_rad = jax.jit(earth_rotation_angle_rad)
+
+
+def mee_of_boundary(boundary, earth_angle_rad, iterations: int = 8) -> np.ndarray:
+    """MEE [..., 6] (p, f, g, h, k, L) of boundary records [..., 6] (lon, a, f, g, h, k) at Earth angles [...]:
+    ``predictor.boundary_elements`` inverted.  Newton on L - 2 f sin L + 2 g cos L = lon + angle (its derivative
+    1 - 2 f cos L - 2 g sin L >= 1 - 2 e; e < 0.1 converges to rounding in a few iterations)."""
+    lon, a, f, g, h, k = np.moveaxis(np.asarray(boundary, dtype=float), -1, 0)
+    mean_lon = lon + earth_angle_rad
+    true_lon = mean_lon
+    for _ in range(iterations):
+        residual = true_lon - 2 * f * np.sin(true_lon) + 2 * g * np.cos(true_lon) - mean_lon
+        true_lon = true_lon - residual / (1 - 2 * f * np.cos(true_lon) - 2 * g * np.sin(true_lon))
+    return np.stack([a * (1 - f * f - g * g), f, g, h, k, true_lon], axis=-1)
+
+
+def run_burns(result) -> Burns | None:
+    """The burns a planner fired (``Burns``), in time order; None for a controller without burn records."""
+    from geojax.loop.report import scenario_of
+
+    rec = result.records.cycles.controller
+    if not {"fired_s", "start_s", "directions_rsw"} <= set(rec):
+        return None
+    sc = scenario_of(result)
+    fired_s, start_s = np.asarray(rec["fired_s"], float), np.asarray(rec["start_s"], float)
+    directions = np.asarray(rec["directions_rsw"], float)
+    cycle_s = steps_per_cycle(sc.step_s) * result.step_s
+    cycle = np.broadcast_to(np.arange(len(fired_s))[:, None], fired_s.shape)
+    thruster = np.broadcast_to(np.array([1, 2]), fired_s.shape)
+    order = np.lexsort((start_s.ravel(), cycle.ravel()))
+    order = order[fired_s.ravel()[order] > 0]
+    duration = fired_s.ravel()[order]
+    thrusters = result.params.thrusters
+    exhaust_mps = float(thrusters["isp_s"]) * G0_MPS2
+    flow_kg_s = float(thrusters["thrust_n"]) / exhaust_mps
+    mass_before = float(result.params.initial.mass_kg) - flow_kg_s * (np.cumsum(duration) - duration)
+    dv = exhaust_mps * np.log(mass_before / (mass_before - flow_kg_s * duration))
+    return Burns(cycle.ravel()[order], thruster.ravel()[order],
+                 sc.epoch_tt_s + cycle.ravel()[order] * cycle_s + start_s.ravel()[order], duration,
+                 dv[:, None] * directions.reshape(-1, 3)[order])
+
+
+def write_burns_csv(path: Path, burns: Burns) -> Path:
+    """The burn list as CSV (``BURN_COLUMNS``: start in UTC ISO 8601 and TT seconds since J2000.0, firing time
+    s, Delta-V magnitude and RTN components m/s); written atomically."""
+    partial = path.with_name(path.name + ".partial")
+    with partial.open("w", newline="") as handle:
+        out = csv.writer(handle)
+        out.writerow(BURN_COLUMNS)
+        for i in range(len(burns.cycle)):
+            dv = burns.dv_rtn_mps[i]
+            out.writerow([int(burns.cycle[i]), int(burns.thruster[i]), calendar(burns.start_tt_s[i], "UTC"),
+                          f"{burns.start_tt_s[i]:.6f}", f"{burns.duration_s[i]:.6f}",
+                          f"{np.linalg.norm(dv):.9f}", *(f"{x:.9f}" for x in dv)])
+    partial.replace(path)
+    return path
+
+
+def calendar(t_tt_s: float, time_system: str = "UTC") -> str:
+    """ISO 8601 calendar date of TT seconds since J2000.0, in TT or in UTC (``physics.time``'s leap seconds;
+    the inverse of ``time.tt_seconds_from_utc`` outside a leap second), to the microsecond."""
+    tt = J2000_TT + dt.timedelta(seconds=float(t_tt_s))
+    if time_system == "TT":
+        return tt.strftime("%Y-%m-%dT%H:%M:%S.%f")
+    guess = tt - dt.timedelta(seconds=TT_MINUS_TAI_S + tai_minus_utc_s((tt - dt.timedelta(seconds=70)).date()))
+    utc = tt - dt.timedelta(seconds=TT_MINUS_TAI_S + tai_minus_utc_s(guess.date()))
+    return utc.strftime("%Y-%m-%dT%H:%M:%S.%f")
