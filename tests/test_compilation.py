@@ -1,0 +1,156 @@
+"""Compiled and traced programs kept between runs, and durations that reuse one compiled loop.
+
+Checks (second methods, never a stored number): a run whose loop is compiled for more cycles than it flies
+(``loop.setup.cycle_slots``, a traced trip count) against the same run compiled for exactly its cycles (the scan
+every sweep and tuning runs), bit for bit; a shorter run against the first cycles of a longer one that runs the
+same compiled program; a run through the kept traced program (``geojax.traced``) and from a warm cache against
+a run with the cache off; a lane-padded batch against its samples; the cache's failures (a folder that cannot
+be written, a kept program that cannot be read) as misses with one warning line, never an error.
+"""
+
+import functools
+import os
+import subprocess
+import sys
+
+import jax
+import numpy as np
+import pytest
+
+from geojax import compilation, scenario, traced
+from geojax.loop import rollout
+from geojax.loop.setup import cycle_slots, prepare
+
+DAYS = 4
+
+
+def _equal(a, b, what):
+    for (path, x), y in zip(jax.tree_util.tree_flatten_with_path(a)[0], jax.tree_util.tree_leaves(b), strict=True):
+        np.testing.assert_array_equal(np.asarray(x), np.asarray(y), err_msg=f"{what}: {jax.tree_util.keystr(path)}")
+
+
+@pytest.fixture(scope="module")
+def qffc():
+    return scenario.load("li2022-qffc", {"duration.days": DAYS, "errors.h_rv": 1.0, "errors.h_att": 1.0})
+
+
+@pytest.fixture(scope="module")
+def padded(qffc):
+    """Two samples with errors, their loop compiled for 32 cycle slots (the cache folder of the session)."""
+    return rollout.simulate_batch([qffc, qffc], seeds=[0, 1])
+
+
+def test_cycle_slots_cover_every_duration_with_half_to_spare():
+    """The slot counts: at least the cycles, fewer than 1.5 times them from 32 cycles up, few distinct values."""
+    for n in range(1, 3000):
+        slots = cycle_slots(n)
+        assert slots >= n and (n <= 32 and slots == 32 or slots < 1.5 * n)
+    assert cycle_slots(10) == cycle_slots(30) == 32 and cycle_slots(366) == 384
+    assert len({cycle_slots(n) for n in range(1, 3000)}) == 14
+
+
+def test_a_run_in_a_longer_compiled_loop_is_bit_for_bit_the_exact_loops(qffc, padded):
+    """The second method: ``rollout`` (one scan over exactly the run's cycles, metrics in the same program), as
+    every sweep and tuning compiles it; every metric and per-cycle record equal bit for bit."""
+    batch = prepare([qffc, qffc])
+    assert batch.shared.env.earth_angle_rad.shape[0] == padded.records.cycles.dv_mps.shape[1] == 4
+    exact = jax.jit(jax.vmap(functools.partial(rollout.rollout, controller=batch.controller, step_s=batch.step_s,
+                                               dynamics=rollout.for_lanes(batch.dynamics, 2)),
+                             in_axes=(0, 0, None, None)))
+    _, records, metrics = exact(batch.params, rollout.keys_of(np.arange(2)), batch.shared, None)
+    status = metrics.pop("status")
+    assert np.all(padded.metrics["mass_used_kg"] > 0) and not np.array_equal(*padded.metrics["dv_per_year_mps"])
+    np.testing.assert_array_equal(padded.status, status)
+    _equal(metrics, padded.metrics, "metrics")
+    _equal(records, padded.records, "records")
+
+
+def test_a_shorter_run_is_the_first_cycles_of_a_longer_one_in_the_same_program(qffc, padded):
+    """9 days run the program that 4 days ran (32 slots): their first 4 cycles agree bit for bit (an independent
+    run of the same physics, not a slice of one result)."""
+    longer = rollout.simulate_batch([scenario.load("li2022-qffc", {**_errors(), "duration.days": 9})] * 2,
+                                    seeds=[0, 1])
+    assert longer.records.cycles.dv_mps.shape[1] == 9
+    _equal(padded.records.cycles, jax.tree_util.tree_map(lambda x: x[:, :4], longer.records.cycles), "cycles")
+
+
+def _errors():
+    return {"errors.h_rv": 1.0, "errors.h_att": 1.0}
+
+
+def test_lanes_padded_to_a_power_of_two_leave_each_sample_as_it_was(qffc, padded):
+    """Three samples run in four lanes (the last repeated, then dropped): samples 0 and 1 as in a batch of two."""
+    assert rollout.lane_slots(3) == 4 and rollout.lane_slots(1) == 1 and rollout.lane_slots(64) == 64
+    three = rollout.simulate_batch([qffc] * 3, seeds=[0, 1, 2])
+    assert three.status.shape == (3,)
+    _equal(jax.tree_util.tree_map(lambda x: x[:2], three.metrics), padded.metrics, "metrics")
+
+
+def test_the_cache_serves_the_same_numbers_as_no_cache(tmp_path, qffc, padded):
+    """A cold cache (the program traced, kept, compiled), a warm one in the same folder (loaded), and the cache
+    off (plain ``jit``): the same bits.  Each run in its own process, as a user's runs are."""
+    code = ("import sys, numpy as np, geojax; from geojax import scenario, compilation; "
+            "from geojax.loop import rollout; "
+            f"sc = scenario.load('li2022-qffc', {{'duration.days': {DAYS}, 'errors.h_rv': 1.0, 'errors.h_att': 1.0}}); "
+            "r = rollout.simulate_batch([sc, sc], seeds=[0, 1]); "
+            "kept = sorted(p.name for p in compilation.cache_dir().glob('*-geojax-traced')) "
+            "if compilation.cache_dir() else []; "
+            "np.save(sys.argv[1], np.array([r.metrics[k] for k in sorted(r.metrics)])); print(len(kept))")
+    env = {k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"}
+    folder = tmp_path / "cache"
+    kept = []
+    for name, extra in (("cold", {"GEOJAX_CACHE_DIR": str(folder)}), ("warm", {"GEOJAX_CACHE_DIR": str(folder)}),
+                        ("off", {"GEOJAX_NO_CACHE": "1"})):
+        out = subprocess.run([sys.executable, "-c", code, str(tmp_path / f"{name}.npy")], env={**env, **extra},
+                             capture_output=True, text=True, check=True)
+        kept.append(int(out.stdout.split()[-1]))
+    assert kept[0] >= 3 and kept[1] == kept[0] and kept[2] == 0  # closed loop, metrics, reference: kept, reused
+    cold, warm, off = (np.load(tmp_path / f"{name}.npy") for name in ("cold", "warm", "off"))
+    expected = np.array([padded.metrics[k] for k in sorted(padded.metrics)])
+    for name, got in (("cold", cold), ("warm", warm), ("off", off)):
+        np.testing.assert_array_equal(got, expected, err_msg=name)
+
+
+def test_an_unusable_cache_folder_warns_once_and_the_run_goes_on(tmp_path):
+    """A file where the folder should be: one warning line, the cache off, exit 0."""
+    blocker = tmp_path / "not-a-folder"
+    blocker.write_text("x")
+    env = {**{k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"},
+           "GEOJAX_CACHE_DIR": str(blocker / "cache")}
+    out = subprocess.run([sys.executable, "-m", "geojax", "scenarios"], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    warnings = [line for line in out.stderr.splitlines() if line.strip()]
+    assert len(warnings) == 1 and warnings[0].startswith("geojax: warning: compilation cache") \
+        and "running without it" in warnings[0], out.stderr
+
+
+def test_a_kept_program_that_cannot_be_read_is_a_miss(tmp_path, monkeypatch):
+    """A corrupt kept program is traced again (and kept anew); the result is the plain ``jit``'s."""
+    monkeypatch.setattr(compilation, "cache_dir", lambda: tmp_path)
+    monkeypatch.setattr(traced, "cache_dir", lambda: tmp_path)
+    monkeypatch.setattr(traced, "_IN_PROCESS", {})
+    double = jax.jit(lambda x: 2.0 * x)
+    x = np.arange(3.0)
+    np.testing.assert_array_equal(traced.call(double, "double", ("test",), x), 2 * x)
+    (kept,) = tmp_path.glob(f"*{traced.SUFFIX}")
+    kept.write_bytes(b"not a program")
+    monkeypatch.setattr(traced, "_IN_PROCESS", {})
+    np.testing.assert_array_equal(traced.call(double, "double", ("test",), x), 2 * x)
+    assert kept.read_bytes() != b"not a program"  # kept anew
+    assert traced.call(double, "double", None, x) is not None  # no identity: never kept
+    assert len(list(tmp_path.glob(f"*{traced.SUFFIX}"))) == 1
+
+
+def test_compilations_are_recorded_with_their_cache_hits(tmp_path):
+    """``Compilations`` counts a program XLA compiled and, in a second process with the same folder, the same
+    program served by the cache (JAX's own monitoring events, an independent count)."""
+    code = ("import jax, jax.numpy as jnp, geojax; from geojax.compilation import Compilations; "
+            "f = jax.jit(lambda x: jnp.cumsum(jnp.sin(x) ** 2)); "
+            "log = Compilations(min_s=0.0).__enter__(); f(jnp.arange(5000.0)).block_until_ready(); "
+            "p = [q for q in log.programs if '<lambda>' in q.name]; print(len(p), p[0].cached); print(log.summary())")
+    env = {**{k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"},
+           "GEOJAX_CACHE_DIR": str(tmp_path), "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "0"}
+    first, second = (subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                                     check=True).stdout.splitlines() for _ in range(2))
+    assert first[0] == "1 False" and "compiled" in first[1]
+    assert second[0] == "1 True" and "loaded" in second[1]
