@@ -48,6 +48,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_BAD_INPUT
+    user_modules_importable(args)
     try:
         return COMMANDS[args.command](args) or 0
     except ValueError as err:
@@ -71,6 +72,23 @@ def main(argv: list[str] | None = None) -> int:
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+
+
+def user_modules_importable(args) -> None:
+    """Let a controller named by import path (``"my_laws:LAW"``) come from the current folder or the folder of
+    the scenario, sweep or tuning file the command reads, as ``python my_script.py`` would find it: those
+    folders are added after the installed packages (so they never hide one) to ``sys.path`` and, for the
+    processes a run starts (Ray's workers), to ``PYTHONPATH``."""
+    import os
+
+    folders = [Path.cwd()]
+    given = getattr(args, "file", None) or getattr(args, "scenario", None)
+    if given and Path(given).is_file():
+        folders.append(Path(given).resolve().parent)
+    added = [str(f) for f in dict.fromkeys(folders) if str(f) not in sys.path]
+    sys.path.extend(added)
+    if added:
+        os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [os.environ.get("PYTHONPATH"), *added]))
 
 
 def in_flags(message: str) -> str:

@@ -277,11 +277,20 @@ def _lookup(kind):
     return lookup(kind)
 
 
+# The ``controller.kind`` of a table validated against a user's ``Controller`` that names no kind of its own.
+OWN_KIND = "custom"
+
+
 def controller_fields(table, controller=None) -> dict[str, Field]:
-    """The fields of a ``[controller]`` table: ``kind`` and those of the controller it names (or of ``controller``)."""
+    """The fields of a ``[controller]`` table: ``kind`` and those of the controller it names (or of ``controller``).
+
+    A table of a user's ``Controller`` (kind ``OWN_KIND``) read without it has ``kind`` alone: its keys are the
+    ``Controller``'s, which the caller holds (a controller with no keys, ``fields={}``, has none to add)."""
     if controller is not None:
-        return {"kind": Field(str, "custom"), **controller.fields}
+        return {"kind": Field(str, OWN_KIND), **controller.fields}
     kind = table.get("kind", "none") if isinstance(table, dict) else "none"
+    if kind == OWN_KIND:
+        return {"kind": Field(str, OWN_KIND)}
     return {"kind": Field(str, "none"), **_lookup(kind).FIELDS}
 
 
