@@ -119,7 +119,8 @@ def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool
             widths = ""
         else:
             compile_s, lanes = local.run_chunks(todo, save, bar,
-                                                make_runner=lambda controller: ChunkRunner(sweep, controller, chunk))
+                                                make_runner=lambda controller, on_phase: ChunkRunner(sweep, controller, chunk,
+                                                                                            on_phase=on_phase))
             widths = ", ".join(f"{c} {n}" for c, n in lanes.items())
     return _write_results(sweep, out, parts, wall_s=time.perf_counter() - start, compile_s=compile_s, lanes=widths)
 
