@@ -159,6 +159,17 @@ def _write_results(sweep: Sweep, out: Path, parts: Path, wall_s: float, compile_
     return out
 
 
+def saved_samples(out: str | Path) -> tuple[Path, int, int]:
+    """(parts folder, chunks saved, samples they hold) of an unfinished sweep writing ``out``: what
+    ``resume=True`` starts from (0, 0 where nothing was saved)."""
+    parts = Path(out).with_name(Path(out).name + ".parts")
+    chunks, samples = 0, 0
+    for path in parts.glob("*.npz"):
+        with np.load(path) as values:
+            chunks, samples = chunks + 1, samples + len(values[values.files[0]])
+    return parts, chunks, samples
+
+
 def ray_nodes() -> list[dict]:
     import ray
 
