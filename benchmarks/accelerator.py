@@ -94,7 +94,7 @@ def _compiled_rollouts(sc, n: int, keys=None):
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=rollout.for_lanes(batch.dynamics, n),
                   keep_steps=False)
     args = (params, keys, batch.shared, rollout._reference_env(batch))
-    compiled, _ = harness.compile_jitted(rollout._batched, *args, **static)
+    compiled, _ = harness.compile_jitted(rollout.closed_loop_batch, *args, **static)
     return compiled, args
 
 

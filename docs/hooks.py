@@ -1,7 +1,10 @@
-"""MkDocs hook: the parts of the pages that are made from the code, at build time, so they cannot drift.
+"""The parts of the pages that are made from the code, so they cannot drift: written into the pages by
+``python docs/generate.py`` (committed, so the pages read on disk hold them) and filled afresh by this MkDocs hook
+when the site is built.
 
-A page asks for one with a line of its own, ``<!-- generated: NAME -->``, or ``<!-- include: PATH -->`` for a file
-of the repository (``studies/README.md``) inlined as it is.  The generated parts:
+A generated part sits between two lines of its own, ``<!-- generated: NAME -->`` and ``<!-- end generated: NAME
+-->``; ``<!-- include: PATH -->`` ... ``<!-- end include: PATH -->`` holds a file of the repository
+(``studies/README.md``) as it is.  The generated parts:
 
 * ``scenario-keys``: every table and key of a scenario file from ``geojax.scenario_schema.SCHEMA`` (the ``Field``
   declarations the loader validates with): type, default, allowed range or choices, the ``Params`` leaf it becomes
@@ -9,18 +12,21 @@ of the repository (``studies/README.md``) inlined as it is.  The generated parts
 * ``controller-keys``: the ``[controller]`` keys of every registered controller, from each module's ``FIELDS``;
 * ``tuning-keys``: the keys of a tuning file, from ``geojax.tune.FIELDS``, each with its one-line meaning;
 * ``metrics``: the names, units and meanings of the results files' datasets (``geojax.results``);
-* ``cli-help``: ``geojax --help`` and every command's ``--help``, as the installed command prints them;
+* ``cli-help``: every command and option of ``geojax`` with its help, from the command's own parser;
 * ``scenarios``: the shipped scenarios with their descriptions;
+* ``api``: the names ``geojax`` exports, each with the first paragraph of its docstring;
 * ``modules-geojax``, ``modules-studies``, ``modules-benchmarks``: every file of the folder with the first
   paragraph of its docstring.
 
 An unknown name or a missing file fails the build (``mkdocs build --strict`` in the tests), and so does a number
 of ours in a page's tables that no results file of its section holds (``docs/number_sources.py``): the pages'
-numbers are checked by the build against the files the scripts wrote.
+numbers are checked by the build against the files the scripts wrote.  ``tests/test_docs.py`` fails when a
+committed part is not what ``python docs/generate.py`` would write.
 """
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import importlib.util
 import io
@@ -28,18 +34,32 @@ import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-MARKER = re.compile(r"^<!-- (generated|include): (\S+) -->$", re.M)
+BLOCK = re.compile(r"^<!-- (generated|include): (\S+) -->\n(.*?)^<!-- end \1: \2 -->$", re.M | re.S)
 
 
 def on_page_markdown(markdown: str, page, config, files) -> str:
     where = page.file.src_path
-    # The tables as written (the page and the files it includes; the generated parts come from the code) hold no
-    # number of ours that their results files do not.
-    written = MARKER.sub(lambda m: _expand(m.group(1), m.group(2), where) if m.group(1) == "include" else "", markdown)
-    misses = _number_sources().unsourced(written, where)
+    filled = fill(markdown, where)
+    misses = _number_sources().unsourced(written(filled), where)
     if misses:
         raise ValueError("numbers without a results file:\n" + "\n".join(misses))
-    return MARKER.sub(lambda m: _expand(m.group(1), m.group(2), where), markdown)
+    return filled
+
+
+def fill(markdown: str, where: str) -> str:
+    """``markdown`` with every generated part and include made afresh from the code and the files."""
+    def block(m):
+        kind, name = m.group(1), m.group(2)
+        return f"<!-- {kind}: {name} -->\n\n{_expand(kind, name, where).strip()}\n\n<!-- end {kind}: {name} -->"
+    if len(re.findall(r"^<!-- (?:generated|include): ", markdown, re.M)) != len(BLOCK.findall(markdown)):
+        raise ValueError(f"{where}: a generated part or include without its '<!-- end ... -->' line")
+    return BLOCK.sub(block, markdown)
+
+
+def written(markdown: str) -> str:
+    """The page as written by hand (the files it includes kept, the generated parts, which come from the code,
+    emptied): the text whose tables must hold no number of ours that their results files do not."""
+    return BLOCK.sub(lambda m: m.group(0) if m.group(1) == "include" else "", markdown)
 
 
 def _number_sources():
@@ -111,8 +131,7 @@ def controller_keys() -> str:
     for name in REGISTRY:
         module = lookup(name)
         fields = dict(module.FIELDS)
-        doc = (module.__doc__ or "").strip().split("\n\n")[0].replace("\n", " ")
-        out += [f"### `kind = \"{name}\"`", "", doc, ""]
+        out += [f"### `kind = \"{name}\"`", "", _first_paragraph(module.__doc__), ""]
         out += [*HEADER, *_field_rows("controller", fields), ""] if fields else ["No keys of its own.", ""]
     return "\n".join(out)
 
@@ -140,14 +159,35 @@ def metrics() -> str:
 
 
 def cli_help() -> str:
+    """Every command and its arguments as tables (not argparse's ``--help`` text, whose layout changes with the
+    Python version and the terminal's width)."""
     from geojax import cli
 
     parser = cli._parser()
-    commands = [a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction"][0].choices
-    out = ["```text", "$ geojax --help", parser.format_help().rstrip(), "```", ""]
-    for name, sub in commands.items():
-        out += [f"### `geojax {name}`", "", "```text", sub.format_help().rstrip(), "```", ""]
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    out = [f"`{parser.prog}`: {parser.description}", "", *_argument_rows(parser, skip=sub), ""]
+    out += ["| command | what it does |", "|---|---|"]
+    out += [f"| [`geojax {c.dest}`](#geojax-{c.dest}) | {_cell(c.help)} |" for c in sub._choices_actions]
+    for choice in sub._choices_actions:
+        out += ["", f"### `geojax {choice.dest}`", "", f"{choice.help}.", "", *_argument_rows(sub.choices[choice.dest])]
     return "\n".join(out)
+
+
+def _argument_rows(parser, skip=None) -> list[str]:
+    rows = ["| argument | meaning |", "|---|---|"]
+    formatter = parser._get_formatter()
+    for action in parser._actions:
+        if action is skip or isinstance(action, argparse._HelpAction):
+            continue
+        if action.option_strings:
+            value = ("{" + ",".join(action.choices) + "}" if action.choices else action.metavar or action.dest.upper())
+            value = "" if action.nargs == 0 else f" [{value}]" if action.nargs == "?" else f" {value}"
+            name = ", ".join(action.option_strings) + value
+        else:
+            name = action.metavar or action.dest.upper()
+        required = " (required)" if action.option_strings and action.required else ""
+        rows.append(f"| `{name}` | {_cell(formatter._expand_help(action))}{required} |")
+    return rows
 
 
 def scenarios() -> str:
@@ -161,11 +201,34 @@ def scenarios() -> str:
     return "\n".join(rows)
 
 
+def api() -> str:
+    """One row per name ``geojax`` exports: a class or function with its docstring's first paragraph, a value
+    with its type's (and, for a tuple of texts, the texts)."""
+    import inspect
+
+    import geojax
+
+    rows = ["| name | what it is |", "|---|---|"]
+    for name in geojax.__all__:
+        obj = getattr(geojax, name)
+        if inspect.isclass(obj) or inspect.isfunction(obj):
+            kind, doc = ("class" if inspect.isclass(obj) else "function"), inspect.getdoc(obj)
+        else:
+            kind, doc = f"a `{type(obj).__name__}`", inspect.getdoc(type(obj))
+            if isinstance(obj, tuple) and all(isinstance(x, str) for x in obj):
+                doc = "; ".join(f"{i}: {x}" for i, x in enumerate(obj))
+        rows.append(f"| `geojax.{name}` | {kind}: {_cell(_first_paragraph(doc))} |")
+    return "\n".join(rows)
+
+
 def _first_line(path: Path) -> str:
     import ast
 
-    doc = ast.get_docstring(ast.parse(path.read_text())) or ""
-    return doc.strip().split("\n\n")[0].replace("\n", " ")
+    return _first_paragraph(ast.get_docstring(ast.parse(path.read_text())))
+
+
+def _first_paragraph(doc: str | None) -> str:
+    return (doc or "").strip().split("\n\n")[0].replace("\n", " ")
 
 
 def modules(folder: str) -> str:
@@ -180,5 +243,5 @@ def modules(folder: str) -> str:
 
 GENERATORS = {"scenario-keys": scenario_keys, "controller-keys": controller_keys, "tuning-keys": tuning_keys,
               "metrics": metrics,
-              "cli-help": cli_help, "scenarios": scenarios,
+              "cli-help": cli_help, "scenarios": scenarios, "api": api,
               **{f"modules-{name}": (lambda name=name: modules(name)) for name in ("geojax", "studies", "benchmarks")}}

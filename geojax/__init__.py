@@ -23,6 +23,10 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
+from geojax.compilation import use_default as _use_compilation_cache  # noqa: E402
+
+_use_compilation_cache()  # compiled programs kept between runs (geojax.compilation; off: GEOJAX_NO_CACHE=1)
+
 __version__ = "0.2.0"
 
 from geojax.control.base import Controller, Estimate  # noqa: E402

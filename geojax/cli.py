@@ -49,6 +49,10 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return EXIT_BAD_INPUT
     user_modules_importable(args)
+    if args.no_cache:
+        from geojax.compilation import use_cache
+
+        use_cache(False)
     try:
         return COMMANDS[args.command](args) or 0
     except ValueError as err:
@@ -150,7 +154,8 @@ def _detail(args):
 
 def _overrides(args) -> dict:
     names = {"days": "duration.days", "step": "integration.step_s", "controller": "controller.kind",
-             "horizon": "controller.horizon", "h_rv": "errors.h_rv", "h_att": "errors.h_att"}
+             "horizon": "controller.horizon", "h_rv": "errors.h_rv", "h_att": "errors.h_att",
+             **{flag: f"errors.{flag}" for flag in ("sigma3_r_m", "sigma3_v_mps", "sigma3_att_deg")}}
     return {key: getattr(args, flag) for flag, key in names.items() if getattr(args, flag, None) is not None}
 
 
@@ -191,9 +196,18 @@ def _simulate(args) -> int:
 def _run_simulation(sc, seed: int, out, plots, args) -> int:
     from geojax.loop import rollout
 
+    from geojax.compilation import Compilations, waiting_note
+    from geojax.loop.setup import cycle_count, cycle_slots
+
     say = _say(args)
-    say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; compiling...", flush=True)
-    result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"compiled in {s:.1f} s; running...", flush=True))
+    say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; compiling the environment, the reference run and "
+        f"the closed loop for {cycle_slots(cycle_count(sc.days))} cycles (every duration up to that many cycles runs "
+        f"the same program)...", flush=True)
+    _detail(args)(f"  {waiting_note()}", flush=True)
+    with Compilations() as log:
+        result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"closed loop ready in {s:.1f} s; "
+                                                                      f"running...", flush=True))
+    say(f"  {log.summary()}")
     return _finish(args, result, "the run is one compiled call (no host callbacks in the loop), so it reports its "
                                  "times instead of a progress bar", out, plots)
 

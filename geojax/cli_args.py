@@ -7,7 +7,8 @@ import argparse
 import geojax
 
 DAYS_HELP = ("duration in solar days (default: the scenario's); the run is that many sidereal-day cycles, "
-             "rounded (20 days: 20 cycles), the same in propagate, simulate, sweep and tune")
+             "rounded (20 days: 20 cycles), the same in propagate, bound and simulate (a sweep file sets it as "
+             "\"duration.days\" in [set], a tuning file as days)")
 
 
 def parser() -> argparse.ArgumentParser:
@@ -23,6 +24,10 @@ def parser() -> argparse.ArgumentParser:
     talk.add_argument("-q", "--quiet", action="store_true", help="print only the files written (and errors)")
     talk.add_argument("-v", "--verbose", action="store_true",
                       help="also print compilation times, devices and where each number comes from")
+    common.add_argument("--no-cache", action="store_true",
+                        help="compile every program afresh and keep none (default: compiled programs are kept in "
+                             "$GEOJAX_CACHE_DIR or the user's cache folder and reused by later runs; "
+                             "GEOJAX_NO_CACHE=1 does the same as this flag)")
 
     def command(name, **kw):
         return sub.add_parser(name, parents=[common], **kw)
@@ -63,8 +68,16 @@ def parser() -> argparse.ArgumentParser:
     sim.add_argument("--days", type=float, help=DAYS_HELP)
     sim.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
     sim.add_argument("--seed", type=int, default=0, help="seed of the orbit-determination and attitude errors (default 0)")
-    sim.add_argument("--h-rv", type=float, help="orbit-determination error level H_rv (Li 2022 eq. 48; default: the scenario's)")
-    sim.add_argument("--h-att", type=float, help="attitude error level H_att (default: the scenario's)")
+    sim.add_argument("--h-rv", type=float, help="orbit-determination error H_rv, a multiple of Li 2022's nominal "
+                     "3-sigma per component, 0.3 m and 5e-5 m/s (eq. 48; 0: none; default: the scenario's)")
+    sim.add_argument("--h-att", type=float, help="attitude error H_att of the burns, a multiple of Li 2022's nominal "
+                     "3-sigma, 0.05 deg in yaw and pitch (eq. 48; 0: none; default: the scenario's)")
+    sim.add_argument("--sigma3-r-m", type=float, metavar="M", help="orbit-determination position error, 3-sigma per "
+                     "component in m (errors.sigma3_r_m: sets H_rv; with --sigma3-v-mps, 0 where not given)")
+    sim.add_argument("--sigma3-v-mps", type=float, metavar="MPS", help="orbit-determination velocity error, 3-sigma "
+                     "per component in m/s (errors.sigma3_v_mps)")
+    sim.add_argument("--sigma3-att-deg", type=float, metavar="DEG", help="attitude error of the burns, 3-sigma in yaw "
+                     "and pitch in deg (errors.sigma3_att_deg: sets H_att)")
     sim.add_argument("--out", help="write /metrics and /cycles to this HDF5 file")
     sim.add_argument("--plots", help="folder for the figures")
 

@@ -8,23 +8,32 @@ and ``description`` attributes, its axes are named with HDF5 dimension labels (`
 coordinates).  ``open_results`` turns that into one ``xarray.Dataset``: the ``/metrics`` datasets under
 their own names (``dv_per_year_mps``), every other group's as ``GROUP__NAME`` (``cycles__lon_deg``),
 the status as ``status``, the file's attributes (provenance, the scenario's TOML) as the Dataset's.
+
+A sample whose status is not 0 (it left the box, drifted off the station, ran out of propellant, met a cycle
+without a solution) has failed: its numbers are not a station keeping's.  ``held`` masks them out of a Dataset,
+``summary_table`` gives the failed count and the statistics over the samples that held, and both rest on
+``held_statistics``, the one computation the sweep's printed summary and its figure use too.
 """
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
+from typing import NamedTuple
 
-from geojax.loop.metrics import STATUS_TEXT
+import numpy as np
+
+from geojax.loop.metrics import STATUS_OK, STATUS_TEXT
 
 # Unit of a dataset by the end of its name (the project's naming rule: the name says the unit).
 UNIT_SUFFIXES = (
-    ("_per_year_mps", "m/s/yr"), ("_deg_per_day", "deg/day"), ("_mps2", "m/s^2"), ("_mps", "m/s"),
-    ("_deg", "deg"), ("_rad", "rad"), ("_km", "km"), ("_kg", "kg"), ("_m2", "m^2"), ("_m", "m"), ("_s", "s"),
-    ("_n", "N"), ("_days", "days"),
+    ("_per_year_mps", "m/s/yr"), ("_s_per_orbit", "s/orbit"), ("_deg_per_day", "deg/day"), ("_mps2", "m/s^2"),
+    ("_mps", "m/s"), ("_deg", "deg"), ("_rad", "rad"), ("_km", "km"), ("_kg", "kg"), ("_m2", "m^2"), ("_m", "m"),
+    ("_s", "s"), ("_n", "N"), ("_days", "days"),
 )
-DIMENSIONLESS = {"ex", "ey", "ix", "iy", "max_abs_de", "max_abs_di", "duty_x", "duty_y", "duty_z", "ns_fraction",
-                 "burns_per_thruster_per_orbit", "burns_total", "cycles_without_solution", "code", "active",
-                 "loss", "step_norm", "theta", "temperature", "trust_radius", "constraint", "constraint_lon",
+DIMENSIONLESS = {"ex", "ey", "ix", "iy", "max_abs_de", "max_abs_di", "duty_fraction", "duty_x", "duty_y", "duty_z",
+                 "ns_fraction", "burns_per_thruster_per_orbit", "burns_total", "cycles_without_solution", "code",
+                 "active", "loss", "step_norm", "theta", "temperature", "trust_radius", "constraint", "constraint_lon",
                  "constraint_lat", "status"}
 DESCRIPTIONS = {
     "dv_per_year_mps": "delta-V per year of the whole run",
@@ -37,8 +46,18 @@ DESCRIPTIONS = {
     "dlon_half_range_deg": "half the range of the longitude offset over the run",
     "dlat_half_range_deg": "half the range of the latitude over the run",
     "max_abs_mean_dlon_deg": "largest |one-cycle mean longitude - station| after the first cycle (Li 2022's measure)",
-    "max_abs_de": "largest |mean e vector - target| after the first cycle",
-    "max_abs_di": "largest |mean i vector (MEE h, k) - target| after the first cycle",
+    "max_abs_de": "largest |mean e vector (MEE f, g) - target| after the first cycle; dimensionless (e)",
+    "max_abs_di": "largest |mean i vector (MEE h, k) - target| after the first cycle; dimensionless (tan(i/2), "
+                  "so 1e-4 is 0.0115 deg of inclination)",
+    "duty_fraction": "fraction of the run's time a thruster fires (a planner's burns, eclipse suspensions left out)",
+    **{f"duty_{axis}": f"fraction of the steps whose thrust has an ECEF {axis} component (Katz 2025's duty of "
+                       f"per-axis thrusters; for thrust in any other direction, the firing fraction)"
+       for axis in "xyz"},
+    "dv_ns_per_year_mps": "north-south (out-of-plane, RSW W) component of the delta-V per year (a planner's burns)",
+    "dv_ew_per_year_mps": "east-west (in-plane, RSW R and S) component of the delta-V per year (a planner's burns); "
+                          "with dv_ns_per_year_mps it adds up to more than dv_per_year_mps where burns combine both",
+    "cpu_s_per_orbit": "wall seconds per cycle of the run, after compiling the loop (its set-up included); with "
+                       "compilation where it was not timed apart",
     "burns_total": "burns fired in the run",
     "burns_per_thruster_per_orbit": "burns per thruster per orbit",
     "mean_beta_deg": "mean pitch angle of the burns",
@@ -47,11 +66,14 @@ DESCRIPTIONS = {
     "lon_deg": "one-cycle mean longitude (east)",
     "ex": "one-cycle mean eccentricity vector, x (MEE f)", "ey": "one-cycle mean eccentricity vector, y (MEE g)",
     "ix": "one-cycle mean inclination vector, x (MEE h)", "iy": "one-cycle mean inclination vector, y (MEE k)",
-    "dv_mps": "delta-V used so far", "t_s": "time since the start of the run",
+    "dv_mps": "delta-V delivered: in /cycles/, within that cycle (not a running total); in a transfer's "
+              "/records/, used so far; in /metrics/, over the whole run", "t_s": "time since the start of the run",
     "dlon_deg": "longitude - station longitude", "lat_deg": "latitude",
     "ux_mps2": "delivered acceleration, ECEF x", "uy_mps2": "delivered acceleration, ECEF y",
     "uz_mps2": "delivered acceleration, ECEF z",
-    "constraint": "box constraints (longitude, latitude); <= 0 inside",
+    "constraint": "box constraints (longitude, latitude): (largest excursion / box half-width)^2 - 1, <= 0 inside",
+    **{f"constraint_{axis}": f"box constraint of the {name}: (largest excursion / box half-width)^2 - 1, <= 0 inside"
+       for axis, name in (("lon", "longitude"), ("lat", "latitude"))},
     "best_dv_per_year_mps": "best feasible delta-V per year so far",
 }
 
@@ -173,3 +195,69 @@ def dims_of_sweep(grid_keys, cycles: bool) -> dict[str, tuple[str, ...]]:
     """The dimension names of a sweep file's groups."""
     axes = ("controller", *grid_keys, "repetition")
     return {"metrics": axes, "status": axes, **({"cycles": (*axes, "cycle")} if cycles else {})}
+
+
+class HeldStatistics(NamedTuple):
+    """Statistics of a metric along one axis over the samples that held (status 0), and how many did not.
+
+    Each field has the shape of the metric less that axis; ``mean``, ``std``, ``min`` and ``max`` are NaN
+    where no sample held."""
+
+    samples: np.ndarray  # samples along the axis
+    failed: np.ndarray  # of them, those with a status other than 0
+    mean: np.ndarray  # over the held samples
+    std: np.ndarray  # population standard deviation (ddof 0) over the held samples
+    min: np.ndarray
+    max: np.ndarray
+
+
+def held_statistics(values, status, axis: int = -1) -> HeldStatistics:
+    """``HeldStatistics`` of ``values`` along ``axis`` over the samples whose ``status`` (same shape) is 0."""
+    values, status = np.asarray(values, float), np.asarray(status)
+    ok = status == STATUS_OK
+    kept = np.where(ok, values, np.nan)
+    with warnings.catch_warnings():  # a point where every sample failed has no statistics: NaN, said by `failed`
+        warnings.simplefilter("ignore", RuntimeWarning)
+        stats = [f(kept, axis=axis) for f in (np.nanmean, np.nanstd, np.nanmin, np.nanmax)]
+    return HeldStatistics(np.full(np.sum(ok, axis=axis).shape, values.shape[axis]), np.sum(~ok, axis=axis), *stats)
+
+
+def held(ds):
+    """``ds`` (an ``open_results`` Dataset) with every per-sample number of a failed sample (status not 0) set
+    to NaN: its metrics, and its per-cycle series where the file kept them.  xarray's reductions skip NaN, so
+    ``held(ds).dv_per_year_mps.mean("repetition")`` is the mean over the samples that held; count the others
+    with ``(ds.status != 0).sum("repetition")`` (``summary_table`` gives both)."""
+    if "status" not in ds:
+        raise ValueError("status: this file has no per-sample status (a propagation, a bound, a transfer)")
+    ok = ds.status == STATUS_OK
+    masked = {name: var.where(ok) for name, var in ds.data_vars.items()
+              if name != "status" and set(ds.status.dims) <= set(var.dims) and var.dtype.kind in "fiu"}
+    return ds.assign(masked)
+
+
+def summary_table(ds, metric: str = "dv_per_year_mps", over: str | tuple[str, ...] = "repetition"):
+    """A ``Dataset`` of ``metric``'s statistics over the axes ``over`` (default the repetitions; a file without
+    them: every sample axis) per remaining coordinate (controller, grid point): ``samples``, ``failed`` (status
+    not 0) and ``held_mean``, ``held_std``, ``held_min``, ``held_max``, over the samples that held
+    (``held_statistics``; NaN where none held).
+
+    >>> summary_table(geojax.open_results("fig09.h5")).sel(controller="qffc")[["failed", "held_mean"]]
+    """
+    import xarray as xr
+
+    if "status" not in ds:
+        raise ValueError("status: this file has no per-sample status (a propagation, a bound, a transfer)")
+    if metric not in ds:
+        raise ValueError(f"{metric}: not a metric of this file; it has {', '.join(sorted(map(str, ds.data_vars)))}")
+    over = tuple(d for d in ((over,) if isinstance(over, str) else over) if d in ds.status.dims) or ds.status.dims
+    kept = [d for d in ds.status.dims if d not in over]
+    flat = lambda var: var.transpose(*kept, *over).values.reshape(  # noqa: E731
+        *(ds.sizes[d] for d in kept), -1)
+    stats = held_statistics(flat(ds[metric]), flat(ds.status))
+    units = ds[metric].attrs.get("units", "")
+    counts = {"samples": stats.samples, "failed": stats.failed}
+    variables = {**{name: xr.Variable(kept, value) for name, value in counts.items()},
+                 **{f"held_{name}": xr.Variable(kept, getattr(stats, name), {"units": units})
+                    for name in ("mean", "std", "min", "max")}}
+    return xr.Dataset(variables, coords={d: ds[d] for d in kept if d in ds.coords},
+                      attrs={"metric": metric, "over": ",".join(over)})

@@ -4,6 +4,8 @@ orbit keys each kind of initial elements needs.  ``geojax.scenario`` validates a
 
 from __future__ import annotations
 
+from geojax.control.burns import NOMINAL_3SIGMA_ATT_DEG
+from geojax.loop.simulate import NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS
 from geojax.params import LOG, NUMBER as _NUMBER, REQUIRED, Field, degrees
 from geojax.physics import constants as c
 from geojax.physics.forces import ForceModel
@@ -84,10 +86,24 @@ SCHEMA: dict[str, dict[str, Field]] = {
     },
     # The [controller] table: `kind` here, the other keys from the controller's module (control.REGISTRY).
     "controller": {"kind": Field(str, "none")},
-    # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors (0.3 m, 5e-5 m/s, 0.05 deg).
+    # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors per component (0.3 m, 5e-5 m/s, 0.05 deg),
+    # or the 3-sigma errors themselves (sigma3_*: they set the multipliers, ``geojax.scenario.absolute_errors``).
     "errors": {
-        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_rv", symbol="H_rv"),
-        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_att", symbol="H_att"),
+        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_rv", symbol="H_rv", unit="",
+                      doc=f"orbit-determination error: a multiple of Li 2022's nominal 3-sigma per component, "
+                          f"{NOMINAL_3SIGMA_R_M:g} m and {NOMINAL_3SIGMA_V_MPS:g} m/s (eq. (48)); 0: none"),
+        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_att", symbol="H_att", unit="",
+                       doc=f"attitude (yaw and pitch) error of the burns: a multiple of Li 2022's nominal 3-sigma, "
+                           f"{NOMINAL_3SIGMA_ATT_DEG:g} deg (eq. (48)); 0: none"),
+        "sigma3_r_m": Field(_NUMBER, None, lower=0.0, lower_inclusive=True, upper=1e6, symbol="3σ_r",
+                            doc="orbit-determination position error, 3-sigma per component, in m: sets errors.h_rv "
+                                "(and rv_r, rv_v) instead of giving them"),
+        "sigma3_v_mps": Field(_NUMBER, None, lower=0.0, lower_inclusive=True, upper=1e3, symbol="3σ_v",
+                              doc="orbit-determination velocity error, 3-sigma per component, in m/s: sets "
+                                  "errors.h_rv (and rv_r, rv_v) instead of giving them"),
+        "sigma3_att_deg": Field(_NUMBER, None, lower=0.0, lower_inclusive=True, upper=1e4, symbol="3σ_att",
+                                doc="attitude error of the burns, 3-sigma in yaw and in pitch, in deg: sets "
+                                    "errors.h_att instead of giving it"),
         # How the attitude error enters (control.burns; studies/ablation/li_attitude_error.py): its yaw and pitch
         # parts scaled (1: eq. (47) as printed), one draw shared by a cycle's two burns instead of one each, and
         # the burns' magnitudes re-fitted to the directions flown (the plan knows the error) instead of kept.

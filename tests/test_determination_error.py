@@ -42,3 +42,48 @@ def test_no_error_gives_the_true_state():
     errors = {"h_rv": jnp.asarray(0.0), "rv_r": jnp.asarray(1.0), "rv_v": jnp.asarray(1.0)}
     fix = measured_mee(MEE, mee, NOISE, errors, MU_EARTH_M3_S2)
     np.testing.assert_allclose(np.asarray(fix), np.asarray(mee), rtol=1e-13, atol=1e-13)
+
+
+# Errors stated as an operator states them (3 sigma per component in m, m/s, deg) and as Li's multiples of the
+# nominal 0.3 m, 5e-5 m/s, 0.05 deg: the same errors.
+ABSOLUTE = {"errors.sigma3_r_m": 0.9, "errors.sigma3_v_mps": 1.5e-4, "errors.sigma3_att_deg": 0.15}
+MULTIPLES = {"errors.h_rv": 3.0, "errors.h_att": 3.0}
+
+
+def test_absolute_errors_give_the_numbers_of_the_equivalent_multiples_bit_for_bit():
+    """Second method: the same 3-day QFFC run with the errors given as 3-sigma values and as multiples H of
+    Li 2022's nominal (0.9 m = 3 x 0.3 m, ...), one batch (one compilation), the same seed; and a run without
+    errors, which must differ (the errors are really flown)."""
+    import geojax
+    from geojax import scenario
+
+    runs = [scenario.load("li2022-qffc", {"duration.days": 3.0, **o}) for o in (ABSOLUTE, MULTIPLES, {})]
+    result = geojax.simulate_batch(runs, seeds=[7, 7, 7])
+    for name, values in result.metrics.items():
+        assert values[0] == values[1], name
+    np.testing.assert_array_equal(result.records.cycles.means.lon_rad[0], result.records.cycles.means.lon_rad[1])
+    assert result.metrics["dv_per_year_mps"][0] != result.metrics["dv_per_year_mps"][2]
+
+
+@pytest.mark.parametrize("given, multipliers", [
+    ({"errors.sigma3_r_m": 0.6}, {"h_rv": 2.0, "rv_r": 1.0, "rv_v": 0.0}),  # velocity not given: none
+    ({"errors.sigma3_r_m": 0.3, "errors.sigma3_v_mps": 1e-4}, {"h_rv": 2.0, "rv_r": 0.5, "rv_v": 1.0}),
+    ({"errors.sigma3_att_deg": 0.1}, {"h_att": 2.0, "att_yaw": 1.0, "att_pitch": 1.0}),
+    ({"errors.h_rv": 2.0, "errors.sigma3_r_m": 0.6}, {"h_rv": 2.0, "rv_r": 1.0, "rv_v": 1.0}),  # agreeing: kept
+])
+def test_absolute_errors_set_the_multipliers(given, multipliers):
+    """Closed form: a part's 3 sigma is h x scale x nominal (0.3 m, 5e-5 m/s, 0.05 deg)."""
+    from geojax import scenario
+
+    errors = scenario.load("li2022-qffc", given).config["errors"]
+    assert {k: errors[k] for k in multipliers} == pytest.approx(multipliers, rel=1e-15)
+
+
+@pytest.mark.parametrize("args, key", [(["--h-rv", "3", "--sigma3-r-m", "0.6"], "errors.sigma3_r_m"),
+                                       (["--h-att", "1", "--sigma3-att-deg", "0.1"], "errors.sigma3_att_deg")])
+def test_contradicting_multiple_and_absolute_error_is_refused(args, key, capsys):
+    from geojax import cli
+
+    assert cli.main(["simulate", "li2022-qffc", "--days", "1", *args]) == 2
+    err = capsys.readouterr().err
+    assert key in err and "contradicts" in err and err.count("\n") == 1

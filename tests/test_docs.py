@@ -1,11 +1,24 @@
 """The documentation builds with every warning an error (a broken link or anchor, a missing page, an unknown
-generated part), and its generated parts hold what the code declares."""
+generated part), its generated parts hold what the code declares, committed as the code makes them now, and
+every link and file path the pages give resolves inside the repository (a clone is all its reader has)."""
 
+import re
 import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")), *sorted((ROOT / "studies").rglob("README.md"))]
+
+
+def _docs_module(name: str):
+    sys.path.insert(0, str(ROOT / "docs"))
+    try:
+        return __import__(name)
+    finally:
+        sys.path.remove(str(ROOT / "docs"))
 
 
 def test_the_documentation_builds_strict(tmp_path):
@@ -20,11 +33,7 @@ def test_the_documentation_builds_strict(tmp_path):
 def test_the_generated_tables_follow_the_code():
     """Every scenario key and every controller key appears once in the generated tables (a key added to the
     schema appears without touching the pages)."""
-    sys.path.insert(0, str(ROOT / "docs"))
-    try:
-        import hooks
-    finally:
-        sys.path.remove(str(ROOT / "docs"))
+    hooks = _docs_module("hooks")
     from geojax.control import REGISTRY, lookup
     from geojax.scenario import SCHEMA
 
@@ -44,13 +53,7 @@ def test_the_build_refuses_a_number_of_ours_that_no_results_file_holds():
     its section names renders; the same cell with a number no file holds fails the build."""
     from types import SimpleNamespace
 
-    import pytest
-
-    sys.path.insert(0, str(ROOT / "docs"))
-    try:
-        import hooks
-    finally:
-        sys.path.remove(str(ROOT / "docs"))
+    hooks = _docs_module("hooks")
     page = SimpleNamespace(file=SimpleNamespace(src_path="page.md"))
     source = "studies/li2022/results/uncontrolled_year.md"
     number = next(n for n in hooks._number_sources().NUMBER.findall((ROOT / source).read_text()) if len(n) >= 6)
@@ -58,3 +61,50 @@ def test_the_build_refuses_a_number_of_ours_that_no_results_file_holds():
     assert hooks.on_page_markdown(table, page, None, None) == table
     with pytest.raises(ValueError, match="numbers without a results file"):
         hooks.on_page_markdown(table.replace(number, "123.456789"), page, None, None)
+
+
+def test_the_committed_generated_parts_are_what_the_code_makes():
+    """The pages read on disk hold the tables the site shows: every ``<!-- generated: NAME -->`` part of
+    ``docs/*.md`` is what ``docs/generate.py`` writes from the code now (a key, option or metric added to the code
+    fails here until the pages are regenerated)."""
+    generate = _docs_module("generate")
+    stale = [str(page.relative_to(ROOT)) for page in generate.stale()]
+    assert not stale, f"generated parts out of date in {', '.join(stale)}: run `{generate.COMMAND}` and commit"
+
+
+def test_a_generated_part_without_its_end_line_is_refused():
+    hooks = _docs_module("hooks")
+    page = "# A page\n\n<!-- generated: scenarios -->\n\n| a | b |\n"
+    with pytest.raises(ValueError, match="without its '<!-- end"):
+        hooks.fill(page, "page.md")
+
+
+def _links(text: str):
+    """The relative targets of the Markdown links in ``text`` (no scheme, not a bare ``#anchor``), anchor cut."""
+    for target in re.findall(r"\]\(([^)\s]+)\)", text):
+        if not re.match(r"[a-z][\w+.-]*:|#", target):
+            yield target.split("#")[0]
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_every_link_and_named_file_resolves_inside_the_repository(page):
+    """Every relative link of README.md, docs/*.md and studies/**/README.md is a file or folder of the repository
+    (none escapes its root), every file path named in backticks exists (looked up from the root, the page's folder,
+    ``geojax/`` and the studies' folders, as the pages write them; NAME-like placeholders skipped), and no page
+    points at the folders beside the repository (``../shared``) or cites an issue ("issue 32"), which a clone's
+    reader cannot open."""
+    text = page.read_text()
+    assert "../shared" not in text
+    assert not re.search(r"\bissues? \d", text, re.I), re.search(r".*\bissues? \d.*", text, re.I).group(0)[:200]
+    misses = []
+    for target in _links(text):
+        path = (page.parent / target).resolve()
+        if not path.is_relative_to(ROOT) or not path.exists():
+            misses.append(f"link {target}")
+    for named in re.findall(r"(?<!\[)`([\w./-]+/[\w.-]+\.(?:py|toml|md|json))`", text):
+        if re.search(r"[A-Z]{3,}", named):
+            continue
+        where = [ROOT, page.parent, ROOT / "geojax", ROOT / "studies", *(ROOT / "studies").iterdir()]
+        if not any((base / named).resolve().is_relative_to(ROOT) and (base / named).is_file() for base in where):
+            misses.append(f"file {named}")
+    assert not misses, f"{page.relative_to(ROOT)}: " + "; ".join(misses)

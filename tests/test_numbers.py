@@ -15,12 +15,16 @@ _spec = importlib.util.spec_from_file_location("number_sources", ROOT / "docs" /
 sources = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(sources)
 NUMBER, found_in, parse, unsourced = sources.NUMBER, sources.found_in, sources.parse, sources.unsourced
+_spec = importlib.util.spec_from_file_location("hooks", ROOT / "docs" / "hooks.py")
+hooks = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(hooks)
 PAGES = [ROOT / "studies" / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_number_of_ours_has_a_results_file(page):
-    misses = unsourced(page.read_text(), str(page.relative_to(ROOT)))
+    """The page as written by hand: its generated parts (``docs/hooks.py``) come from the code, not from results."""
+    misses = unsourced(hooks.written(page.read_text()), str(page.relative_to(ROOT)))
     assert not misses, "\n".join(misses)
 
 

@@ -209,7 +209,7 @@ def test_decade_brings_small_values_near_one_and_leaves_ordinary_ones():
 
 def test_a_sweep_figure_marks_the_grid_and_draws_only_what_its_legend_names(tmp_path, monkeypatch):
     """Ticks at the grid's values (they fell between them), controllers as written, the min-max band in the
-    legend with its repetitions, the unstable point too; the title as the command line writes it."""
+    legend with its repetitions, the failed point too; the title as the command line writes it."""
     from geojax import cli
 
     kept = []
@@ -220,8 +220,8 @@ def test_a_sweep_figure_marks_the_grid_and_draws_only_what_its_legend_names(tmp_
     ax = kept[-1].axes[0]
     assert list(ax.get_xticks()) == [60.0, 70.0, 80.0, 90.0]
     assert [t.get_text() for t in ax.get_legend().get_texts()] == [
-        "qffc: mean", "fompc: mean", "fompc: unstable", "qffc: min–max of 3 repetitions",
-        "fompc: min–max of 3 repetitions"]
+        "qffc: mean (held)", "fompc: mean (held)", "fompc: failed (status not 0): mean, count",
+        "qffc: min–max (held, 3 repetitions)", "fompc: min–max (held, 3 repetitions)"]
     attrs = {"name": "fig09", "base_scenario_toml": '[duration]\ndays = 365.25\n'}
     assert cli.sweep_title(attrs, ["controller", "thrusters.beta_max_deg"]) == "thrusters.beta_max_deg: fig09, 365.25 days"
 

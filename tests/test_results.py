@@ -100,3 +100,73 @@ def test_open_results_refuses_what_is_not_a_results_file(tmp_path, content, mess
         path.write_bytes(content)
     with pytest.raises(ValueError, match=message):
         open_results(path)
+
+
+# A sweep file where samples failed, written by hand so every expected number is computed here, not by geojax:
+# beta 60: one of four left the longitude box (its 900 m/s/yr must not reach the mean); beta 90: all held;
+# beta 120: all four ran out of propellant.
+FAILED_DV = np.array([[[50.0, 54.0, 900.0, 52.0], [60.0, 61.0, 62.0, 63.0], [70.0, 71.0, 72.0, 73.0]]])
+FAILED_STATUS = np.array([[[0, 0, 2, 0], [0, 0, 0, 0], [5, 5, 5, 5]]], np.int8)
+FAILED_DLON = np.array([[[0.01, 0.02, 27.0, 0.03], [0.04, 0.01, 0.01, 0.01], [0.5, 0.5, 0.5, 0.5]]])
+
+
+@pytest.fixture
+def failed_sweep_file(tmp_path):
+    from geojax import store
+    from geojax.results import dims_of_sweep
+
+    grid = {"controller": np.array([b"qffc"]), "thrusters__beta_max_deg": np.array([60.0, 90.0, 120.0])}
+    metrics = {"dv_per_year_mps": FAILED_DV, "max_abs_dlon_deg": FAILED_DLON, "max_abs_dlat_deg": FAILED_DLON / 10}
+    return store.write_h5(tmp_path / "failed.h5", {"grid": grid, "metrics": metrics,
+                                                   "status": {"code": FAILED_STATUS}}, 'scenario = "li2022-qffc"', 1.0,
+                          attrs={"kind": "sweep", "name": "failed", "grid_axes": "controller,thrusters.beta_max_deg",
+                                 "base_scenario_toml": "[duration]\ndays = 365.25\n"},
+                          dims=dims_of_sweep(["thrusters.beta_max_deg"], cycles=False))
+
+
+def test_failed_samples_are_counted_and_left_out_of_open_results_statistics(failed_sweep_file):
+    """Independent check: the held samples' mean, spread and count worked out by hand from the arrays above."""
+    from geojax.results import held, summary_table
+
+    ds = open_results(failed_sweep_file)
+    table = summary_table(ds)
+    assert table.held_mean.dims == ("controller", "thrusters.beta_max_deg") and table.held_mean.attrs["units"] == "m/s/yr"
+    np.testing.assert_array_equal(table.samples.values, [[4, 4, 4]])
+    np.testing.assert_array_equal(table.failed.values, [[1, 0, 4]])
+    np.testing.assert_allclose(table.held_mean.values[0, :2], [52.0, 61.5], rtol=1e-15)
+    np.testing.assert_allclose(table.held_std.values[0, 0], np.sqrt(8.0 / 3.0), rtol=1e-15)
+    assert table.held_max.values[0, 0] == 54.0 and np.isnan(table.held_mean.values[0, 2])  # none held at beta 120
+    dlon = summary_table(ds, "max_abs_dlon_deg").held_max.sel(controller="qffc")
+    assert dlon.sel({"thrusters.beta_max_deg": 60.0}).item() == 0.03  # not the failed sample's 27 deg
+    # held(): the same, as a Dataset any xarray reduction reads.
+    assert held(ds).dv_per_year_mps.mean("repetition").values[0, 0] == 52.0
+    assert int((ds.status != 0).sum()) == 5
+
+
+def test_the_sweep_summary_counts_failed_samples_and_averages_the_held(failed_sweep_file):
+    from types import SimpleNamespace
+
+    from geojax import store
+
+    groups, _ = store.read_h5(failed_sweep_file)
+    spec = SimpleNamespace(grid={"thrusters.beta_max_deg": [60.0, 90.0, 120.0]}, controllers=["qffc"], repetitions=4)
+    lines = cli.sweep_summary(spec, groups)
+    assert lines[1] == ("    beta_max_deg 60: ΔV 52.00 ± 1.63 m/s/yr, max |δλ| 0.0300°, max |δφ| 0.0030°; 3 held, "
+                        "1 failed (1 left the longitude box)")
+    assert lines[2].endswith("ΔV 61.50 ± 1.12 m/s/yr, max |δλ| 0.0400°, max |δφ| 0.0040°; all ok")
+    assert lines[3] == "    beta_max_deg 120: all 4 failed (4 propellant exhausted): no statistics"
+    assert "5 of 12 samples failed" in lines[4]
+
+
+def test_the_sweep_figure_draws_the_held_mean_and_counts_the_failed(failed_sweep_file, tmp_path, monkeypatch):
+    import matplotlib.pyplot as plt
+
+    kept = []
+    monkeypatch.setattr(plt, "close", kept.append)
+    assert cli.main(["plot", str(failed_sweep_file), "--out", str(tmp_path)]) == 0
+    ax = kept[-1].axes[0]
+    mean_line = next(line for line in ax.get_lines() if line.get_label() == "qffc: mean (held)")
+    np.testing.assert_allclose(mean_line.get_ydata(), [52.0, 61.5, np.nan], rtol=1e-15)
+    assert sorted(t.get_text() for t in ax.texts) == ["1/4 failed", "4/4 failed"]
+    crosses = next(line for line in ax.get_lines() if "failed" in line.get_label())
+    np.testing.assert_allclose(crosses.get_ydata(), [900.0, 71.5])  # where they failed, at their own mean

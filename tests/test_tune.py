@@ -179,3 +179,13 @@ def test_a_tuned_scenario_that_fails_its_load_checks_is_named():
     weak = tune.from_theta(jnp.asarray(theta - np.log(100.0)), base, entries)
     fault = tune.tuned_scenario_fault(spec, weak)
     assert fault.startswith("thrusters.thrust_n: 0.0008 N") and "Ye 2022 eq. (41)" in fault
+
+
+def test_printed_constraints_are_read_back_as_excursions_in_degrees():
+    """Round trip through the objective's definition, g = (excursion / box)^2 - 1 (Katz 2025 eq. (10),
+    normalised): the excursions the tuner prints beside its constraints are the ones that made them."""
+    from geojax.tune.write import excursion_deg
+
+    excursions_deg, box_deg = np.array([[0.03, 0.045], [0.05, 0.0]]), 0.05
+    g = (excursions_deg / box_deg) ** 2 - 1.0
+    np.testing.assert_allclose(excursion_deg(g, box_deg).T, excursions_deg, rtol=1e-14, atol=1e-17)

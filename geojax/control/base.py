@@ -59,11 +59,12 @@ from geojax.physics.dynamics import Thrust, no_thrust
 
 # The keys only the robotic arms read (Li 2022 eq. (1); ``physics.propulsion.arm_limits``; the fuel bound's
 # "arms" geometry), and those only a planned burn reads (``control.burns``: its shortest duration and the
-# attitude error of its direction, Li 2022 eq. (47)).
+# attitude error of its direction, Li 2022 eq. (47), given absolute or as multiples; the absolute key first, so
+# that a refusal names the key the file gave).
 ARM_LIMIT_KEYS = ("thrusters.beta_max_deg", "thrusters.beta_min_deg", "thrusters.alpha_max_deg",
                   "thrusters.alpha_min_deg")
-BURN_KEYS = ("thrusters.min_burn_s", "errors.h_att", "errors.att_yaw", "errors.att_pitch", "errors.att_shared",
-             "errors.att_known")
+BURN_KEYS = ("thrusters.min_burn_s", "errors.sigma3_att_deg", "errors.h_att", "errors.att_yaw", "errors.att_pitch",
+             "errors.att_shared", "errors.att_known")
 
 # The ``params.controller`` leaf holding a surrogate's temperature (``geojax.tune`` anneals it).
 SURROGATE_TEMPERATURE = "temperature"

@@ -1,4 +1,4 @@
-"""Minimum-fuel receding-horizon controller (issue 14, item 3): one linear program per cycle, first cycle flown.
+"""Minimum-fuel receding-horizon controller: one linear program per cycle, first cycle flown.
 
 Each cycle the controller solves Gazzino 2016's minimum-fuel problem (Problem 3: L1 fuel, linear dynamics,
 a box) over the next N cycles on Li 2022's predictor model, and flies the first cycle's burns:

@@ -60,7 +60,6 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int) -> di
     lat_max, lat_min = jnp.max(cycles.lat_max_rad), jnp.min(cycles.lat_min_rad)
     abs_dlon = jnp.maximum(jnp.abs(dlon_max), jnp.abs(dlon_min))
     abs_lat = jnp.maximum(jnp.abs(lat_max), jnp.abs(lat_min))
-    duty = jnp.sum(cycles.firing_steps, axis=0) / n_steps_total
     solved = cycles.controller.get("solved", jnp.ones(n_cycles, bool))
     out = {
         "dv_per_year_mps": (final.dv_mps - params.initial.dv_mps) * SECONDS_PER_YEAR / (n_cycles * cycle_s),
@@ -73,12 +72,13 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int) -> di
         "max_abs_mean_dlon_deg": jnp.max(jnp.abs(jnp.degrees(wrap_angle(m.lon_rad[first:] - target[0])))),
         "max_abs_de": jnp.max(jnp.hypot(m.ex[first:] - target[2], m.ey[first:] - target[3])),
         "max_abs_di": jnp.max(jnp.hypot(m.ix[first:] - target[4], m.iy[first:] - target[5])),
-        "duty_x": duty[0], "duty_y": duty[1], "duty_z": duty[2],
         "cycles_without_solution": jnp.sum(~solved).astype(float),
     }
     out.update(yearly_dv(cycles.dv_mps, cycle_s))
+    out.update(duty_metrics(cycles, n_steps_total, n_cycles * cycle_s))
     if "fired_s" in cycles.controller:
         out.update(burn_metrics(cycles.controller, n_cycles))
+        out.update(dv_split_per_year(cycles.controller, cycles.dv_mps, n_cycles * cycle_s))
     finite = jnp.all(jnp.isfinite(final.orbit)) & (final.mass_kg > 0)
     for value in out.values():
         finite &= jnp.isfinite(value)
@@ -119,6 +119,36 @@ def burn_metrics(rec: dict, n_cycles: int) -> dict:
         "burns_per_thruster_per_orbit": jnp.sum(fired) / (2 * n_cycles),
         "mean_beta_deg": sum_over_cycles(jnp.where(with_burns, beta, 0.0)) / jnp.maximum(jnp.sum(with_burns), 1),
     }
+
+
+def duty_metrics(cycles, n_steps_total: int, run_s: float) -> dict:
+    """How much the thrusters fire.  A planner's burns (``fired_s`` records): ``duty_fraction``, the fraction of
+    the run's time a thruster fires (its burns one at a time, eclipse suspensions left out).  Another
+    controller's: ``duty_x``, ``duty_y``, ``duty_z``, the fraction of the steps whose delivered acceleration has
+    an ECEF x, y, z component, Katz 2025's duty cycle of per-axis thrusters (its discrete law; thrust in any other
+    direction has all three components, so the three are equal, its firing fraction).  A planner's burns are
+    along RSW directions, so their per-axis counts would only repeat its firing fraction: they are not given."""
+    if "fired_s" in cycles.controller:
+        return {"duty_fraction": sum_over_cycles(jnp.sum(cycles.controller["fired_s"], axis=1)) / run_s}
+    duty = jnp.sum(cycles.firing_steps, axis=0) / n_steps_total
+    return {"duty_x": duty[0], "duty_y": duty[1], "duty_z": duty[2]}
+
+
+def dv_split_per_year(rec: dict, dv_mps, run_s: float) -> dict:
+    """The north-south and east-west components of a planner's Delta-V, per 365.25 days: ``dv_ns_per_year_mps``
+    (out of the orbit plane, RSW W) and ``dv_ew_per_year_mps`` (in it, R and S).  Each cycle's delivered
+    Delta-V (``dv_mps`` [n_cycles]) is split by the directions its burns flew (``directions_rsw`` [n_cycles, 2, 3],
+    attitude errors included), weighted by each burn's firing time (one thrust F/m for both burns of a cycle:
+    the mass changes by parts in 1e5 within a cycle).  Components, not a partition: a burn of v at pitch beta
+    counts v sin(beta) north-south and v cos(beta) east-west, so the two add up to more than
+    ``dv_per_year_mps`` where burns combine both (they are what separate north-south and east-west burns
+    would spend)."""
+    d = rec["directions_rsw"]
+    weight = rec["fired_s"] / jnp.maximum(jnp.sum(rec["fired_s"], axis=1, keepdims=True), 1e-300)
+    ns = dv_mps * jnp.sum(weight * jnp.abs(d[..., 2]), axis=1)
+    ew = dv_mps * jnp.sum(weight * jnp.hypot(d[..., 0], d[..., 1]), axis=1)
+    return {"dv_ns_per_year_mps": sum_over_cycles(ns) * SECONDS_PER_YEAR / run_s,
+            "dv_ew_per_year_mps": sum_over_cycles(ew) * SECONDS_PER_YEAR / run_s}
 
 
 def sum_over_cycles(values):

@@ -18,11 +18,14 @@ import jax
 import numpy as np
 
 from geojax.control import none
-from geojax.loop.metrics import STATUS_MEANINGS, STATUS_TEXT, step_table
+from geojax.loop.metrics import STATUS_MEANINGS, STATUS_TEXT, YEAR_CYCLES, step_table
 from geojax.loop.setup import cycle_count, prepare, uncontrolled_boundaries, unstack
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.propagate import environment_grid, steps_per_cycle
 from geojax.scenario import Scenario
+
+
+DV_SPLIT = ("dv_ns_per_year_mps", "dv_ew_per_year_mps")  # a planner's (loop.metrics.dv_split_per_year)
 
 
 def groups(result) -> dict[str, dict]:
@@ -61,17 +64,19 @@ def run_s(result) -> float:
 
 
 def summary(result, paper: bool = True) -> list[str]:
-    """What ``geojax simulate`` prints after the run: its length, time and status, then every metric, beside the
-    published number of a shipped scenario's paper (``geojax.papers``) with ``paper``, and a note where this run
-    differs from the paper's."""
+    """What ``geojax simulate`` prints after the run: its length, time and status, then every metric with its
+    unit, beside the published number of a shipped scenario's paper (``geojax.papers``) with ``paper``, and
+    notes (``row_notes``): what is extrapolated, what is n/a, what ``cpu_s_per_orbit`` times, and where this
+    run differs from the paper's."""
     from geojax import papers, scenario
+    from geojax.results import units_of
 
     sc = scenario_of(result)
     values = metrics(result)
     code = int(result.status)
-    timed = "after compilation" if math.isfinite(result.compile_s) else "with compilation"
-    lines = [f"{sc.name}: {sc.controller}, {len(result.records.cycles.dv_mps)} cycles in {run_s(result):.1f} s "
-             f"{timed}, status {code} ({STATUS_MEANINGS[code]})"]
+    n_cycles = len(result.records.cycles.dv_mps)
+    lines = [f"{sc.name}: {sc.controller}, {n_cycles} cycles in {run_s(result):.1f} s {timed(result)}, "
+             f"status {code} ({STATUS_MEANINGS[code]})"]
     published, source = papers.published(sc.name, sc.config) if paper else ({}, "")
     changed = []
     if published:
@@ -79,12 +84,38 @@ def summary(result, paper: bool = True) -> list[str]:
         changed = papers.departures(sc.config, result.seed or 0, shipped)
     if changed:
         source = f"{source} (its own run)"
-    lines.append(f"  {'metric':32s} {'geojax':>12s}  {source}")
-    lines += [f"  {name:32s} {value:12.5g}  {published.get(name, '')}" for name, value in values.items()]
+    notes = row_notes(values, n_cycles, result)
+    lines.append(f"  {'metric':32s} {'unit':>7s} {'geojax':>12s}  {source}")
+    lines += [f"  {name:32s} {units_of(name) or '1':>7s} {value:12.5g}  {published.get(name, ''):8s}  "
+              f"{notes.get(name, '')}".rstrip() for name, value in values.items()]
+    lines += [f"  {name:32s} {units_of(name):>7s} {'n/a':>12s}  {'':8s}  {text}"
+              for name, text in notes.items() if name not in values]
     if changed:
         lines.append(f"  note: {source.split(' (')[0]}'s numbers are for its own run; this one differs in "
                      f"{', '.join(changed)}, so they are shown for orientation only")
     return lines
+
+
+def timed(result) -> str:
+    """What a run's time (``run_s``) includes."""
+    if math.isfinite(result.compile_s):
+        return "after compiling the loop (its set-up included: the reference run and its compilation)"
+    return "with compilation"
+
+
+def row_notes(values: dict, n_cycles: int, result) -> dict[str, str]:
+    """{metric: note} of the printed summary: a per-year figure of a run shorter than a year (``YEAR_CYCLES``
+    cycles) is extrapolated from its length; the north-south / east-west split is n/a (a row of its own) for a
+    controller without burns; ``cpu_s_per_orbit`` says what it times (Li 2022's 0.09 s beside it is its Fortran
+    per orbit, one sample)."""
+    notes = {}
+    if n_cycles < YEAR_CYCLES:
+        days = n_cycles * SIDEREAL_DAY_S / SECONDS_PER_DAY
+        notes.update({name: f"extrapolated from {days:.4g} days ({n_cycles} cycles)"
+                      for name in values if name.endswith("_per_year_mps")})
+    notes.update({name: "n/a: this controller flies no burns to split" for name in DV_SPLIT if name not in values})
+    notes["cpu_s_per_orbit"] = f"wall s per cycle, {timed(result)}"
+    return notes
 
 
 def plot(result, folder: str | Path) -> list[Path]:

@@ -64,12 +64,19 @@ def rollout(params: Params, key, shared: Shared, reference_env=None, *, controll
     reference (``loop.setup.reference``) instead of ``shared.reference``; ``controller``, ``step_s``,
     ``dynamics`` and ``keep_steps`` are static.
     """
+    final, records = loop(params, key, shared, reference_env, controller=controller, step_s=step_s,
+                          dynamics=dynamics, keep_steps=keep_steps)
+    return final, records, summarize(params, final, records, step_s, shared.env.earth_angle_rad.shape[1])
+
+
+def loop(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,
+         dynamics: Dynamics, keep_steps: bool = False):
+    """``rollout`` without its metrics: ``(final state, records)``, the records over every cycle of
+    ``shared.env`` (the run's first ``shared.n_active``, zeros beyond)."""
     if reference_env is not None:
         shared = shared._replace(reference=reference(params, reference_env, step_s, dynamics,
                                                      controller.reference_cycles))
-    final, records = closed_loop(controller, params, shared, key, step_s=step_s, dynamics=dynamics,
-                                 keep_steps=keep_steps)
-    return final, records, summarize(params, final, records, step_s, shared.env.earth_angle_rad.shape[1])
+    return closed_loop(controller, params, shared, key, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps)
 
 
 def rollout_fn(batch: Batch, keep_steps: bool = False, controller: Controller | None = None, lanes: int = 1):
@@ -88,10 +95,19 @@ def _reference_env(batch: Batch):
 
 
 @functools.partial(jax.jit, static_argnames=("controller", "step_s", "dynamics", "keep_steps"))
-def _batched(params, keys, shared, reference_env, controller, step_s, dynamics, keep_steps):
-    """``rollout`` vmapped over (params, keys), compiled once per (shapes, controller, step, dynamics)."""
-    one = functools.partial(rollout, controller=controller, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps)
+def closed_loop_batch(params, keys, shared, reference_env, controller, step_s, dynamics, keep_steps):
+    """``loop`` vmapped over (params, keys): the closed loop, compiled once per (lanes, cycle slots, controller,
+    step, dynamics), whatever the duration within the slots and the epoch."""
+    one = functools.partial(loop, controller=controller, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps)
     return jax.vmap(one, in_axes=(0, 0, None, None))(params, keys, shared, reference_env)
+
+
+@functools.partial(jax.jit, static_argnames=("n_cycles", "step_s", "steps_per_cycle"))
+def metrics_batch(params, final, records, n_cycles: int, step_s: float, steps_per_cycle: int):
+    """``loop.metrics.summarize`` of every sample over the first ``n_cycles`` cycles of its records: a small
+    program of its own, compiled per duration (the closed loop is compiled per slot count)."""
+    records = records._replace(cycles=jax.tree_util.tree_map(lambda x: x[:, :n_cycles], records.cycles))
+    return jax.vmap(lambda p, f, r: summarize(p, f, r, step_s, steps_per_cycle))(params, final, records)
 
 
 def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None = None,
@@ -125,7 +141,7 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     """
     start = time.perf_counter()
     scenarios = [scenarios] if isinstance(scenarios, Scenario) else list(scenarios)
-    batch = prepare(scenarios, controller)
+    batch = prepare(scenarios, controller, pad=True)
     if params is None:
         params = batch.params
     elif len(scenarios) != 1:
@@ -133,23 +149,44 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     n = jax.tree_util.tree_leaves(params)[0].shape[0]
     if keys is None:
         keys = keys_of(np.arange(n) if seeds is None else seeds)
-    args = (params, keys, batch.shared, _reference_env(batch))
-    static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, n),
+    lanes = lane_slots(n)
+    args = (pad_lanes(params, lanes), pad_lanes(keys, lanes), batch.shared, _reference_env(batch))
+    static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, lanes),
                   keep_steps=keep_steps)
     compile_s = float("nan")
     if on_compiled is None:
-        final, records, metrics = _batched(*args, **static)
+        final, records = closed_loop_batch(*args, **static)
     else:
         begun = time.perf_counter()
-        compiled = _batched.lower(*args, **static).compile()  # the same executable a plain call would cache
+        compiled = closed_loop_batch.lower(*args, **static).compile()
         compile_s = time.perf_counter() - begun
         on_compiled(compile_s)
-        final, records, metrics = compiled(*args)
-    metrics = {k: np.asarray(v) for k, v in metrics.items()}
+        final, records = compiled(*args)
+    metrics = metrics_batch(args[0], final, records, batch.n_cycles, batch.step_s,
+                            batch.shared.env.earth_angle_rad.shape[1])
+    to_numpy = lambda tree: jax.tree_util.tree_map(lambda x: np.asarray(x)[:n], tree)  # noqa: E731
+    metrics = to_numpy(metrics)
     status = metrics.pop("status")
-    to_numpy = lambda tree: jax.tree_util.tree_map(np.asarray, tree)  # noqa: E731
-    return Result(metrics, status, to_numpy(records), to_numpy(final), to_numpy(params), batch.step_s,
-                  time.perf_counter() - start, compile_s)
+    records = to_numpy(records)
+    records = Records(jax.tree_util.tree_map(lambda x: x[:, :batch.n_cycles], records.cycles),
+                      None if records.steps is None else
+                      jax.tree_util.tree_map(lambda x: x[:, :batch.n_cycles], records.steps))
+    return Result(metrics, status, records, to_numpy(final), jax.tree_util.tree_map(np.asarray, params),
+                  batch.step_s, time.perf_counter() - start, compile_s)
+
+
+def lane_slots(n: int) -> int:
+    """The samples a batch of ``n`` is compiled for: the least power of two that holds them (60 and 64 samples
+    run one program); the lanes beyond ``n`` repeat the last sample and are dropped."""
+    return 1 << max(0, n - 1).bit_length()
+
+
+def pad_lanes(tree, lanes: int):
+    """``tree``'s leaves (leading axis n) with the last sample repeated up to ``lanes``."""
+    def pad(x):
+        extra = lanes - x.shape[0]
+        return x if extra == 0 else jnp.concatenate([x, jnp.repeat(x[-1:], extra, axis=0)])
+    return jax.tree_util.tree_map(pad, tree)
 
 
 def keys_of(seeds) -> jax.Array:

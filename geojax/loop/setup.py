@@ -53,6 +53,17 @@ class Segments(NamedTuple):
     offset: jnp.ndarray  # [n_cycles] int, cycle k's start boundary within that segment
 
 
+def cycle_slots(n_cycles: int) -> int:
+    """The cycles a loop of ``n_cycles`` is compiled for: the least of 32, 48, 64, 96, 128, 192, ... (a power of
+    two or one and a half times one) that holds them.  The cycles beyond ``n_cycles`` are skipped at run time
+    (``Shared.n_active``), so every duration within a slot count runs one compiled program (10 and 30 days: 32
+    slots; a year, 366 cycles: 384), at most a third more slots than cycles from 32 cycles up."""
+    slots = 32
+    while slots < n_cycles:
+        slots = slots * 3 // 2 if slots & (slots - 1) == 0 else slots * 4 // 3
+    return slots
+
+
 class Batch(NamedTuple):
     """Everything the rollouts of a batch of scenarios need (``params`` leaves: [n_scenarios, ...])."""
 
@@ -61,7 +72,7 @@ class Batch(NamedTuple):
     shared: Shared
     step_s: float  # the step actually used: a whole number of steps per sidereal day
     dynamics: Dynamics
-    n_cycles: int
+    n_cycles: int  # the run's cycles; ``shared.env`` may hold more (``cycle_slots``), skipped at run time
     reference_env: Segments | None  # where the reference runs; None for a controller that reads none
     reference_per_sample: bool  # each sample runs its own reference (its initial state or forces differ)
 
@@ -93,10 +104,14 @@ def controller_of(scenarios: list[Scenario]) -> Controller:
 
 
 def prepare(scenarios: list[Scenario], controller: Controller | None = None,
-            segment_cycles: int = REFERENCE_SEGMENT_CYCLES) -> Batch:
+            segment_cycles: int = REFERENCE_SEGMENT_CYCLES, pad: bool = False) -> Batch:
     """The ``Batch`` of ``scenarios`` (``controller``: a user's, else the registered one of their kind).
 
     ``segment_cycles``: cycles between re-starts of the predictor's reference (``REFERENCE_SEGMENT_CYCLES``).
+    ``pad``: compile the loop for ``cycle_slots(n_cycles)`` cycles and run ``n_cycles`` of them
+    (``Shared.n_active``), so that other durations reuse the compiled programs; the records then hold the
+    slots (zero beyond ``n_cycles``), the numbers of the run's cycles bit-for-bit those of a loop compiled for
+    exactly ``n_cycles``.
     """
     controller = controller_of(scenarios) if controller is None else controller
     first = scenarios[0]
@@ -104,6 +119,7 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     n_steps = steps_per_cycle(first.step_s)
     step_s = SIDEREAL_DAY_S / n_steps
     n_cycles = cycle_count(first.days)
+    n_slots = cycle_slots(n_cycles) if pad else n_cycles
     dynamics = DYNAMICS[first.dynamics]
     params = [params_of(sc, controller) for sc in scenarios]
     stacked = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *params)
@@ -119,7 +135,19 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     ref = None
     if width and not per_sample:
         ref = _reference_jit(params[0], segments, step_s=step_s, dynamics=dynamics, width=width)
-    return Batch(controller, stacked, Shared(cycles_env, ref), step_s, dynamics, n_cycles, segments, per_sample)
+    shared = Shared(cycles_env, ref)
+    if pad:
+        # The environment and the reference are computed for the run's cycles as they always were (small
+        # programs; their values at other lengths differ in the last bit, XLA's vector and scalar loops), then
+        # repeated into the slots the loop skips.
+        shared = Shared(*_padded((cycles_env, ref), n_slots), jnp.asarray(n_cycles, jnp.int32))
+    return Batch(controller, stacked, shared, step_s, dynamics, n_cycles, segments, per_sample)
+
+
+def _padded(tree, n_slots: int):
+    """``tree``'s leaves [n, ...] with their last row repeated to [n_slots, ...]."""
+    return jax.tree_util.tree_map(
+        lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], n_slots - x.shape[0], axis=0)]), tree)
 
 
 def reference_segments(env, n_cycles: int, width: int, segment_cycles: int) -> Segments:

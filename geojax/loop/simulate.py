@@ -110,6 +110,9 @@ class Shared(NamedTuple):
 
     env: Environment  # leaves [n_cycles, n_steps, 3, ...]
     reference: Reference | None  # for n_cycles or more, reference_cycles boundaries or more; None if unused
+    # [] int: run the first n_active cycles of ``env`` only (the loop compiled for more, ``loop.setup.cycle_slots``,
+    # so that other durations reuse it); None: all of them
+    n_active: jnp.ndarray | None = None
 
 
 def simulate(controller: Controller, params: Params, shared: Shared, key, *, step_s: float,
@@ -202,8 +205,37 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
     initial_state = controller.init(params, context(jnp.asarray(0), jax.tree_util.tree_map(lambda x: x[0], env),
                                                     windows[0]))
     xs = (jnp.arange(n_cycles), env, osc_ref, windows)
-    (final, _), (cycles, steps) = jax.lax.scan(jax.checkpoint(one_cycle), (params.initial, initial_state), xs)
+    carry = (params.initial, initial_state)
+    body = jax.checkpoint(one_cycle)
+    if shared.n_active is None:
+        (final, _), (cycles, steps) = jax.lax.scan(body, carry, xs)
+    else:
+        (final, _), (cycles, steps) = _scan_first(body, carry, xs, shared.n_active)
     return final, Records(cycles, steps)
+
+
+def _scan_first(body, carry, xs, n_active):
+    """``lax.scan(body, carry, xs)`` over the first ``n_active`` elements of ``xs`` only (a traced count: one
+    compiled loop serves every duration within the slots of ``xs``); the outputs beyond are zeros.
+
+    The loop is the ``while`` that ``lax.scan`` lowers to, with a traced trip count, so a cycle computes what it
+    computes in a scan, bit for bit (a ``lax.cond`` around the cycle moved the last bit).  ``n_active`` is shared
+    by a batch, so under ``vmap`` the loop stays a loop.  Not reverse-differentiable (a ``while``): tuning runs
+    the plain scan.  ``body`` is traced once (``jax.closure_convert``), not again for the shapes of its outputs.
+    """
+    first = jax.tree_util.tree_map(lambda x: x[0], xs)
+    fn, consts = jax.closure_convert(body, carry, first)
+    shapes = jax.eval_shape(fn, carry, first, *consts)[1]
+    n_slots = jax.tree_util.tree_leaves(xs)[0].shape[0]
+    outputs = jax.tree_util.tree_map(lambda s: jnp.zeros((n_slots, *s.shape), s.dtype), shapes)
+
+    def one(k, state):
+        carry, outputs = state
+        x = jax.tree_util.tree_map(lambda a: jax.lax.dynamic_index_in_dim(a, k, keepdims=False), xs)
+        carry, y = fn(carry, x, *consts)
+        return carry, jax.tree_util.tree_map(lambda o, v: jax.lax.dynamic_update_index_in_dim(o, v, k, 0), outputs, y)
+
+    return jax.lax.fori_loop(0, n_active, one, (carry, outputs))
 
 
 def _to_ecef(cos_angle, sin_angle):

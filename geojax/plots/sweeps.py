@@ -1,9 +1,9 @@
-"""A sweep's figure: its metric against its first swept parameter, mean and spread over the repetitions, one
-line per controller, unstable points marked (``plot_sweep``; several sweeps on one axis: ``plot_sweeps``)."""
+"""A sweep's figure: its metric against its first swept parameter, mean and spread over the repetitions that held
+(status 0), one line per controller, the points where samples failed marked and counted (``plot_sweep``; several
+sweeps on one axis: ``plot_sweeps``)."""
 
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -11,14 +11,16 @@ import numpy as np
 
 from geojax.plots.labels import _label, _quantity, decade
 from geojax.plots.style import _save, styled
+from geojax.results import held_statistics
 
 
 @styled
 def plot_sweep(groups, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
                label: str = "", dpi: int = 150) -> Path:
-    """A sweep's metric against its first swept parameter: mean and spread (min-max) over the
-    repetitions, one line per controller (and per value of any further axis), unstable points
-    (status 2) marked with a cross.  ``groups`` are the groups of a ``geojax sweep`` file."""
+    """A sweep's metric against its first swept parameter: mean and spread (min-max) over the repetitions
+    that held (status 0), one line per controller (and per value of any further axis); a point where samples
+    failed is marked with a cross at their mean and labelled with their count ("3/20 failed").  ``groups`` are
+    the groups of a ``geojax sweep`` file."""
     return plot_sweeps([(label, groups)], axes_names, path, metric, title, dpi=dpi)
 
 
@@ -54,19 +56,20 @@ def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv
             s = status[i].reshape(v.shape)
             for j in range(v.shape[1]):
                 name = " ".join(filter(None, [prefix, controller, f"#{j}" if v.shape[1] > 1 else ""]))
-                stable = np.where(s[:, j] == 2, np.nan, v[:, j])
-                bad = np.any(s[:, j] == 2, axis=-1)
-                with warnings.catch_warnings():  # a point whose every repetition is unstable has no spread
-                    warnings.simplefilter("ignore", RuntimeWarning)
-                    mean, low, high = (f(stable, axis=-1) for f in (np.nanmean, np.nanmin, np.nanmax))
-                    unstable = np.nanmean(np.where(np.isfinite(v[bad, j]), v[bad, j], np.nan), axis=-1)
-                line, = ax.plot(x, mean, "o-", ms=3.5, label=f"{name}: mean")
+                stats = held_statistics(v[:, j], s[:, j])
+                bad = stats.failed > 0
+                line, = ax.plot(x, stats.mean, "o-", ms=3.5, label=f"{name}: mean (held)")
                 if v.shape[-1] > 1:
-                    ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, lw=0)
+                    ax.fill_between(x, stats.min, stats.max, color=line.get_color(), alpha=0.2, lw=0)
                     bands.append(Patch(color=line.get_color(), alpha=0.2, lw=0,
-                                       label=f"{name}: min–max of {v.shape[-1]} repetitions"))
+                                       label=f"{name}: min–max (held, {v.shape[-1]} repetitions)"))
                 if bad.any():
-                    ax.plot(x[bad], unstable, "x", color=line.get_color(), ms=8, mew=1.5, label=f"{name}: unstable")
+                    failed_mean = np.nanmean(np.where(s[bad, j] != 0, v[bad, j], np.nan), axis=-1)
+                    ax.plot(x[bad], failed_mean, "x", color=line.get_color(), ms=8, mew=1.5,
+                            label=f"{name}: failed (status not 0): mean, count")
+                    for xi, yi, k in zip(x[bad], failed_mean, stats.failed[bad], strict=True):
+                        ax.annotate(f"{k}/{v.shape[-1]} failed", (xi, yi), xytext=(3, 3), textcoords="offset points",
+                                    fontsize="x-small", color=line.get_color())
     if len(grid_values) <= 12:  # the ticks on the grid's values, not between them
         ax.set_xticks(sorted(grid_values), [f"{v:g}" for v in sorted(grid_values)])
     names = [c.decode() if isinstance(c, bytes) else str(c) for _, g in runs for c in g["grid"]["controller"]]

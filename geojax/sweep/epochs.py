@@ -1,4 +1,4 @@
-"""The epoch as a sweep axis: one slot flown from many dates (issue 32, lifetime budgets).
+"""The epoch as a sweep axis: one slot flown from many dates (the lifetime budgets of `studies/lifetime/`).
 
 A sweep file's grid may hold the key ``"epoch.utc"`` with a list of ISO 8601 UTC dates::
 

@@ -11,9 +11,12 @@ SUMMARY_ROWS = 40  # grid points listed per controller; the rest: geojax plot or
 
 
 def summary(spec, groups) -> list[str]:
-    """One line per controller and grid point: ΔV per year (mean ± std over the repetitions), box half-ranges
-    and the statuses; a warning where the repetitions of a point are identical (nothing random in them)."""
+    """One line per controller and grid point: over the repetitions that held (status 0), ΔV per year (mean ±
+    std) and the largest longitude and latitude excursions; then how many failed, by status
+    (``results.held_statistics``: a failed sample is counted, never averaged in); a warning where the
+    repetitions of a point are identical (nothing random in them)."""
     from geojax.loop.metrics import STATUS_MEANINGS
+    from geojax.results import held_statistics
 
     metrics, codes = groups["metrics"], groups["status"]["code"]
     keys = list(spec.grid)
@@ -23,18 +26,18 @@ def summary(spec, groups) -> list[str]:
         lines.append(f"  {controller}:")
         flat = {k: np.asarray(v[i]).reshape(len(points), spec.repetitions) for k, v in metrics.items()}
         status = np.asarray(codes[i]).reshape(len(points), spec.repetitions)
+        dv, dlon, dlat = (held_statistics(flat[k], status) for k in
+                          ("dv_per_year_mps", "max_abs_dlon_deg", "max_abs_dlat_deg"))
         for j, point in enumerate(points[:SUMMARY_ROWS]):
-            dv = flat["dv_per_year_mps"][j]
-            counts = ", ".join(f"{int(np.sum(status[j] == c))} {STATUS_MEANINGS[c]}"
-                               for c in range(1, len(STATUS_MEANINGS)) if np.any(status[j] == c))
             where = ", ".join(f"{k.rpartition('.')[2]} {v if isinstance(v, str) else format(v, 'g')}"
                               for k, v in zip(keys, point, strict=True))
-            spread = f" ± {np.std(dv):.2f}" if spec.repetitions > 1 else ""
-            lines.append(f"    {where}: ΔV {np.mean(dv):.2f}{spread} m/s/yr, max |δλ| "
-                         f"{np.max(flat['max_abs_dlon_deg'][j]):.4f}°, max |δφ| {np.max(flat['max_abs_dlat_deg'][j]):.4f}°; "
-                         f"{counts or 'all ok'}")
+            lines.append(f"    {where}: {_point(dv, dlon, dlat, j, status[j], STATUS_MEANINGS)}")
         if len(points) > SUMMARY_ROWS:
             lines.append(f"    ... {len(points) - SUMMARY_ROWS} more grid points (geojax plot, geojax.open_results)")
+        failed = int(np.sum(dv.failed))
+        if failed:
+            lines.append(f"    {failed} of {status.size} samples failed (status not 0): left out of every mean, "
+                         f"spread and maximum above (geojax.results.held, summary_table)")
         if spec.repetitions > 1:
             same = all(np.array_equal(v, v[:, :1].repeat(spec.repetitions, 1), equal_nan=True) for v in flat.values())
             if same:
@@ -44,6 +47,20 @@ def summary(spec, groups) -> list[str]:
                      f"{', '.join(identical)}: nothing random in them (no orbit-determination or attitude errors, no "
                      f"[dispersion], a deterministic controller); use repetitions = 1, or add errors or a dispersion")
     return lines
+
+
+def _point(dv, dlon, dlat, j: int, status, meanings) -> str:
+    """One grid point's line: the held samples' statistics, then the failed ones by status."""
+    n, failed = int(dv.samples[j]), int(dv.failed[j])
+    counts = ", ".join(f"{int(np.sum(status == c))} {meanings[c]}" for c in range(1, len(meanings))
+                       if np.any(status == c))
+    if failed == n:
+        return f"all {n} failed ({counts}): no statistics"
+    spread = f" ± {dv.std[j]:.2f}" if n - failed > 1 else ""
+    held = f"{n - failed} held" if failed else "all ok"
+    text = (f"ΔV {dv.mean[j]:.2f}{spread} m/s/yr, max |δλ| {dlon.max[j]:.4f}°, max |δφ| {dlat.max[j]:.4f}°; "
+            f"{held}")
+    return text + (f", {failed} failed ({counts})" if failed else "")
 
 
 def title(attrs, axes: list[str]) -> str:

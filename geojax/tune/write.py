@@ -70,9 +70,18 @@ def summary(result) -> list[str]:
         return lines + ["  no feasible point: every iterate left the box with the exact law"]
     fields = scenario_mod.controller_fields(spec.scenario.config["controller"], spec.controller)
     lines += [f"  {name:24s} {value:.6g}" for name, value in reported(result.best_params, fields).items()]
+    box_deg = spec.scenario.config["station"]["box_half_width_deg"]
     g = result.best_constraint
-    return lines + [f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept "
-                    f"(constraint lon {g[0]:+.4f}, lat {g[1]:+.4f})"]
+    lon_deg, lat_deg = excursion_deg(g, box_deg)
+    return lines + [f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept: largest "
+                    f"|δλ| {lon_deg:.4f}°, |δφ| {lat_deg:.4f}° of ±{box_deg:g}° "
+                    f"(constraints (excursion / box)² - 1: lon {g[0]:+.4f}, lat {g[1]:+.4f})"]
+
+
+def excursion_deg(constraint, box_half_width_deg: float):
+    """The largest excursions (deg) that the box constraints ``constraint`` [..., 2] (lon, lat; (excursion /
+    box)² - 1, ``tune.objective``) stand for."""
+    return box_half_width_deg * np.sqrt(np.maximum(np.asarray(constraint, float) + 1.0, 0.0)).T
 
 
 def plot(result, folder) -> list[Path]:

@@ -1,4 +1,4 @@
-"""Issue 20, Li 2022 Fig. 13: does the optimum horizon move with the arm limits once the search has converged?
+"""Li 2022 Fig. 13: does the optimum horizon move with the arm limits once the search has converged?
 
     python studies/ablation/fig13_budget.py [--seeds 2] [--days 365.25] [--horizons 2 4 6 8 10]
 

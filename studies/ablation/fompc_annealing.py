@@ -1,4 +1,4 @@
-"""Issue 20 ablation: does the optimizer or the formulation limit the FOMPC's saving over the QFFC?
+"""Does the optimizer or the formulation limit the FOMPC's saving over the QFFC?
 
     python studies/ablation/fompc_annealing.py [--seeds 4] [--days 365.25] [--variants NAME ...]
 

@@ -1,4 +1,4 @@
-"""Issue 20: why does our longitude at Katz's gains range 2-5x wider than Katz 2025's Table 1?
+"""Why does our longitude at Katz's gains range 2-5x wider than Katz 2025's Table 1?
 
     python studies/ablation/katz_longitude.py [--days 365.25] [--modes continuous discrete constant]
                                               [--acquisition-days 60]

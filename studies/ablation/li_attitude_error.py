@@ -1,4 +1,4 @@
-"""Issue 34 ablation: why do our QFFC and FOMPC leave the box under Li 2022's attitude errors (Fig. 15)?
+"""Why do our QFFC and FOMPC leave the box under Li 2022's attitude errors (Fig. 15)?
 
     python studies/ablation/li_attitude_error.py [--reps 6] [--days 180] [--levels 0 300 500]
 

@@ -1,4 +1,4 @@
-"""Issue 34: the Fig. 15 runs with unsolved cycles -- do the cycles go unsolved before or after the box is left?
+"""The Fig. 15 runs with unsolved cycles -- do the cycles go unsolved before or after the box is left?
 
     python studies/ablation/li_fig15_unsolved.py [--levels 300] [--sweeps fig15_h_att fig15_h_att_known]
 

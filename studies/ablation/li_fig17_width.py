@@ -1,4 +1,4 @@
-"""Issue 34: why is our Li 2022 Fig. 17 wider than Li's at H_rv = 800?
+"""Why is our Li 2022 Fig. 17 wider than Li's at H_rv = 800?
 
     python studies/ablation/li_fig17_width.py [--reps 6] [--days 365.25] [--controllers qffc fompc]
 

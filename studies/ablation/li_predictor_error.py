@@ -1,4 +1,4 @@
-"""Issue 20: how accurate is the FOMPC's state predictor over N cycles, against the true propagation?
+"""How accurate is the FOMPC's state predictor over N cycles, against the true propagation?
 
     python studies/ablation/li_predictor_error.py [--days 365.25] [--horizon 10]
 

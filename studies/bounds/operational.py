@@ -1,4 +1,4 @@
-"""Gazzino 2016's operational thruster constraints (issue 14, item 2): the bound's relaxed plan made flyable by
+"""Gazzino 2016's operational thruster constraints: the bound's relaxed plan made flyable by
 the paper's two equivalence schemes (``geojax.bound.operational``), each flown in the nonlinear closed loop.
 
     python studies/bounds/operational.py [--days 28] [--margin 0.2] [--out studies/bounds/results]

@@ -1,4 +1,4 @@
-"""Issue 32, item 2: the fuel bound with a periodic end (the default of ``geojax bound``) beside the free end.
+"""The fuel bound with a periodic end (the default of ``geojax bound``) beside the free end.
 
     python studies/bounds/periodic.py [--scenario li2022] [--days 365.25] [--start-utc UTC] [--name periodic]
                                       [--out studies/bounds/results]

@@ -1,4 +1,4 @@
-"""The controllers beside the least fuel the physics allows (issue 14): li2022 (2020) under Li's weak, normal
+"""The controllers beside the least fuel the physics allows: li2022 (2020) under Li's weak, normal
 and strong arm limits, and katz2025 with its gimballed thruster.
 
     python studies/bounds/table.py [--days 365.25] [--only li2022-normal katz2025 ...] [--rerun]

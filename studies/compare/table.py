@@ -1,4 +1,4 @@
-"""Issue 32, item 3: every controller on one satellite, one box and one set of error levels, like for like.
+"""Every controller on one satellite, one box and one set of error levels, like for like.
 
     python studies/compare/table.py [--stage bounds|table|widths|mc|all] [--box 0.05] [--years 3]
                                     [--widths 0.02 0.035 0.05 0.07 0.1] [--reps 64] [--out studies/compare/results]

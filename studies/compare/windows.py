@@ -1,4 +1,4 @@
-"""Issue 32, item 3 (first part): the planners at the same inclination window, in steady state.
+"""The planners at the same inclination window, in steady state.
 
     python studies/compare/windows.py [--years 3] [--out studies/compare/results]
 

@@ -1,4 +1,4 @@
-"""Issue 32, item 4: the propellant of a 15-year mission of Li's satellite at 96 deg E, and the year-to-year swing.
+"""The propellant of a 15-year mission of Li's satellite at 96 deg E, and the year-to-year swing.
 
     python studies/lifetime/lifetime.py [--controllers qffc,fompc:8,mpc:2] [--mission-years 15]
                                         [--continuous-years 5] [--out studies/lifetime/results] [--reuse]

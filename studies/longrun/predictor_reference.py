@@ -1,4 +1,4 @@
-"""Issue 32, item 1: long runs that do not degrade -- the predictor's reference, measured.
+"""Long runs that do not degrade -- the predictor's reference, measured.
 
     python studies/longrun/predictor_reference.py [--controllers qffc,fompc,mpc] [--years 3]
                                                   [--long-controllers qffc] [--long-years 10]

@@ -1,0 +1,200 @@
+"""What XLA compiles for geojax: the persistent compilation cache (on by default) and a record of every compilation.
+
+Nearly all of a short run's wall time is XLA compiling its programs (the environment grid, the predictor's
+reference run, the closed loop, the metrics); once compiled, a year of QFFC station keeping is well under a
+second.  JAX can keep compiled programs on disk between processes (its *persistent compilation cache*): a
+second run of the same program loads the executable instead of compiling it.  geojax turns that cache on when it
+is imported, in a per-user folder:
+
+* ``$GEOJAX_CACHE_DIR`` if set; else JAX's own ``$JAX_COMPILATION_CACHE_DIR`` (or ``jax_compilation_cache_dir``)
+  if the user set one; else the platform's cache folder: ``$XDG_CACHE_HOME/geojax/jax`` or
+  ``~/.cache/geojax/jax`` (Linux), ``~/Library/Caches/geojax/jax`` (macOS), ``%LOCALAPPDATA%\\geojax\\jax``
+  (Windows);
+* off with ``GEOJAX_NO_CACHE=1``, ``geojax --no-cache COMMAND ...`` or ``geojax.compilation.use_cache(False)``;
+* at most ``$GEOJAX_CACHE_MAX_MB`` megabytes (default ``DEFAULT_MAX_MB``), the least recently used programs
+  evicted first (JAX's LRU cache; it needs the ``filelock`` package, a dependency).
+
+The cache is keyed by JAX itself: a hash of the compiled program's HLO, the compile options, the devices and the
+JAX/jaxlib versions, so a changed program, flag or version is a miss, never a wrong hit, and a hit is the same
+executable (results are bit-for-bit those of a fresh compilation: ``tests/test_compilation.py``).  A folder that
+cannot be used (not writable, a file in its place) gives one warning line and the run goes on uncached; an entry
+that cannot be read is a miss (JAX warns and compiles).  Programs that compile in under
+``MIN_COMPILE_S`` are not kept (JAX's eager operations compile thousands of those).
+
+``Compilations`` records what compiles while it is open (JAX's monitoring events): per program its name, the
+seconds spent tracing, lowering and compiling (or loading from the cache), and whether the cache served it; the
+command line reports from it and ``benchmarks/startup.py`` measures with it.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+from pathlib import Path
+from typing import NamedTuple
+
+import jax
+
+ENV_DIR, ENV_OFF, ENV_MAX_MB = "GEOJAX_CACHE_DIR", "GEOJAX_NO_CACHE", "GEOJAX_CACHE_MAX_MB"
+DEFAULT_MAX_MB = 2048  # a year's closed loop is a few MB of executable: hundreds of programs
+MIN_COMPILE_S = 0.2  # JAX's default is 1 s, which would leave the environment grid (~0.5 s) uncached
+
+
+def default_dir() -> Path:
+    """The platform's per-user cache folder for geojax's compiled programs."""
+    if sys.platform == "win32":
+        base = Path(os.environ.get("LOCALAPPDATA") or Path.home() / "AppData" / "Local")
+    elif sys.platform == "darwin":
+        base = Path.home() / "Library" / "Caches"
+    else:
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "geojax" / "jax"
+
+
+def use_cache(path: str | os.PathLike | bool | None = None, max_mb: float | None = None) -> Path | None:
+    """Turn the persistent compilation cache on at ``path`` (None: the folder the environment names, else
+    ``default_dir()``), or off (``False``).  Returns the folder in use, or None when the cache is off.
+
+    A folder that cannot be created or written gives one warning line on stderr and leaves the cache off.
+    """
+    if path is False:
+        _set_dir(None)
+        return None
+    folder = Path(path) if path not in (None, True) else configured_dir()
+    problem = _unusable(folder)
+    if problem:
+        print(f"geojax: warning: compilation cache {folder}: {problem}; running without it", file=sys.stderr)
+        _set_dir(None)
+        return None
+    max_mb = float(os.environ.get(ENV_MAX_MB, DEFAULT_MAX_MB)) if max_mb is None else max_mb
+    jax.config.update("jax_compilation_cache_max_size", int(max_mb * 2**20) if max_mb >= 0 else -1)
+    if jax.config.jax_persistent_cache_min_compile_time_secs == 1.0:  # JAX's default: not set by the user
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_S)
+    _set_dir(folder)
+    return folder
+
+
+def configured_dir() -> Path:
+    """The folder the environment asks for: ``$GEOJAX_CACHE_DIR``, else JAX's own setting, else ``default_dir()``."""
+    named = os.environ.get(ENV_DIR) or jax.config.jax_compilation_cache_dir
+    return Path(named) if named else default_dir()
+
+
+def use_default() -> Path | None:
+    """What ``import geojax`` does: the cache on in ``configured_dir()``, unless ``$GEOJAX_NO_CACHE`` is set."""
+    if os.environ.get(ENV_OFF, "").strip() not in ("", "0"):
+        return use_cache(False)
+    return use_cache()
+
+
+def cache_dir() -> Path | None:
+    """The cache folder in use, None when the cache is off."""
+    named = jax.config.jax_compilation_cache_dir
+    return Path(named) if named and jax.config.jax_enable_compilation_cache else None
+
+
+def _set_dir(folder: Path | None) -> None:
+    from jax._src import compilation_cache  # the cache is opened once per process: re-open it after a change
+
+    jax.config.update("jax_enable_compilation_cache", folder is not None)
+    jax.config.update("jax_compilation_cache_dir", None if folder is None else str(folder))
+    compilation_cache.reset_cache()
+
+
+def _unusable(folder: Path) -> str:
+    """Why ``folder`` cannot hold the cache ("" if it can): created if missing, a file written and removed."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".probe-"):
+            pass
+    except OSError as err:
+        return err.strerror or type(err).__name__
+    return ""
+
+
+class Program(NamedTuple):
+    """One compilation: JAX's name of the function, and where its seconds went."""
+
+    name: str  # e.g. "_batched" (the closed loop), "reference", "_environment_grid"
+    trace_s: float  # Python tracing to a jaxpr
+    lower_s: float  # jaxpr to StableHLO
+    compile_s: float  # XLA compiling, or loading the executable from the cache when ``cached``
+    cached: bool  # the persistent cache served it
+
+
+_TRACE, _LOWER, _COMPILE = ("/jax/core/compile/jaxpr_trace_duration", "/jax/core/compile/jaxpr_to_mlir_module_duration",
+                            "/jax/core/compile/backend_compile_duration")
+_HIT = "/jax/compilation_cache/cache_hits"
+
+
+class Compilations:
+    """``with Compilations() as log: ...``: ``log.programs`` lists every program compiled inside (``Program``).
+
+    A program is counted when XLA's compilation (or the cache's load) ends; its tracing and lowering are the
+    latest ones of the same function name before it.  Eager operations that compile in under ``min_s`` are
+    left out of ``programs`` (their time is in ``other_s``).
+    """
+
+    def __init__(self, min_s: float = 0.05):
+        self.min_s = min_s
+        self.programs: list[Program] = []
+        self.other_s = 0.0
+        self._pending: dict[str, dict[str, float]] = {}
+        self._hit = False
+
+    def __enter__(self):
+        jax.monitoring.register_event_duration_secs_listener(self._duration)
+        jax.monitoring.register_event_listener(self._event)
+        return self
+
+    def __exit__(self, *exc):
+        jax.monitoring.unregister_event_duration_listener(self._duration)
+        jax.monitoring.unregister_event_listener(self._event)
+        return False
+
+    def _event(self, event: str, **kwargs) -> None:
+        if event == _HIT:
+            self._hit = True
+
+    def _duration(self, event: str, seconds: float, fun_name: str = "", **kwargs) -> None:
+        name = fun_name.removeprefix("jit(").removesuffix(")")
+        if event in (_TRACE, _LOWER):
+            self._pending.setdefault(name, {})[event] = seconds
+        elif event == _COMPILE:
+            parts = self._pending.pop(name, {})
+            program = Program(name, parts.get(_TRACE, 0.0), parts.get(_LOWER, 0.0), seconds, self._hit)
+            self._hit = False
+            if program.trace_s + program.lower_s + program.compile_s >= self.min_s:
+                self.programs.append(program)
+            else:
+                self.other_s += program.trace_s + program.lower_s + program.compile_s
+
+    def total_s(self) -> float:
+        """Seconds of tracing, lowering and compiling (or loading) of every program recorded, eager ones included."""
+        return self.other_s + sum(p.trace_s + p.lower_s + p.compile_s for p in self.programs)
+
+    def compiled(self) -> list[Program]:
+        """The programs XLA compiled (the cache did not serve)."""
+        return [p for p in self.programs if not p.cached]
+
+    def summary(self) -> str:
+        """One line: how many programs XLA compiled and in how long, how many the cache served."""
+        fresh, cached = self.compiled(), [p for p in self.programs if p.cached]
+        parts = []
+        if fresh:
+            parts.append(f"compiled {len(fresh)} program{'s' * (len(fresh) != 1)} in "
+                         f"{sum(p.compile_s for p in fresh):.1f} s")
+        if cached:
+            parts.append(f"loaded {len(cached)} from the cache in {sum(p.compile_s for p in cached):.1f} s")
+        traced = sum(p.trace_s + p.lower_s for p in self.programs)
+        return ", ".join(parts or ["nothing compiled"]) + f" (tracing and lowering {traced:.1f} s)"
+
+
+def waiting_note() -> str:
+    """What a command says while it compiles: why it waits, and what the next run will do."""
+    folder = cache_dir()
+    if folder is None:
+        return "the compilation cache is off: every run compiles afresh"
+    return (f"a program's first run compiles it (a minute or more on a CPU; XLA may print 'Very slow compile?', "
+            f"which is expected here, not a fault); later runs load it from the cache in {folder}")
