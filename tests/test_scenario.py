@@ -102,7 +102,8 @@ def _unread_cases():
         for key in getattr(module, "UNREAD", ()):
             table, name = key.split(".")
             default = scenario.SCHEMA[table][name].default
-            yield shipped[kind], kind, key, (not default) if isinstance(default, bool) else default + 0.5
+            value = 1.0 if default is None else (not default) if isinstance(default, bool) else default + 0.5
+            yield shipped[kind], kind, key, value
 
 
 @pytest.mark.parametrize("name, kind, key, value", list(_unread_cases()))
