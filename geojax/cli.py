@@ -48,6 +48,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_BAD_INPUT
+    user_modules_importable(args)
     if args.no_cache:
         from geojax.compilation import use_cache
 
@@ -65,16 +66,69 @@ def main(argv: list[str] | None = None) -> int:
         print(f"geojax {args.command}: error: {in_flags(str(err))}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        hint = ""
-        if args.command == "sweep":  # its finished chunks are on disk
-            hint = f"; the chunks done are saved: geojax sweep {args.file} --out {args.out} --resume continues"
-        print(f"geojax {args.command}: interrupted{hint}", file=sys.stderr)
-        return 130
+        return _interrupted(args)
     except BrokenPipeError:  # `geojax scenarios | head`: the reader left; say nothing more
         import os
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+
+
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command ended by Ctrl-C
+
+
+def _interrupted(args) -> int:
+    """Ctrl-C: say what was saved and how to go on, and end with status 130.
+
+    Where a thread of this process is still at work (a compilation: ``parallel.per_device`` compiles each
+    device's program in a daemon thread, which XLA cannot stop), the process ends at once (``os._exit``) after
+    flushing its output: Python's exit would tear that thread down inside XLA, which aborts ("terminate called
+    after throwing an instance of '' ... FATAL: exception not rethrown").  Every file is written atomically,
+    so nothing is left half written either way."""
+    import os
+    import threading
+
+    saved = ""
+    if args.command == "sweep":
+        from geojax.sweep import saved_samples
+
+        parts, chunks, samples = saved_samples(args.out)
+        resume = f"geojax sweep {args.file} --out {args.out} --resume"
+        saved = (f"; {chunks} chunk(s) of {samples} sample(s) are saved in {parts}: `{resume}` continues from them"
+                 if chunks else f"; no chunk had finished, nothing is saved: `{resume}` starts it afresh")
+    elif args.command == "tune" and args.out:
+        from geojax import store, tune
+
+        if Path(args.out).is_file():
+            tuned = tune.tuned_scenario_path(args.out)
+            saved = (f"; {args.out} holds the iterations done, status \"{store.read_attrs(args.out)['status']}\""
+                     + (f", and {tuned} the best feasible point so far" if tuned.is_file() else ""))
+        else:
+            saved = "; no iteration had finished, nothing is saved"
+        saved += f"; a tuning cannot be resumed: `geojax tune {args.file} --out {args.out}` runs it again"
+    print(f"geojax {args.command}: interrupted{saved}", file=sys.stderr)
+    if threading.active_count() > 1:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(EXIT_INTERRUPTED)
+    return EXIT_INTERRUPTED
+
+
+def user_modules_importable(args) -> None:
+    """Let a controller named by import path (``"my_laws:LAW"``) come from the current folder or the folder of
+    the scenario, sweep or tuning file the command reads, as ``python my_script.py`` would find it: those
+    folders are added after the installed packages (so they never hide one) to ``sys.path`` and, for the
+    processes a run starts (Ray's workers), to ``PYTHONPATH``."""
+    import os
+
+    folders = [Path.cwd()]
+    given = getattr(args, "file", None) or getattr(args, "scenario", None)
+    if given and Path(given).is_file():
+        folders.append(Path(given).resolve().parent)
+    added = [str(f) for f in dict.fromkeys(folders) if str(f) not in sys.path]
+    sys.path.extend(added)
+    if added:
+        os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [os.environ.get("PYTHONPATH"), *added]))
 
 
 def in_flags(message: str) -> str:

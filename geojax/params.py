@@ -53,12 +53,19 @@ def scaled(scale: float, name: str = "scaled") -> Transform:
 
 @dataclasses.dataclass(frozen=True)
 class Field:
-    """One allowed key of a scenario table."""
+    """One allowed key of a scenario table (or of a controller's ``[controller]`` table):
+    ``Field(kind, default, lower=..., upper=..., si=..., transform=...)``, e.g.
+    ``Field(float, 1e-5, lower=0.0, si="k_inc", transform=LOG)`` for a gain that must be > 0, read by the
+    controller as ``params.controller["k_inc"]`` and tuned in log space.  ``kind``: the TOML type (``float``,
+    ``int``, ``bool``, ``str``, ``list`` or a tuple of them); ``default``: the value when the key is left out
+    (``REQUIRED``: it must be given)."""
 
     kind: type | tuple
     default: Any = None
-    lower: float | None = None  # exclusive unless lower_inclusive
-    upper: float | None = None  # exclusive
+    # Bounds of a number, checked at load: strict, so ``lower=0.0`` means > 0 (zero refused) unless
+    # ``lower_inclusive`` (then >= 0); ``upper`` is always exclusive.  None: unbounded on that side.
+    lower: float | None = None
+    upper: float | None = None
     lower_inclusive: bool = False
     choices: tuple = ()
     length: int | None = None  # for lists of numbers

@@ -27,6 +27,7 @@ from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.params import Field, check_table
 from geojax.physics.propulsion import arm_limits_deg
 from geojax.physics.time import TT_MINUS_TAI_S, parse_utc, tai_minus_utc_s, tt_seconds_from_utc
+from geojax.control.base import ARM_LIMIT_KEYS
 from geojax.scenario_schema import (EPHEMERIS_UTC_RANGE, NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M,
                                     NOMINAL_3SIGMA_V_MPS, ORBIT_KEYS, SCHEMA)
 from geojax.scenario_toml import to_toml
@@ -209,12 +210,30 @@ def _validate(raw: dict, controller=None) -> dict:
     validate = getattr(module, "validate", None)
     if validate is not None:
         validate(config)
+    _check_honoured(config, module)
     t = config["thrusters"]
     arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
-    _check_propellant(config)
+    _check_propellant(config, module)
     return config
 
 
+def _check_honoured(config: dict, module) -> None:
+    """Every key is honoured or refused: ``thrusters.count`` equals the number of thrusters the controller flies
+    (its module's ``THRUSTERS``), and a key its rollout never reads (``UNREAD``) keeps its default -- the arms'
+    limits excepted where ``thrusters.layout = "arms"``, as ``geojax bound`` then reads them (``control.base``).
+    ``module``: the registry entry of ``controller.kind`` (None: a user's ``Controller``, not checked)."""
+    kind, count = config["controller"]["kind"], config["thrusters"]["count"]
+    flown, why = getattr(module, "THRUSTERS", (None, ""))
+    if count is not None and flown is not None and count != flown:
+        raise ValueError(f"thrusters.count: the {kind} controller flies {flown} thruster{'s' * (flown > 1)} ({why}), "
+                         f"got {count}; leave it out or set {flown}")
+    for key in getattr(module, "UNREAD", ()):
+        table, name = key.split(".")
+        if key in ARM_LIMIT_KEYS and config["thrusters"]["layout"] == "arms":
+            continue
+        if config[table][name] != SCHEMA[table][name].default:
+            raise ValueError(f"{key}: the {kind} controller does not read it ({why}), got {config[table][name]!r}; "
+                             f"leave it out")
 # Each part of the determination and attitude errors: (its absolute key, its multiplier, its own scale, Li 2022's
 # nominal 3 sigma of eq. (48)); a part's 3 sigma is multiplier x scale x nominal (loop.simulate.measured_mee,
 # control.burns.attitude_error_rad).
@@ -279,7 +298,7 @@ def _check_gravity(forces: dict) -> None:
         raise ValueError(f"forces.gravity_order: must be <= forces.gravity_degree = {degree}, got {order}")
 
 
-def _check_propellant(config: dict) -> None:
+def _check_propellant(config: dict, module) -> None:
     """The propellant (mass less dry mass) must last at least one step of every thruster at full thrust: a run
     that cannot is a typo (an Isp in hours, a mass in tonnes), not a scenario.  Running out later is data
     (status 5, the thrusters stop)."""
@@ -288,9 +307,10 @@ def _check_propellant(config: dict) -> None:
     if propellant_kg <= 0:
         raise ValueError(f"spacecraft.dry_mass_kg: must be less than spacecraft.mass_kg = {craft['mass_kg']:g}, "
                          f"got {craft['dry_mass_kg']:g}")
-    per_step_kg = t["count"] * t["thrust_n"] * config["integration"]["step_s"] / (t["isp_s"] * c.G0_MPS2)
+    count = t["count"] or getattr(module, "THRUSTERS", (1,))[0]
+    per_step_kg = count * t["thrust_n"] * config["integration"]["step_s"] / (t["isp_s"] * c.G0_MPS2)
     if per_step_kg >= propellant_kg:
-        raise ValueError(f"thrusters.isp_s: {t['count']} thrusters of {t['thrust_n']:g} N at Isp {t['isp_s']:g} s "
+        raise ValueError(f"thrusters.isp_s: {count} thrusters of {t['thrust_n']:g} N at Isp {t['isp_s']:g} s "
                          f"burn {per_step_kg:.4g} kg in one {config['integration']['step_s']:g} s step, more than the "
                          f"{propellant_kg:.4g} kg of propellant (spacecraft.mass_kg - spacecraft.dry_mass_kg)")
 
@@ -301,11 +321,20 @@ def _lookup(kind):
     return lookup(kind)
 
 
+# The ``controller.kind`` of a table validated against a user's ``Controller`` that names no kind of its own.
+OWN_KIND = "custom"
+
+
 def controller_fields(table, controller=None) -> dict[str, Field]:
-    """The fields of a ``[controller]`` table: ``kind`` and those of the controller it names (or of ``controller``)."""
+    """The fields of a ``[controller]`` table: ``kind`` and those of the controller it names (or of ``controller``).
+
+    A table of a user's ``Controller`` (kind ``OWN_KIND``) read without it has ``kind`` alone: its keys are the
+    ``Controller``'s, which the caller holds (a controller with no keys, ``fields={}``, has none to add)."""
     if controller is not None:
-        return {"kind": Field(str, "custom"), **controller.fields}
+        return {"kind": Field(str, OWN_KIND), **controller.fields}
     kind = table.get("kind", "none") if isinstance(table, dict) else "none"
+    if kind == OWN_KIND:
+        return {"kind": Field(str, OWN_KIND)}
     return {"kind": Field(str, "none"), **_lookup(kind).FIELDS}
 
 

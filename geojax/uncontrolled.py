@@ -110,6 +110,7 @@ def propagate_scenario(scenario: Scenario, progress: bool | None = None) -> Prop
     key = jax.random.key(0)  # the null controller draws nothing; the fix it is given is not used
     pieces = []
     with Progress(n_cycles, "cycles", enabled=progress) as bar:
+        bar.phase(f"compiling and running the first {block} cycles")
         for b in range(n_blocks):
             block_epoch = scenario.epoch_tt_s + b * block * SIDEREAL_DAY_S
             env = environment_grid(block_epoch, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, block, n_steps,

@@ -208,3 +208,13 @@ def test_an_installed_copy_names_the_commit_it_was_built_from(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], cwd=lib, capture_output=True, text=True, check=True,
                          env={**os.environ, "PYTHONPATH": str(lib)})
     assert out.stdout.strip().removesuffix("+dirty") == head
+
+
+def test_a_thruster_count_the_controller_cannot_fly_exits_2(tmp_path, capsys):
+    """Issue 43, item 7: ``thrusters.count = 1`` on the QFFC (two arms) is refused in one line, exit 2."""
+    path = tmp_path / "one.toml"
+    path.write_text(geojax.scenario.read_text("li2022-qffc").replace("count = 2", "count = 1"))
+    assert cli.main(["simulate", str(path), "--days", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("geojax simulate: error: thrusters.count: the qffc controller flies 2 thrusters")
+    assert err.count("\n") == 1

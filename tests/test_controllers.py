@@ -1,5 +1,8 @@
 """The controller protocol from a user's side, status codes computed in the rollout, sweeps over any leaf."""
 
+import os
+import sys
+
 import h5py
 import jax.numpy as jnp
 import numpy as np
@@ -195,3 +198,63 @@ def test_a_controller_of_ones_own_is_named_by_import_path(tmp_path, capsys):
         assert cli.main(["sweep", str(spec), "--out", str(tmp_path / "bad.h5"), "-q"]) == cli.EXIT_BAD_INPUT
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and message in err[0], err
+
+
+OWN_MODULE = '''
+import geojax
+from geojax.control.base import coast, no_plan, stateless_init
+
+LAW = geojax.Controller(stateless_init, no_plan, coast)  # no keys of its own
+'''
+
+
+def test_a_controller_without_keys_runs_when_passed_in_python():
+    """Issue 43, item 12: ``fields={}`` failed with "controller.kind: must be one of ... got 'custom'", a name the
+    user never typed.  A coasting controller of one's own flies the uncontrolled orbit: no propellant used."""
+    ns = {}
+    exec(OWN_MODULE, ns)
+    sc = scenario.load("li2022", {"duration.days": 1}, controller=ns["LAW"])
+    result = simulate(sc, controller=ns["LAW"])
+    assert int(result.status) == 0 and float(result.metrics["mass_used_kg"]) == 0.0
+
+
+def test_the_command_imports_ones_own_module_from_the_current_folder(tmp_path):
+    """Issue 43, item 12: ``geojax sweep`` found ``my_laws:LAW`` only with ``PYTHONPATH=.``.  The real console
+    script, run in the folder of ``my_laws.py`` with the sweep file elsewhere, imports it."""
+    import os
+    import subprocess
+    from pathlib import Path
+
+    import geojax as package
+
+    (tmp_path / "my_laws.py").write_text(OWN_MODULE)
+    (tmp_path / "sweeps").mkdir()
+    (tmp_path / "sweeps" / "s.toml").write_text('scenario = "li2022"\ncontrollers = ["my_laws:LAW"]\n'
+                                                '[set]\n"duration.days" = 1.0\n[grid]\n"errors.h_rv" = [0.0]\n')
+    root = str(Path(package.__file__).parents[1])  # this checkout, not the folder of my_laws.py
+    env = {**os.environ, "PYTHONPATH": root}
+    geojax_command = Path(sys.executable).with_name("geojax")
+    run = subprocess.run([str(geojax_command), "sweep", "sweeps/s.toml", "--out", "s.h5", "-q"], cwd=tmp_path, env=env,
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / "s.h5").is_file()
+
+
+def test_the_folder_of_the_file_a_command_reads_is_searched_too(tmp_path, monkeypatch):
+    """A module beside the scenario or sweep file (not in the current folder) is found as well, after the
+    installed packages, and the processes a run starts (Ray's workers) find it through ``PYTHONPATH``."""
+    import argparse
+    import importlib
+
+    from geojax import cli
+
+    (tmp_path / "study").mkdir()
+    (tmp_path / "study" / "beside_laws.py").write_text(OWN_MODULE)
+    (tmp_path / "study" / "s.toml").write_text("")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    monkeypatch.setenv("PYTHONPATH", "/elsewhere")
+    cli.user_modules_importable(argparse.Namespace(file="study/s.toml"))
+    assert sys.path[-2:] == [str(tmp_path), str(tmp_path / "study")]
+    assert os.environ["PYTHONPATH"] == os.pathsep.join(["/elsewhere", str(tmp_path), str(tmp_path / "study")])
+    assert importlib.import_module("beside_laws").LAW.fields == {}

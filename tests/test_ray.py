@@ -192,3 +192,69 @@ def test_workers_without_ray_is_refused(local, tmp_path, capsys):
     assert cli.main(["sweep", str(spec), "--out", str(tmp_path / "x.h5"), "--workers", "2"]) == 2
     assert "--workers: only with --ray" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_local_start_finishes_beside_a_killed_cluster_that_auto_reports_in_one_line(tmp_path):
+    """Issue 43, item 17: after a Ray head was killed (SIGKILL, its GCS server and raylet too), ``--ray`` hung
+    ten minutes on "Failed to connect to GCS": ``ray.init()`` joined the dead cluster Ray had recorded.  Now
+    ``--ray`` starts an instance of its own and the sweep finishes; ``--ray auto``, which means the recorded
+    cluster, says in one line within seconds that nothing answers there.  Ray's temporary folder is this test's
+    own (``RAY_TMPDIR``, short: Ray's socket paths must fit 107 characters), so no other Ray run on the
+    machine sees the dead cluster."""
+    import shutil
+    import socket
+    import tempfile
+
+    root = Path(sweep.__file__).parents[2]
+    ray_tmp = Path(tempfile.mkdtemp(prefix="gjray", dir="/tmp"))
+    env = {**os.environ, "RAY_TMPDIR": str(ray_tmp),
+           "PYTHONPATH": os.pathsep.join([str(root), str(root / "tests")])}
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+
+    def ours() -> list[int]:
+        """The processes of the Ray instances started with this test's temporary folder."""
+        found = []
+        for proc in Path("/proc").iterdir():
+            try:
+                if proc.name.isdigit() and str(ray_tmp).encode() in (proc / "cmdline").read_bytes():
+                    found.append(int(proc.name))
+            except OSError:
+                continue
+        return found
+
+    def kill_ours():
+        for pid in ours():
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+
+    (tmp_path / "s.toml").write_text('scenario = "li2022"\ncontrollers = ["own_laws:DAMPER"]\nrepetitions = 1\n'
+                                     '[set]\n"duration.days" = 2.0\n[grid]\n"controller.k_inc_per_s" = [1e-5, 1e-4]\n')
+    try:
+        subprocess.run([str(Path(sys.executable).with_name("ray")), "start", "--head", f"--port={port}",
+                        "--node-ip-address=127.0.0.1", "--num-cpus=1", "--include-dashboard=false"],
+                       env=env, check=True, capture_output=True, timeout=180)
+        assert ours(), "the Ray head did not start"
+        kill_ours()
+        assert (ray_tmp / "ray" / "ray_current_cluster").read_text().strip().endswith(f":{port}")  # recorded
+
+        geojax_command = [str(Path(sys.executable).with_name("geojax")), "sweep", "s.toml"]
+        begun = time.monotonic()
+        auto = subprocess.run([*geojax_command, "--out", "auto.h5", "--ray", "auto"], cwd=tmp_path, env=env,
+                              capture_output=True, text=True, timeout=120)
+        assert auto.returncode == 2 and auto.stderr.count("\n") == 1, auto.stderr
+        assert "--ray auto: cannot reach " in auto.stderr and f":{port} (Connection refused)" in auto.stderr
+        assert time.monotonic() - begun < 60
+
+        run = subprocess.run([*geojax_command, "--out", "s.h5", "--ray", "-q"], cwd=tmp_path, env=env,
+                             capture_output=True, text=True, timeout=540)
+        assert run.returncode == 0, run.stderr
+        assert "Failed to connect" not in run.stderr
+        with h5py.File(tmp_path / "s.h5") as f:
+            assert f["metrics/dv_per_year_mps"].shape == (1, 2, 1)
+    finally:
+        kill_ours()
+        shutil.rmtree(ray_tmp, ignore_errors=True)

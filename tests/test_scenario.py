@@ -90,3 +90,44 @@ def test_kepler_eccentricity_of_one_is_refused():
 def test_unknown_scenario_lists_the_names():
     with pytest.raises(ValueError, match="scenario .li2021.: unknown; named scenarios: gazzino2016, geo, katz2025, katz2025-constant, katz2025-continuous, katz2025-discrete, li2022"):
         scenario.load("li2021")
+
+
+def _unread_cases():
+    """(scenario, controller kind, key, a value other than its default) for every key a registered controller
+    declares it does not read (``control.base``, ``UNREAD``)."""
+    from geojax.control import REGISTRY
+
+    shipped = {"lyapunov": "katz2025-continuous", "zone_nssk": "ye2022-ex1"}
+    for kind, module in REGISTRY.items():
+        for key in getattr(module, "UNREAD", ()):
+            table, name = key.split(".")
+            default = scenario.SCHEMA[table][name].default
+            value = 1.0 if default is None else (not default) if isinstance(default, bool) else default + 0.5
+            yield shipped[kind], kind, key, value
+
+
+@pytest.mark.parametrize("name, kind, key, value", list(_unread_cases()))
+def test_a_key_the_controller_does_not_read_is_refused(name, kind, key, value):
+    """Issue 43, item 7: every key is honoured or refused.  A key a controller's rollout never reads, set to
+    anything but its default, is refused in one line naming it and the controller."""
+    with pytest.raises(ValueError) as err:
+        scenario.load(name, {key: value})
+    assert str(err.value).startswith(f"{key}: the {kind} controller does not read it")
+    assert "\n" not in str(err.value)
+
+
+def test_every_controller_declares_what_it_flies_and_the_count_must_match():
+    """Issue 43, item 7 (``thrusters.count = 1`` was accepted and the QFFC flew two burns per cycle): each
+    registered controller that flies thrusters says how many (the arms' planners 2, a gimbal or a manipulator
+    1), a different count is refused, and an unset count takes the controller's."""
+    from geojax.control import REGISTRY
+
+    flown = {kind: getattr(module, "THRUSTERS", (None,))[0] for kind, module in REGISTRY.items()}
+    assert flown == {"none": None, "qffc": 2, "fompc": 2, "mpc": 2, "lyapunov": 1, "zone_nssk": 1}
+    for name, count in [("li2022-qffc", 1), ("li2022-fompc", 3), ("katz2025-continuous", 2), ("ye2022-ex1", 2)]:
+        with pytest.raises(ValueError, match=r"^thrusters\.count: the \w+ controller flies \d thrusters? \(.*\), "
+                                             rf"got {count}; leave it out or set \d$"):
+            scenario.load(name, {"thrusters.count": count})
+    assert scenario.load("katz2025-continuous", {"thrusters.count": 1}).config["thrusters"]["count"] == 1
+    # The arms' limits are the fuel bound's where the layout is the arms, whatever flies the rollout.
+    scenario.load("katz2025-continuous", {"thrusters.layout": "arms", "thrusters.beta_max_deg": 50.0})

@@ -33,6 +33,13 @@ What a tuning may move is declared here too: a field with a ``transform`` is tun
 ``"controller.k_h_per_km2_s"``, or its ``alias``, ``"k_h"``), and its ``unit`` labels the figures.  The
 tuner (``geojax.tune``) reads nothing else of a controller.
 
+What a registered controller's module declares beside ``FIELDS`` and ``make`` (read at load, by
+``geojax.scenario``, so that every key of a scenario is honoured or refused): ``THRUSTERS``, the thrusters it
+flies and why (``(2, "Li 2022's two robotic arms, one burn each per cycle")``), which ``thrusters.count``
+must then equal; and ``UNREAD``, the keys of the other tables its rollout never reads (``ARM_LIMIT_KEYS``
+for a law that does not fly the arms), each refused at any value but its default.  A module without them
+(the null controller, a user's) is not checked.
+
 No controller name is compared inside the traced loop: the loop only calls
 these functions.  A new controller is one module under ``control/`` that
 defines ``FIELDS`` and ``make(tables) -> Controller`` and one line in
@@ -49,6 +56,15 @@ import jax.numpy as jnp
 
 from geojax.physics.dynamics import Thrust, no_thrust
 
+
+# The keys only the robotic arms read (Li 2022 eq. (1); ``physics.propulsion.arm_limits``; the fuel bound's
+# "arms" geometry), and those only a planned burn reads (``control.burns``: its shortest duration and the
+# attitude error of its direction, Li 2022 eq. (47), given absolute or as multiples; the absolute key first, so
+# that a refusal names the key the file gave).
+ARM_LIMIT_KEYS = ("thrusters.beta_max_deg", "thrusters.beta_min_deg", "thrusters.alpha_max_deg",
+                  "thrusters.alpha_min_deg")
+BURN_KEYS = ("thrusters.min_burn_s", "errors.sigma3_att_deg", "errors.h_att", "errors.att_yaw", "errors.att_pitch",
+             "errors.att_shared", "errors.att_known")
 
 # The ``params.controller`` leaf holding a surrogate's temperature (``geojax.tune`` anneals it).
 SURROGATE_TEMPERATURE = "temperature"

@@ -46,6 +46,7 @@ from geojax.control import qffc
 from geojax.control.base import Controller
 from geojax.control.qffc import model_cycle
 
+THRUSTERS = qffc.THRUSTERS
 FIELDS = qffc.FIELDS
 
 

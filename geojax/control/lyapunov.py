@@ -56,7 +56,7 @@ import numpy as np
 
 from geojax.physics import thrust_laws
 from geojax.physics.constants import OMEGA_EARTH_RAD_S
-from geojax.control.base import SURROGATE_TEMPERATURE, Controller, no_plan, stateless_init
+from geojax.control.base import ARM_LIMIT_KEYS, BURN_KEYS, SURROGATE_TEMPERATURE, Controller, no_plan, stateless_init
 from geojax.physics.dynamics import Thrust
 from geojax.physics.elements import wrap_angle
 from geojax.physics.frames import rotate_z, rsw_basis
@@ -79,6 +79,11 @@ def _sigma_from_theta(theta, leaves):
 SIGMA_WEIGHTS = Transform("log-weights", _sigma_to_theta, _sigma_from_theta)
 
 # The [controller] table, in the paper's units (see the module docstring for the reading of each).
+# What ``geojax.scenario`` holds a scenario of this law to (``control.base``): one thrust vector of any direction,
+# flown every step; no arms, no planned burns.
+THRUSTERS = (1, "one gimbaled thruster, Katz 2025")
+UNREAD = ARM_LIMIT_KEYS + BURN_KEYS
+
 FIELDS = {
     "k_h_per_km2_s": Field(NUMBER, REQUIRED, lower=0.0, si="k_h_per_m2_s", to_si=1e-6, transform=LOG,
                            symbol="k_h", unit="1/(km² s)", alias="k_h", doc="angular-momentum gain, eq. (1)"),

@@ -58,6 +58,8 @@ from geojax.physics.propulsion import alpha_beta_bounds, arm_limits, delta_v_dir
 HORIZON_LIMIT = 30  # cycles: the largest N_max accepted
 SOLVED_VIOLATION = 0.01  # a plan violating a row by more than this fraction of its half-width is "not solved"
 
+THRUSTERS = (2, "Li 2022's two robotic arms, one burn of each per cycle")  # control.base
+
 FIELDS = {
     # Horizon N (cycles) and the limits of the mean elements about their targets.
     "horizon": Field(int, 20, lower=1, upper=HORIZON_LIMIT + 1, lower_inclusive=True, si="horizon"),

@@ -28,6 +28,8 @@ __all__ = ["ArmTrig", "BurnPair", "CONTROLLER", "FIELDS", "_log_at_least_one", "
 
 # The [controller] keys of Li 2022's planners.  The QFFC reads vdt_estimate only; it accepts the FOMPC's keys
 # (and ignores them) so that one scenario and one sweep file run both controllers on the same grid.
+THRUSTERS = (2, "Li 2022's two robotic arms, one burn each per cycle")  # control.base: honoured or refused
+
 FIELDS = {
     # Start V_DT from the estimate of Li 2022, eqs. (37)-(39), instead of the drift target.
     "vdt_estimate": Field(bool, False, si="vdt_estimate"),

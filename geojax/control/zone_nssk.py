@@ -65,7 +65,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 
 from geojax.control import burns as burns_mod
-from geojax.control.base import Controller, stateless_init
+from geojax.control.base import ARM_LIMIT_KEYS, Controller, stateless_init
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS
 from geojax.control.qffc import BurnPair
 from geojax.physics.constants import MU_MOON_M3_S2, MU_SUN_M3_S2, OMEGA_EARTH_RAD_S, SECONDS_PER_DAY, SIDEREAL_DAY_S
@@ -78,6 +78,11 @@ N0_RAD_S = OMEGA_EARTH_RAD_S  # n_0 of eqs. (31)-(39): the synchronous mean moti
 # (Sun, Moon) weights of the long-period terms removed, by Table 3's "perturbation term" (eqs. (22)-(24)).
 PERTURBATION_TERMS = {"nutation": (1.0, 1.0), "semi_annual": (0.0, 1.0), "semi_monthly": (0.0, 0.0)}
 ZONE_NAMES = ("normal", "one", "two", "three", "four", "five")
+
+# What ``geojax.scenario`` holds a scenario of this law to (``control.base``): one thruster on a manipulator,
+# not Li's arms (its burns' shortest duration and attitude error are ``control.burns``' and read).
+THRUSTERS = (1, "one thruster on a manipulator, Ye 2022 Sec. 3.2")
+UNREAD = ARM_LIMIT_KEYS
 
 FIELDS = {
     # Which periodic terms the mean inclination keeps (Table 3): the Sun's semi-annual and the Moon's

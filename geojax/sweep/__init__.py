@@ -54,4 +54,4 @@ controller's batch: its shared arrays and the predictor's reference run, and the
 
 from geojax.sweep.spec import DISPERSION_FIELDS, DISPERSION_STREAM, MAX_SAMPLES, Sweep, load, prepare_check, _scenario  # noqa: F401
 from geojax.sweep.batch import ChunkRunner, default_chunk, lane_plan  # noqa: F401
-from geojax.sweep.run import ray_nodes, run_sweep  # noqa: F401
+from geojax.sweep.run import ray_nodes, run_sweep, saved_samples  # noqa: F401

@@ -28,13 +28,13 @@ class ChunkRunner:
     that runs it: a local sweep and every Ray worker use this.
     """
 
-    def __init__(self, sweep: Sweep, controller: str, chunk: int | None = None):
+    def __init__(self, sweep: Sweep, controller: str, chunk: int | None = None, on_phase=None):
         self.n_samples = sweep.n_points * sweep.repetitions
         self.repetitions = sweep.repetitions
         self.plan = lane_plan(sweep, controller, chunk)
         self.width = self.plan.lanes * jax.local_device_count()
-        self._batch_fn, self._params, self._group_of_point, self.compile_s = _compiled_batch(sweep, controller,
-                                                                                            self.width)
+        self._batch_fn, self._params, self._group_of_point, self.compile_s = _compiled_batch(
+            sweep, controller, self.width, on_phase or (lambda name: None))
 
     def run(self, first: int, length: int, on_samples=None) -> dict:
         samples = np.arange(first, first + length)
@@ -82,10 +82,10 @@ def lane_plan(sweep: Sweep, controller: str, chunk: int | None = None) -> lanes_
                           requested=sweep.lanes)
 
 
-def _compiled_batch(sweep: Sweep, controller: str, width: int):
+def _compiled_batch(sweep: Sweep, controller: str, width: int, on_phase):
     """(function of (params [width], sample indices [width], epoch group) -> metrics, params of every grid point
     [n_points], the epoch group of every grid point [n_points], set-up seconds: each epoch's shared arrays and
-    reference run, and the one compilation).
+    reference run, and the one compilation).  ``on_phase(name)`` is told when the compilation starts.
 
     What the samples of one epoch share (the environment grid, the predictor's reference or the segments each
     sample runs its own on, the Earth angle at the start) is an argument of the compiled call, not a constant
@@ -120,6 +120,7 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int):
         return out
 
     shared = [shared_of(b, g) for b, g in zip(batches, groups, strict=True)]
+    on_phase(f"{controller}: compiling")
     lanes = np.zeros(width, dtype=int)
     run, _ = per_device(jax.vmap(one, in_axes=(0, 0, None, None, None)), (_lanes(batch.params, lanes), lanes),
                         shared=shared[0])

@@ -42,8 +42,10 @@ class ClusterError(RuntimeError):
 
 @contextlib.contextmanager
 def connected(address: str):
-    """Join (``"auto"``, ``"HOST:PORT"``, ``"ray://HOST:PORT"``) or start (``"local"``) a Ray instance for
-    the duration of the block; ``ValueError`` in one line if Ray is missing or the cluster unreachable.
+    """Join (``"auto"``, ``"HOST:PORT"``, ``"ray://HOST:PORT"``) or start (``"local"``: always a new instance of
+    its own, on 127.0.0.1, whatever clusters Ray has recorded) a Ray instance for the duration of the block;
+    ``ValueError`` in one line, within seconds, if Ray is missing or the cluster unreachable (nothing listening
+    at its address: a cluster killed leaves its address recorded).
 
     If this process has already joined one (``ray.init`` in a notebook or a test), that one is used.
     """
@@ -54,13 +56,18 @@ def connected(address: str):
     if ray.is_initialized():
         yield ray
         return
-    if address not in ("local", "auto"):
+    if address == "auto":
+        _check_reachable(_recorded_cluster(address), named=address)
+    elif address != "local":
         _check_reachable(address)
     try:
         with warnings.catch_warnings():  # Ray starts its processes by fork and exec, which JAX's warning
             warnings.filterwarnings("ignore", "os.fork", RuntimeWarning)  # about forking threads does not concern
             if address == "local":
-                ray.init(include_dashboard=False, logging_level="ERROR")
+                # An instance of our own, on the loopback address: ``ray.init()`` without an address would join
+                # the cluster recorded in Ray's temporary folder, and wait ten minutes on one that was killed.
+                ray.init(address="local", _node_ip_address="127.0.0.1", include_dashboard=False,
+                         logging_level="ERROR")
             else:
                 ray.init(address=address, logging_level="ERROR")
     except (ConnectionError, RuntimeError, ValueError, TimeoutError) as err:
@@ -73,15 +80,33 @@ def connected(address: str):
         ray.shutdown()
 
 
-def _check_reachable(address: str) -> None:
-    """Fail fast, in one line, where nothing listens at ``address`` (Ray itself retries for 20-30 s)."""
+def _recorded_cluster(address: str) -> str:
+    """The HOST:PORT that ``"auto"`` means: ``RAY_ADDRESS``, else the cluster the last ``ray start`` on this
+    machine recorded (Ray's own lookup); ``ValueError`` in one line where there is none."""
+    from ray._private.services import canonicalize_bootstrap_address
+
+    try:
+        found = canonicalize_bootstrap_address(address)
+    except (ConnectionError, ValueError) as err:
+        found, why = None, f" ({(str(err).strip().splitlines() or [''])[0]})"
+    else:
+        why = ""
+    if not found:
+        raise ValueError(f"ray={address}: no running Ray cluster found on this machine{why}; start one with "
+                         f"`ray start --head`, or give --ray alone for an instance of this sweep's own")
+    return found
+
+
+def _check_reachable(address: str, named: str | None = None) -> None:
+    """Fail fast, in one line, where nothing listens at ``address`` (Ray itself retries for 20-30 s, or ten
+    minutes on a cluster it finds recorded); the message names ``named`` (default ``address``), what was given."""
     host, _, port = address.removeprefix("ray://").rpartition(":")
     if not host or not port.isdigit() or not 0 < int(port) < 65536:
         raise ValueError(f"ray={address}: expected local, auto, HOST:PORT or ray://HOST:PORT")
     try:
         socket.create_connection((host.strip("[]"), int(port)), timeout=CONNECT_TIMEOUT_S).close()
     except OSError as err:
-        raise ValueError(f"ray={address}: cannot reach {host}:{port} ({err.strerror or err})") from None
+        raise ValueError(f"ray={named or address}: cannot reach {host}:{port} ({err.strerror or err})") from None
 
 
 class ChunkWorker:

@@ -10,12 +10,14 @@ from __future__ import annotations
 
 def run_chunks(todo: list[tuple[str, int, int]], save, bar, *, make_runner) -> tuple[float, dict[str, int]]:
     """Run each (controller, first sample, length) of ``todo``, calling ``save(controller, first, values)`` as each
-    chunk finishes and ``bar`` (``geojax.progress.Progress``) as samples do.  Returns (seconds compiling, lanes
+    chunk finishes and ``bar`` (``geojax.progress.Progress``) as samples do; ``make_runner(controller, on_phase)``
+    names its phases (set-up, compiling) through ``on_phase``.  Returns (seconds compiling, lanes
     per device of each controller)."""
     compile_s, runners = 0.0, {}
     for controller, first, length in todo:
         if controller not in runners:
-            runners[controller] = make_runner(controller)
+            bar.phase(f"{controller}: set-up")
+            runners[controller] = make_runner(controller, bar.phase)
             compile_s += runners[controller].compile_s
             bar.restart(f"{controller} compiled in {runners[controller].compile_s:.1f} s "
                         f"({runners[controller].plan.lanes} lanes per device)")

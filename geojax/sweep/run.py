@@ -119,7 +119,8 @@ def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool
             widths = ""
         else:
             compile_s, lanes = local.run_chunks(todo, save, bar,
-                                                make_runner=lambda controller: ChunkRunner(sweep, controller, chunk))
+                                                make_runner=lambda controller, on_phase: ChunkRunner(sweep, controller, chunk,
+                                                                                            on_phase=on_phase))
             widths = ", ".join(f"{c} {n}" for c, n in lanes.items())
     return _write_results(sweep, out, parts, wall_s=time.perf_counter() - start, compile_s=compile_s, lanes=widths)
 
@@ -156,6 +157,17 @@ def _write_results(sweep: Sweep, out: Path, parts: Path, wall_s: float, compile_
                    dims=dims_of_sweep(list(sweep.grid), sweep.cycles))
     store.discard_folder(parts)
     return out
+
+
+def saved_samples(out: str | Path) -> tuple[Path, int, int]:
+    """(parts folder, chunks saved, samples they hold) of an unfinished sweep writing ``out``: what
+    ``resume=True`` starts from (0, 0 where nothing was saved)."""
+    parts = Path(out).with_name(Path(out).name + ".parts")
+    chunks, samples = 0, 0
+    for path in parts.glob("*.npz"):
+        with np.load(path) as values:
+            chunks, samples = chunks + 1, samples + len(values[values.files[0]])
+    return parts, chunks, samples
 
 
 def ray_nodes() -> list[dict]:

@@ -65,7 +65,13 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
     if fault:
         warnings.warn(fault, ShortHorizonWarning, stacklevel=2)
     run_ = Run(spec, out, problem, verbose)
-    message = METHODS[spec.method](run_)
+    try:
+        message = METHODS[spec.method](run_)
+    except KeyboardInterrupt:  # Ctrl-C: the file says so (not "running") and keeps the best point so far
+        if out and run_.hist["theta"]:
+            write(out, spec, run_.problem, run_.hist, run_.hist["theta"][0], run_.best,
+                  interrupted_status(len(run_.hist["theta"])), run_.elapsed())
+        raise
     best = run_.best
     if best["theta"] is None:
         message += "; no iterate kept the box with the exact law"
@@ -76,6 +82,13 @@ def tune(spec: TuneSpec, out=None, problem: Problem | None = None, verbose: bool
     if out:
         result.save(out)
     return result
+
+
+def interrupted_status(iterations: int) -> str:
+    """The file's ``status`` of a tuning stopped by Ctrl-C after ``iterations`` iterations (a tuning has no
+    resume: its iterates are not a function of where it stopped, the trust region and the annealing being
+    state of the run)."""
+    return f"interrupted after {iterations} iteration(s) (Ctrl-C); the best feasible point so far kept"
 
 
 def default_margin(spec: TuneSpec) -> float:

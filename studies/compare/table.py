@@ -44,6 +44,7 @@ import numpy as np
 
 import geojax
 from geojax import plots, scenario as scenario_mod
+from geojax.control import lookup
 from geojax.loop.metrics import STATUS_MEANINGS
 
 HERE = Path(__file__).resolve().parent
@@ -145,6 +146,15 @@ def device_text() -> str:
     return f"CPU ({os.cpu_count()} cores, {platform.processor() or platform.machine()}, shared)"
 
 
+def read_by_controller(row: Row, overrides: dict) -> dict:
+    """``overrides`` less the keys ``row``'s controller does not read (Katz's law has no attitude error model),
+    which a scenario refuses at any value but the default (``control.base``, ``UNREAD``).  A run's cache name
+    keeps its full overrides: dropping a key the law never read changes none of its numbers."""
+    kind = row.fixed.get("controller.kind") or geojax.load_scenario(row.base).controller
+    unread = getattr(lookup(kind), "UNREAD", ())
+    return {k: v for k, v in overrides.items() if k not in unread}
+
+
 def run_batch(row: Row, settings: list[dict], box_deg: float, years: int, out: Path, errors: float = 0.0) -> dict:
     """Every setting of ``row`` flown in one compiled batch (seed 0): per setting the metrics of ``METRICS``,
     the years' Delta-V and the status; the wall time after compilation per sample-year.  Kept in ``out/runs``."""
@@ -157,7 +167,7 @@ def run_batch(row: Row, settings: list[dict], box_deg: float, years: int, out: P
     scenarios, refused = {}, {}
     for j, o in enumerate(overrides):  # a setting the scenario's checks refuse at this box is recorded, not flown
         try:
-            scenarios[j] = geojax.load_scenario(row.base, o)
+            scenarios[j] = geojax.load_scenario(row.base, read_by_controller(row, o))
         except ValueError as err:
             refused[j] = str(err)
     compiled = []
@@ -445,6 +455,7 @@ def monte_carlo(args) -> dict:
                    "seed": 32, "set": {**row.fixed, **setting, "station.box_half_width_deg": args.box,
                                        "duration.days": args.years * 365.25, "errors.h_att": level},
                    "grid": {"errors.h_rv": [level]}, "dispersion": MC_DISPERSION}
+            raw["set"] = read_by_controller(row, raw["set"])
             raw["set"].pop("controller.kind", None)
             path = folder / f"{name}.toml"
             path.write_text(scenario_mod.to_toml(raw))

@@ -1,0 +1,83 @@
+"""Progress on stderr: a bar on a terminal, sparse lines off one (issue 43, item 14), and a phase (set-up,
+compiling) shown before the rate starts (issue 40)."""
+
+import io
+
+from geojax import progress
+
+
+class Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+class Clock:
+    def __init__(self):
+        self.now = 1000.0
+
+    def __call__(self):
+        return self.now
+
+
+def test_a_terminal_gets_a_bar_with_the_phase_then_the_rate(monkeypatch):
+    clock = Clock()
+    monkeypatch.setattr(progress.time, "perf_counter", clock)
+    stream = Terminal()
+    with progress.Progress(100, "samples", stream=stream) as bar:
+        bar.phase("qffc: compiling")
+        clock.now += 12.0
+        bar.update(0)
+        assert stream.getvalue().endswith("0/100 samples  qffc: compiling (12 s) ")
+        bar.restart()
+        clock.now += 10.0
+        bar.update(20)  # 20 samples in 10 s after the compilation: 2 per second, 40 s to go
+        assert stream.getvalue().endswith("] 20/100 samples  2.0 samples/s  ETA 40 s ")
+        assert stream.getvalue().count("\r") == 4  # redrawn in place
+    assert stream.getvalue().endswith("\n")
+
+
+def test_a_file_gets_a_line_per_phase_then_every_10_percent_or_30_s_whichever_is_later(monkeypatch):
+    clock = Clock()
+    monkeypatch.setattr(progress.time, "perf_counter", clock)
+    stream = io.StringIO()  # not a terminal: stderr redirected to a file
+    with progress.Progress(100, "samples", stream=stream) as bar:
+        bar.phase("qffc: set-up")
+        clock.now += 40.0
+        bar.phase("qffc: compiling")  # each phase is said when it starts
+        clock.now += 100.0
+        bar.restart()
+        assert stream.getvalue().splitlines() == ["[0 s] 0/100 samples  qffc: set-up (0 s)",
+                                                  "[40 s] 0/100 samples  qffc: compiling (0 s)"]
+        for _ in range(50):  # 1 sample each second: 10 % takes 10 s, so the 30 s decide
+            clock.now += 1.0
+            bar.update(1)
+        clock.now += 1.0
+        bar.update(48)  # 10 % more within 1 s: too soon for a line
+    lines = stream.getvalue().splitlines()[2:]
+    assert lines == ["[150 s] 10/100 samples  1.0 samples/s  ETA 90 s",  # 30 s after the last line
+                     "[180 s] 40/100 samples  1.0 samples/s  ETA 60 s",
+                     "[191 s] 98/100 samples  1.9 samples/s  ETA 1 s"]  # the last count, at the end
+    assert "\r" not in stream.getvalue()
+
+
+def test_lines_wait_for_10_percent_when_30_s_pass_sooner(monkeypatch):
+    clock = Clock()
+    monkeypatch.setattr(progress.time, "perf_counter", clock)
+    stream = io.StringIO()
+    with progress.Progress(1000, "cycles", stream=stream) as bar:
+        for _ in range(150):  # 1 cycle a minute: 10 % takes 100 min
+            clock.now += 60.0
+            bar.update(1)
+    times = [line.split("]")[0] for line in stream.getvalue().splitlines()]
+    assert times == ["[6000 s", "[9000 s"]  # 100 cycles, then the final count (150)
+
+
+def test_a_short_run_off_a_terminal_and_a_quiet_run_print_nothing():
+    stream = io.StringIO()
+    with progress.Progress(10, "cycles", stream=stream) as bar:
+        bar.update(10)
+    assert stream.getvalue() == ""
+    with progress.Progress(10, "cycles", stream=stream, enabled=False) as bar:
+        bar.phase("compiling")
+        bar.update(10)
+    assert stream.getvalue() == ""
