@@ -18,8 +18,8 @@ The cache is keyed by JAX itself: a hash of the compiled program's HLO, the comp
 JAX/jaxlib versions, so a changed program, flag or version is a miss, never a wrong hit, and a hit is the same
 executable (results are bit-for-bit those of a fresh compilation: ``tests/test_compilation.py``).  A folder that
 cannot be used (not writable, a file in its place) gives one warning line and the run goes on uncached; an entry
-that cannot be read is a miss (JAX warns and compiles).  Programs that compile in under
-``MIN_COMPILE_S`` are not kept (JAX's eager operations compile thousands of those).
+that cannot be read is a miss (JAX warns and compiles).  Every program is kept, the ~40 small eager operations
+a command compiles too (``MIN_COMPILE_S``).
 
 ``Compilations`` records what compiles while it is open (JAX's monitoring events): per program its name, the
 seconds spent tracing, lowering and compiling (or loading from the cache), and whether the cache served it; the
@@ -38,7 +38,8 @@ import jax
 
 ENV_DIR, ENV_OFF, ENV_MAX_MB = "GEOJAX_CACHE_DIR", "GEOJAX_NO_CACHE", "GEOJAX_CACHE_MAX_MB"
 DEFAULT_MAX_MB = 2048  # a year's closed loop is a few MB of executable: hundreds of programs
-MIN_COMPILE_S = 0.2  # JAX's default is 1 s, which would leave the environment grid (~0.5 s) uncached
+MIN_COMPILE_S = 0.0  # every program (JAX's default, 1 s, would leave the environment grid and the ~40 eager
+#                      operations a command compiles, 2-3 s in all, to compile again in every run)
 
 
 def default_dir() -> Path:
@@ -69,7 +70,7 @@ def use_cache(path: str | os.PathLike | bool | None = None, max_mb: float | None
         return None
     max_mb = float(os.environ.get(ENV_MAX_MB, DEFAULT_MAX_MB)) if max_mb is None else max_mb
     jax.config.update("jax_compilation_cache_max_size", int(max_mb * 2**20) if max_mb >= 0 else -1)
-    if jax.config.jax_persistent_cache_min_compile_time_secs == 1.0:  # JAX's default: not set by the user
+    if "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS" not in os.environ:  # the user's setting wins
         jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_S)
     _set_dir(folder)
     return folder
