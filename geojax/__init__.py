@@ -42,9 +42,6 @@ from geojax.results import open_results  # noqa: E402
 from geojax.store import read_h5 as read_results  # noqa: E402
 from geojax.sweep import load as load_sweep  # noqa: E402
 from geojax.sweep import run_sweep  # noqa: E402
-from geojax.tune import from_dict as tuning_from_dict  # noqa: E402
-from geojax.tune import load as load_tuning  # noqa: E402
-from geojax.tune import tune as tune_gains  # noqa: E402
 
 __all__ = [
     "Controller", "CycleContext", "Estimate", "Field", "LOG", "Params", "Result", "STATUS_MEANINGS", "Scenario",
@@ -52,3 +49,16 @@ __all__ = [
     "load_tuning", "open_results", "prepare_params", "read_results", "run_sweep", "simulate", "simulate_batch", "tune_gains",
     "tuning_from_dict",
 ]
+
+# The tuner (optax, SciPy's optimisers: a second of a command's start-up) is imported when first asked for.
+_LAZY = {"tuning_from_dict": ("geojax.tune", "from_dict"), "load_tuning": ("geojax.tune", "load"),
+         "tune_gains": ("geojax.tune", "tune")}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        module, attribute = _LAZY[name]
+        return getattr(importlib.import_module(module), attribute)
+    raise AttributeError(f"module 'geojax' has no attribute {name!r}")

@@ -72,7 +72,7 @@ def test_simulate_writes_metrics_and_cycles(tmp_path, capsys):
     out = tmp_path / "sim.h5"
     assert cli.main(["simulate", "li2022-qffc", "--days", "5", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "dv_per_year_mps" in printed and "compiled in" in printed and "5 cycles" in printed
+    assert "dv_per_year_mps" in printed and "closed loop ready in" in printed and "5 cycles" in printed
     # A 5-day run beside Li's one-year numbers: said so, with what differs; its per-year figures extrapolated.
     assert "Li 2022 (its own run)" in printed and "duration.days = 5" in printed
     dv_line = next(line for line in printed.splitlines() if line.split()[:1] == ["dv_per_year_mps"])

@@ -14,7 +14,7 @@ from geojax.loop.rollout import Result
 from geojax.uncontrolled import propagate_scenario
 
 # Measured, not computed: they differ from run to run.
-TIMES = {"wall_s", "created_utc", "compile_s", "source_revision"}
+TIMES = {"wall_s", "created_utc", "compile_s", "run_s", "source_revision"}
 TIMED_DATASETS = {"metrics/cpu_s_per_orbit", "rounds/solve_s", "iterations/wall_s"}  # wall times: of a run, of
 # each program solve, of a tuning at each iteration
 
