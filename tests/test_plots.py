@@ -269,8 +269,8 @@ def test_a_sweep_over_two_keys_names_the_second_by_its_values_and_keeps_the_lege
     fig.canvas.draw()
     ax = fig.axes[0]
     texts = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert texts[:2] == ["qffc, H_rv = 1: mean", "qffc, H_rv = 2: mean"]
-    assert "fompc, H_rv = 1: unstable" in texts and not any("#" in t for t in texts)
+    assert texts[:2] == ["qffc, H_rv = 1: mean (held)", "qffc, H_rv = 2: mean (held)"]
+    assert "fompc, H_rv = 1: failed (status not 0): mean, count" in texts and not any("#" in t for t in texts)
     legend, frame = ax.get_legend().get_window_extent(), ax.get_window_extent()
     assert legend.x0 >= frame.x1 and legend.x1 <= fig.bbox.x1 + 1  # beside the axes, inside the figure
     attrs = {"name": "grid2", "base_scenario_toml": '[duration]\ndays = 30\n'}
