@@ -10,7 +10,7 @@ It turns with the orbit: its rate is ``n = |r x v| / |r|^2`` about the orbit nor
 axes.  The Sun-tracking solar array turns about the orbit normal once a day; its frame (``array_frame``) is its
 axis (the orbit normal, +(r x v)), the direction across it in its plane, and its normal (the Sun's direction
 projected onto the orbit plane), so that a centre-of-pressure offset is given "along the array axis, one across
-it" (issue 41).
+it".
 
 The torques are pure functions of the state the orbit already has: solar radiation pressure acting at a centre
 of pressure offset from the centre of mass (``srp_force_eci_n``: the orbit's own SRP model,

@@ -21,7 +21,7 @@ through one extension point: a tuple of ``StateModel`` s, static (chosen from th
 With no model (every scenario that asks for none) the carry and the records hold empty dicts: no leaf, the same
 program, every number as without the extension point (``tests/test_momentum.py`` checks it against main's code).
 
-How a navigation filter fits (issue 42): its state is the estimate and covariance; ``cycle`` runs the update
+How a navigation filter fits: its state is the estimate and covariance; ``cycle`` runs the update
 with the cycle's measurement (drawn from ``CycleStart.key``), ``step`` the time update with the thrust flown, and
 the controller's ``Estimate`` is then read from it -- the one hook not built yet, a model's optional
 ``estimate(params, state, estimate) -> Estimate`` that the loop would call where it builds the estimate today.

@@ -1,4 +1,4 @@
-"""The reaction wheels' momentum of a nadir-pointing body, a state of the loop (issue 41, items 1 and 2a-b).
+"""The reaction wheels' momentum of a nadir-pointing body, a state of the loop.
 
 The body points at nadir (``physics.attitude.nadir_frame``); its inner attitude loop holds that attitude with
 three reaction wheels along the body axes, and the attitude errors are neglected at the station-keeping time
@@ -30,14 +30,15 @@ is conserved to rounding, ``tests/test_momentum.py``).  The torques (ECI):
   principal body axes (the default tensor), constant for a product of inertia.
 
 Thruster torques (the thrust lines' offsets from the centre of mass) and dumping are not modelled yet: every
-controller fires through the centre of mass (docs/momentum.md, what is left of issue 41).
+controller fires through the centre of mass (docs/momentum.md says what is not built yet).
 
 The default inertia tensor (``DEFAULT_INERTIA_KG_M2``) is an estimate for a satellite of Li 2022's class (5000
 kg, 200 m^2 of SRP area), no manufacturer publishing one: a 4600 kg bus as a uniform box 2.5 m (x) x 2.5 m (y) x
 3.5 m (z), and two 200 kg wings of 20 m x 5 m (100 m^2 each) on the y axis (the array axis), their centres 12.75
 m from the centre of mass, as thin plates turning about y (their width's share of Ixx and Izz averaged over the
 turn): Ixx = 7091.7 + 78358.3 + 416.7, Iyy = 7091.7 + 833.3, Izz = 4791.7 + 78358.3 + 416.7 kg m^2, principal.
-The default capacity, 50 N m s per wheel, is issue 41's li2022-momentum wheels.
+The default capacity, 50 N m s per wheel, is the wheels planned for Li's satellite with a centre-of-pressure
+offset (the li2022-momentum scenario to come).
 """
 
 from __future__ import annotations
