@@ -1,4 +1,4 @@
-"""Navigation (issue 42): stations, measurement models, schedules, the EKF's pieces and the planned keys.
+"""Navigation: stations, measurement models, schedules, the EKF's pieces and the planned keys.
 
 Each test names its independent check: closed-form geometry of a geostationary satellite, central finite
 differences, the standard Kalman update, a Monte Carlo draw, the integral that defines the process noise,
@@ -228,7 +228,7 @@ def _rk4_two_body(x, dt_s, substeps):
 
 
 def test_filter_covariance_matches_the_batch_least_squares_bound():
-    """Independent method (issue 42's Cramer-Rao check): two stations (30 deg N and 30 deg S of the sub-satellite
+    """Independent method (the Cramer-Rao check): two stations (30 deg N and 30 deg S of the sub-satellite
     point, 15 deg apart in longitude) range an unperturbed, slightly eccentric and inclined GEO orbit every
     10 min for a day, sigma 5 m.  The batch information matrix P0^-1 + sum Phi_k^T H_k^T R^-1 H_k Phi_k, at the
     truth, with Phi_k from jax.jacfwd of a Kepler (f and g) propagator, mapped to the last epoch, against the
