@@ -124,6 +124,18 @@ def scenario_keys() -> str:
     return "\n".join(out)
 
 
+def navigation_keys() -> str:
+    """The planned ``[navigation]`` keys (``geojax.navigation.keys``: validated, not yet in the scenario schema)."""
+    from geojax.navigation import keys
+
+    out = []
+    for table, fields in (("navigation", keys.FIELDS), ("navigation.stations", keys.STATION_FIELDS),
+                          ("navigation.gnss", keys.GNSS_FIELDS)):
+        out += [f"### `[{'[' + table + ']' if table.endswith('stations') else table}]`", "", *HEADER,
+                *_field_rows(table, fields), ""]
+    return "\n".join(out)
+
+
 def controller_keys() -> str:
     from geojax.control import REGISTRY, lookup
 
@@ -242,6 +254,6 @@ def modules(folder: str) -> str:
 
 
 GENERATORS = {"scenario-keys": scenario_keys, "controller-keys": controller_keys, "tuning-keys": tuning_keys,
-              "metrics": metrics,
+              "navigation-keys": navigation_keys, "metrics": metrics,
               "cli-help": cli_help, "scenarios": scenarios, "api": api,
               **{f"modules-{name}": (lambda name=name: modules(name)) for name in ("geojax", "studies", "benchmarks")}}

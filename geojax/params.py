@@ -127,9 +127,12 @@ class Params(NamedTuple):
     station: dict
     errors: dict
     controller: dict
+    # The ``[attitude]`` table's leaves where the loop carries the wheels (``geojax.states.momentum``); else empty:
+    # a state that is absent has no leaf.
+    attitude: dict = {}
 
 
-LEAF_TABLES = ("spacecraft", "thrusters", "station", "errors", "controller")
+LEAF_TABLES = ("spacecraft", "thrusters", "station", "errors", "controller", "attitude")
 
 
 def table_leaves(config_table: dict, fields: dict[str, Field]) -> dict:

@@ -29,12 +29,12 @@ from geojax.loop.metrics import STATUS_OK, STATUS_TEXT
 UNIT_SUFFIXES = (
     ("_per_year_mps", "m/s/yr"), ("_s_per_orbit", "s/orbit"), ("_deg_per_day", "deg/day"), ("_mps2", "m/s^2"),
     ("_mps", "m/s"), ("_deg", "deg"), ("_rad", "rad"), ("_km", "km"), ("_kg", "kg"), ("_m2", "m^2"), ("_m", "m"),
-    ("_s", "s"), ("_n", "N"), ("_days", "days"),
+    ("_s", "s"), ("_n", "N"), ("_days", "days"), ("_nms", "N m s"),
 )
 DIMENSIONLESS = {"ex", "ey", "ix", "iy", "max_abs_de", "max_abs_di", "duty_fraction", "duty_x", "duty_y", "duty_z",
                  "ns_fraction", "burns_per_thruster_per_orbit", "burns_total", "cycles_without_solution", "code",
                  "active", "loss", "step_norm", "theta", "temperature", "trust_radius", "constraint", "constraint_lon",
-                 "constraint_lat", "status"}
+                 "constraint_lat", "status", "time_above_80pct_capacity_fraction"}
 DESCRIPTIONS = {
     "dv_per_year_mps": "delta-V per year of the whole run",
     "dv_steady_per_year_mps": "delta-V per year in steady state: the mean of the years after the first",
@@ -75,6 +75,15 @@ DESCRIPTIONS = {
     **{f"constraint_{axis}": f"box constraint of the {name}: (largest excursion / box half-width)^2 - 1, <= 0 inside"
        for axis, name in (("lon", "longitude"), ("lat", "latitude"))},
     "best_dv_per_year_mps": "best feasible delta-V per year so far",
+    # The wheels' momentum (geojax.states.momentum, where attitude.wheels = true)
+    "max_wheel_momentum_nms": "largest |momentum| of any reaction wheel at any step start (body axes)",
+    "wheel_momentum_per_day_nms": "secular growth of the wheels' momentum: its net change from the first cycle "
+                                  "start to the last cycle end, per day",
+    "srp_torque_impulse_nms": "integral of |SRP torque| over the run (centre-of-pressure offset)",
+    "gravity_gradient_impulse_nms": "integral of |gravity-gradient torque| over the run",
+    "time_above_80pct_capacity_fraction": "fraction of the step starts with a wheel above 80 % of its capacity",
+    **{f"wheel_{axis}_nms": f"the {axis} wheel's momentum at the cycle end, body axes" for axis in "xyz"},
+    **{f"wheel_max_abs_{axis}_nms": f"largest |momentum| of the {axis} wheel within the cycle" for axis in "xyz"},
 }
 
 

@@ -10,6 +10,7 @@ from geojax.params import LOG, NUMBER as _NUMBER, REQUIRED, Field, degrees
 from geojax.physics import constants as c
 from geojax.physics.forces import ForceModel
 from geojax.physics.geopotential import MAX_DEGREE as MAX_GRAVITY_DEGREE
+from geojax.states.momentum import DEFAULT_CAPACITY_NMS, DEFAULT_INERTIA_KG_M2
 
 MAX_ORBIT_KM = 2.0e6  # beyond Earth's Hill sphere (1.5e6 km)
 MAX_ANGLE_RAD, MAX_ANGLE_DEG = 1.0e3, 1.0e5  # about 160 and 280 turns: more is a unit slip
@@ -140,6 +141,26 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "dynamics": Field(str, "mee", choices=("mee", "cartesian")),
     },
     "duration": {"days": Field(_NUMBER, 365.25, lower=0.0, upper=MAX_DAYS)},
+    # The reaction wheels' momentum of a nadir-pointing body (geojax.states.momentum, docs/momentum.md): carried
+    # only where `wheels = true` (the other keys are refused otherwise); every torque's default is none.
+    "attitude": {
+        "wheels": Field(bool, False, static=True,
+                        doc="carry the reaction wheels' momentum (a nadir-pointing body, three wheels on its axes)"),
+        "wheel_capacity_nms": Field(_NUMBER, DEFAULT_CAPACITY_NMS, lower=0.0, upper=1e6, si="wheel_capacity_nms",
+                                    symbol="h_max", unit="N m s",
+                                    doc="momentum each wheel stores at most; beyond it: status 6, wheels saturated"),
+        "initial_momentum_nms": Field(list, [0.0, 0.0, 0.0], length=3, si="initial_momentum_nms", unit="N m s",
+                                      doc="the wheels' momentum at the start, body axes (x along-track, y "
+                                          "anti-normal, z nadir)"),
+        "inertia_kg_m2": Field(list, list(DEFAULT_INERTIA_KG_M2), length=6, si="inertia_kg_m2", unit="kg m²",
+                               doc="inertia tensor (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) in body axes: the gravity-"
+                                   "gradient torque; default an estimate for Li 2022's 5000 kg class, principal"),
+        "srp_offset_body_m": Field(list, [0.0, 0.0, 0.0], length=3, si="srp_offset_body_m", unit="m",
+                                   doc="centre of pressure less centre of mass, body axes: SRP torque"),
+        "srp_offset_array_m": Field(list, [0.0, 0.0, 0.0], length=3, si="srp_offset_array_m", unit="m",
+                                    doc="centre of pressure less centre of mass along the solar array's axis (the "
+                                        "orbit normal), across it, along its Sun-facing normal: SRP torque"),
+    },
 }
 
 # The keys of ``orbit`` that each ``orbit.elements`` needs (every other one of them must be left out).

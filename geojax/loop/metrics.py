@@ -10,8 +10,13 @@ computed here, inside the rollout's ``jit``:
     3 left the latitude box   (|geocentric latitude| > station.box_half_width_deg at some step start)
     4 non-finite or non-physical state (NaN / inf, or no mass left)
     5 propellant exhausted (the mass reached spacecraft.dry_mass_kg; the thrusters stopped there)
+    6 wheels saturated (a reaction wheel exceeded attitude.wheel_capacity_nms at some step start:
+      ``geojax.states.momentum``; the attitude the loop assumes held is then lost)
 
-in that order of precedence (4, 5, then 2, 3, 1).  The box is checked on the
+in that order of precedence (4, 5, 6, then 2, 3, 1): a saturated sample's later box checks assume an
+attitude it no longer holds, so its saturation is what it reports; it is kept, never dropped.  A further
+state the loop carries (``geojax.states``) adds its metrics (``StateModel.metrics``) and, where it
+fails (``StateModel.status``), its code.  The box is checked on the
 osculating sub-satellite point at every step start of the whole run, the
 acquisition included (Katz 2025 eq. (10)); a sample with status 4 gets
 finite placeholders (0) for its non-finite metrics, so no NaN reaches a
@@ -35,12 +40,14 @@ import numpy as np
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.elements import wrap_angle
 from geojax.params import station_target
+from geojax.states import REGISTRY as STATE_MODELS
 
 SECONDS_PER_YEAR = 365.25 * SECONDS_PER_DAY
 YEAR_CYCLES = round(SECONDS_PER_YEAR / SIDEREAL_DAY_S)  # 366 sidereal-day cycles: the cycles of a one-year run
-STATUS_OK, STATUS_NO_SOLUTION, STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE, STATUS_NO_PROPELLANT = range(6)
+(STATUS_OK, STATUS_NO_SOLUTION, STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE, STATUS_NO_PROPELLANT,
+ STATUS_WHEELS_SATURATED) = range(7)
 STATUS_MEANINGS = ("ok", "cycles without a solution", "left the longitude box", "left the latitude box",
-                   "non-finite or non-physical state", "propellant exhausted")
+                   "non-finite or non-physical state", "propellant exhausted", "wheels saturated")
 STATUS_TEXT = ", ".join(f"{code} {text}" for code, text in enumerate(STATUS_MEANINGS))
 
 # Per-cycle series a sweep may keep (``cycles = true``).
@@ -79,16 +86,24 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int) -> di
     if "fired_s" in cycles.controller:
         out.update(burn_metrics(cycles.controller, n_cycles))
         out.update(dv_split_per_year(cycles.controller, cycles.dv_mps, n_cycles * cycle_s))
+    failures = []  # (failed, code) of the further states, in their order
+    for name, record in cycles.states.items():
+        model = STATE_MODELS[name]
+        values, failed = model.metrics(params, record, n_steps_total, n_cycles * cycle_s)
+        out.update(values)
+        if model.status is not None:
+            failures.append((failed, STATUS_MEANINGS.index(model.status)))
     finite = jnp.all(jnp.isfinite(final.orbit)) & (final.mass_kg > 0)
     for value in out.values():
         finite &= jnp.isfinite(value)
     box = params.station["box_half_width_rad"]
+    status = jnp.where(abs_dlon > box, STATUS_LEFT_LON_BOX,
+                       jnp.where(abs_lat > box, STATUS_LEFT_LAT_BOX,
+                                 jnp.where(out["cycles_without_solution"] > 0, STATUS_NO_SOLUTION, STATUS_OK)))
+    for failed, code in reversed(failures):
+        status = jnp.where(failed, code, status)
     status = jnp.where(~finite, STATUS_NONFINITE,
-                       jnp.where(final.mass_kg <= params.spacecraft["dry_mass_kg"], STATUS_NO_PROPELLANT,
-                       jnp.where(abs_dlon > box, STATUS_LEFT_LON_BOX,
-                                 jnp.where(abs_lat > box, STATUS_LEFT_LAT_BOX,
-                                           jnp.where(out["cycles_without_solution"] > 0, STATUS_NO_SOLUTION,
-                                                     STATUS_OK)))))
+                       jnp.where(final.mass_kg <= params.spacecraft["dry_mass_kg"], STATUS_NO_PROPELLANT, status))
     out = {k: jnp.where(jnp.isfinite(v), v, 0.0) for k, v in out.items()}
     return {**out, "status": status.astype(jnp.int8)}
 
@@ -210,6 +225,10 @@ def cycle_table(records) -> dict[str, np.ndarray]:
         })
     if "solved" in rec:
         table["status"] = np.where(rec["solved"], 0, 1).astype(np.int8)
+    for name, record in c.states.items():
+        columns = STATE_MODELS[name].columns
+        if columns is not None:
+            table.update(columns(record))
     return {k: np.asarray(v) for k, v in table.items()}
 
 

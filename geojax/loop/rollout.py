@@ -62,26 +62,27 @@ class Result(NamedTuple):
 
 
 def rollout(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,
-            dynamics: Dynamics, keep_steps: bool = False):
+            dynamics: Dynamics, keep_steps: bool = False, states: tuple = ()):
     """One sample's closed loop and its metrics: ``(final state, records, metrics)``; pure, vmappable.
 
     ``reference_env`` (the reference's ``loop.setup.Segments``) makes the sample run its own uncontrolled
     reference (``loop.setup.reference``) instead of ``shared.reference``; ``controller``, ``step_s``,
-    ``dynamics`` and ``keep_steps`` are static.
+    ``dynamics``, ``keep_steps`` and ``states`` (the further states carried, ``geojax.states``) are static.
     """
     final, records = loop(params, key, shared, reference_env, controller=controller, step_s=step_s,
-                          dynamics=dynamics, keep_steps=keep_steps)
+                          dynamics=dynamics, keep_steps=keep_steps, states=states)
     return final, records, summarize(params, final, records, step_s, shared.env.earth_angle_rad.shape[1])
 
 
 def loop(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,
-         dynamics: Dynamics, keep_steps: bool = False):
+         dynamics: Dynamics, keep_steps: bool = False, states: tuple = ()):
     """``rollout`` without its metrics: ``(final state, records)``, the records over every cycle of
     ``shared.env`` (the run's first ``shared.n_active``, zeros beyond)."""
     if reference_env is not None:
         shared = shared._replace(reference=reference(params, reference_env, step_s, dynamics,
                                                      controller.reference_cycles))
-    return closed_loop(controller, params, shared, key, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps)
+    return closed_loop(controller, params, shared, key, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps,
+                       states=states)
 
 
 def rollout_fn(batch: Batch, keep_steps: bool = False, controller: Controller | None = None, lanes: int = 1):
@@ -92,18 +93,20 @@ def rollout_fn(batch: Batch, keep_steps: bool = False, controller: Controller | 
     """
     return functools.partial(rollout, shared=batch.shared, reference_env=_reference_env(batch),
                              controller=batch.controller if controller is None else controller,
-                             step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, lanes), keep_steps=keep_steps)
+                             step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, lanes), keep_steps=keep_steps,
+                             states=batch.states)
 
 
 def _reference_env(batch: Batch):
     return batch.reference_env if batch.reference_per_sample else None
 
 
-@functools.partial(jax.jit, static_argnames=("controller", "step_s", "dynamics", "keep_steps"))
-def closed_loop_batch(params, keys, shared, reference_env, controller, step_s, dynamics, keep_steps):
+@functools.partial(jax.jit, static_argnames=("controller", "step_s", "dynamics", "keep_steps", "states"))
+def closed_loop_batch(params, keys, shared, reference_env, controller, step_s, dynamics, keep_steps, states=()):
     """``loop`` vmapped over (params, keys): the closed loop, compiled once per (lanes, cycle slots, controller,
     step, dynamics), whatever the duration within the slots and the epoch."""
-    one = functools.partial(loop, controller=controller, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps)
+    one = functools.partial(loop, controller=controller, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps,
+                            states=states)
     return jax.vmap(one, in_axes=(0, 0, None, None))(params, keys, shared, reference_env)
 
 
@@ -157,7 +160,7 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     lanes = lane_slots(n)
     args = (pad_lanes(params, lanes), pad_lanes(keys, lanes), batch.shared, _reference_env(batch))
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, lanes),
-                  keep_steps=keep_steps)
+                  keep_steps=keep_steps, states=batch.states)
     compile_s = run_s = float("nan")
     summarized = dict(n_cycles=batch.n_cycles, step_s=batch.step_s,
                       steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1])

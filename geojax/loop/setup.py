@@ -35,6 +35,7 @@ from geojax.loop.simulate import Shared, simulate
 from geojax.params import LEAF_TABLES, Params, static_settings, table_leaves
 from geojax.physics.propagate import DYNAMICS, Dynamics, environment_grid, steps_per_cycle
 from geojax.scenario import SCHEMA, Scenario, controller_fields
+from geojax.states import of_config as states_of
 
 
 # Cycles between re-starts of the predictor's reference from the station's nominal state (``control.predictor``).
@@ -76,6 +77,7 @@ class Batch(NamedTuple):
     n_cycles: int  # the run's cycles; ``shared.env`` may hold more (``cycle_slots``), skipped at run time
     reference_env: Segments | None  # where the reference runs; None for a controller that reads none
     reference_per_sample: bool  # each sample runs its own reference (its initial state or forces differ)
+    states: tuple = ()  # the further states the loop carries (``geojax.states.of_config``), static
 
 
 def cycle_count(days: float) -> int:
@@ -93,6 +95,8 @@ def params_of(sc: Scenario, controller: Controller) -> Params:
     fields = {t: SCHEMA[t] for t in LEAF_TABLES if t != "controller"}
     fields["controller"] = controller.fields
     leaves = {t: table_leaves(cfg[t], fields[t]) for t in LEAF_TABLES}
+    if not cfg["attitude"]["wheels"]:
+        leaves["attitude"] = {}  # no state, no leaf
     return Params(initial, fm, **leaves)
 
 
@@ -144,7 +148,8 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
         # programs; their values at other lengths differ in the last bit, XLA's vector and scalar loops), then
         # repeated into the slots the loop skips.
         shared = Shared(*_padded((cycles_env, ref), n_slots), jnp.asarray(n_cycles, jnp.int32))
-    return Batch(controller, stacked, shared, step_s, dynamics, n_cycles, segments, per_sample)
+    return Batch(controller, stacked, shared, step_s, dynamics, n_cycles, segments, per_sample,
+                 states_of(first.config))
 
 
 def _padded(tree, n_slots: int):
@@ -191,7 +196,8 @@ STATIC_KEYS = {"integration.step_s": lambda sc: steps_per_cycle(sc.step_s), "dur
                "forces.gravity_degree": lambda sc: (sc.config["forces"]["gravity_degree"],
                                                     sc.config["forces"]["gravity_order"]),
                "forces.moon_shadow": lambda sc: sc.config["forces"]["moon_shadow"],
-               "forces.ephemeris": lambda sc: sc.config["forces"]["ephemeris"]}
+               "forces.ephemeris": lambda sc: sc.config["forces"]["ephemeris"],
+               "attitude.wheels": lambda sc: sc.config["attitude"]["wheels"]}
 
 
 def _check_static(scenarios: list[Scenario], controller: Controller, skip: tuple[str, ...] = ()) -> None:

@@ -26,6 +26,12 @@ eq. (9)), the boundary elements the reference needs, the Delta-V delivered,
 the extremes of the step records (so box checks cover every step without
 keeping the steps) and the controller's own records.  Per-step records are
 kept only on request (``keep_steps``).
+
+Beyond the orbit and the mass the loop carries the spacecraft's further states (``geojax.states``: the wheels'
+momentum), one extension point: ``states`` is a static tuple of ``StateModel`` s whose states ride in the carry
+(a dict by name), updated after each orbit step (``StateModel.step``) and at each cycle start
+(``StateModel.cycle``), with records in ``CycleRecord.states`` and ``StepRecord.states``.  With none, every dict
+is empty: no leaf, the same program and numbers.
 """
 
 from __future__ import annotations
@@ -45,6 +51,7 @@ from geojax.physics.fusion import materialized
 from geojax.physics.integrate import rk4_step
 from geojax.params import Params
 from geojax.physics.propagate import MEE, CycleMeans, Dynamics, cycle_means
+from geojax.states.base import STATE_KEY_OFFSET, CycleStart, StateModel, StepContext
 
 # Li 2022, eq. (48): nominal 3-sigma determination errors per component, scaled by H_rv (the attitude's:
 # control.burns).
@@ -90,6 +97,7 @@ class CycleRecord(NamedTuple):
     lat_max_rad: jnp.ndarray
     firing_steps: jnp.ndarray  # [3] steps whose delivered acceleration has an ECEF x, y, z component
     controller: dict  # ``controller.record(plan)``
+    states: dict  # {name: ``StateModel.summary``} of each further state the loop carries (``geojax.states``)
 
 
 class StepRecord(NamedTuple):
@@ -98,6 +106,7 @@ class StepRecord(NamedTuple):
     lon_rad: jnp.ndarray  # geocentric sub-satellite longitude
     lat_rad: jnp.ndarray  # geocentric sub-satellite latitude
     accel_ecef_mps2: jnp.ndarray  # [..., 3] delivered thrust acceleration, ECEF axes
+    states: dict  # {name: step record} of each further state the loop carries
 
 
 class Records(NamedTuple):
@@ -116,11 +125,12 @@ class Shared(NamedTuple):
 
 
 def simulate(controller: Controller, params: Params, shared: Shared, key, *, step_s: float,
-             dynamics: Dynamics = MEE, keep_steps: bool = False):
+             dynamics: Dynamics = MEE, keep_steps: bool = False, states: tuple[StateModel, ...] = ()):
     """Closed loop over the cycles of ``shared.env``; returns (final ``SpacecraftState``, ``Records``).
 
     Pure: vmap it over ``params`` and ``key`` for a batch, differentiate it with respect to ``params``.
-    ``controller``, ``step_s``, ``dynamics`` and ``keep_steps`` are static.
+    ``controller``, ``step_s``, ``dynamics``, ``keep_steps`` and ``states`` (the further states carried,
+    ``geojax.states``) are static.
     """
     env = shared.env
     n_cycles, n_steps = env.earth_angle_rad.shape[:2]
@@ -143,10 +153,11 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
         return CycleContext(k, k * cycle_s, cycle_s, step_s, env_steps, window, fm)
 
     def one_cycle(carry, xs):
-        state, controller_state = carry
+        state, controller_state, extra = carry
         k, env_steps, osc_ref_k, window = xs
         cycle_key = jax.random.fold_in(key, k)
         ctx = context(k, env_steps, window)
+        extra = _cycle_start(states, params, extra, dynamics, state, k, ctx.t_s, cycle_key, mu)
         fix = measured_mee(dynamics, state.orbit, jax.random.normal(cycle_key, (2, 6))[0], params.errors, mu)
         if width:
             mean = estimate_mean(boundary_elements(fix, env_steps.earth_angle_rad[0, 0]), osc_ref_k, window[0], mu)
@@ -156,7 +167,7 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
         plan, controller_state = controller.plan(params, controller_state, estimate, ctx, cycle_key)
 
         def step(carry, xs):
-            state, (fghk_sum, a_sum) = carry
+            state, (fghk_sum, a_sum), extra = carry
             j, env3 = xs
             r, v = dynamics.rv_xyz(state.orbit, mu)  # components: no [3] vectors in the step's kernels
             thrust = controller.thrust(params, plan, ctx.t_s + j * step_s, state,
@@ -170,14 +181,18 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
             accel_ecef = jnp.stack(east(rsw_to_eci_xyz((accel * d[0], accel * d[1], accel * d[2]), r, v)))
             mee = dynamics.to_mee(state.orbit, mu)
             sums = (fghk_sum + mee[1:5], a_sum + semi_major_axis_m(mee))  # for the cycle means, summed as it goes
-            return (rk4_step(dynamics.rhs, state, env3, fm, thrust, step_s), sums), (lon, tan_lat, accel_ecef)
+            new = rk4_step(dynamics.rhs, state, env3, fm, thrust, step_s)
+            extra, extra_steps = _steps(states, params, extra, dynamics, state, new, r, v, thrust, env3,
+                                        ctx.t_s + j * step_s, step_s, mu)
+            return (new, sums, extra), (lon, tan_lat, accel_ecef, extra_steps)
 
         # (A carry of six separate scalars instead of the orbit array [6] was measured slower: 3.2-5.2 against
         # 1.6-1.8 us per RHS unbatched, 146-153 against 124-128 ns at batch 1024.  The mean elements' sums are
         # carried rather than the step states stacked: 44.6 against 41.1 ns per RHS at 512 lanes.)
         zero = jnp.zeros((), state.orbit.dtype)
-        (final, (fghk_sum, a_sum)), (lon, tan_lat, accel) = jax.lax.scan(
-            jax.checkpoint(step), (state, (jnp.zeros(4, state.orbit.dtype), zero)), (jnp.arange(n_steps), env_steps))
+        (final, (fghk_sum, a_sum), extra_end), (lon, tan_lat, accel, extra_steps) = jax.lax.scan(
+            jax.checkpoint(step), (state, (jnp.zeros(4, state.orbit.dtype), zero), extra),
+            (jnp.arange(n_steps), env_steps))
         # the cycle's mean elements from the step starts' records and the end state, whose longitude and
         # latitude are stored once (``materialized``: else XLA's CPU fusion evaluates them again for each of the
         # n samples of every kernel that appends them)
@@ -198,20 +213,47 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
             means, boundary_elements(dynamics.to_mee(state.orbit, mu), env_steps.earth_angle_rad[0, 0]),
             final.dv_mps - state.dv_mps, jnp.min(dlon), jnp.max(dlon), jnp.sum(dlon), latitude_rad(jnp.min(tan_lat)),
             latitude_rad(jnp.max(tan_lat)),
-            firing, {} if controller.record is None else controller.record(plan))
-        steps = StepRecord(lon, latitude_rad(tan_lat), accel) if keep_steps else None
-        return (final, controller_state), (record, steps)
+            firing, {} if controller.record is None else controller.record(plan),
+            {m.name: m.summary(params, extra[m.name], extra_end[m.name], extra_steps[m.name]) for m in states})
+        steps = StepRecord(lon, latitude_rad(tan_lat), accel, extra_steps) if keep_steps else None
+        return (final, controller_state, extra_end), (record, steps)
 
     initial_state = controller.init(params, context(jnp.asarray(0), jax.tree_util.tree_map(lambda x: x[0], env),
                                                     windows[0]))
     xs = (jnp.arange(n_cycles), env, osc_ref, windows)
-    carry = (params.initial, initial_state)
+    r0, v0 = position_velocity(dynamics, params.initial.orbit, mu) if states else (None, None)
+    carry = (params.initial, initial_state, {m.name: m.init(params, r0, v0) for m in states})
     body = jax.checkpoint(one_cycle)
     if shared.n_active is None:
-        (final, _), (cycles, steps) = jax.lax.scan(body, carry, xs)
+        (final, _, _), (cycles, steps) = jax.lax.scan(body, carry, xs)
     else:
-        (final, _), (cycles, steps) = _scan_first(body, carry, xs, shared.n_active)
+        (final, _, _), (cycles, steps) = _scan_first(body, carry, xs, shared.n_active)
     return final, Records(cycles, steps)
+
+
+def _cycle_start(states, params, extra: dict, dynamics, state, k, t_s, cycle_key, mu) -> dict:
+    """The further states after their ``cycle`` hooks at a cycle start (unchanged without hooks)."""
+    hooked = [(place, m) for place, m in enumerate(states) if m.cycle is not None]
+    if not hooked:
+        return extra
+    r, v = position_velocity(dynamics, state.orbit, mu)
+    extra = dict(extra)
+    for place, m in hooked:
+        start = CycleStart(k, t_s, r, v, state.mass_kg, jax.random.fold_in(cycle_key, STATE_KEY_OFFSET + place))
+        extra[m.name] = m.cycle(params, extra[m.name], start)
+    return extra
+
+
+def _steps(states, params, extra: dict, dynamics, state, new, r, v, thrust, env3, t_s, step_s, mu):
+    """The further states after one orbit step from ``state`` to ``new`` (``r``, ``v``: the start's
+    components), and their step records: ({name: state}, {name: record}); ({}, {}) without states."""
+    if not states:
+        return {}, {}
+    r_end, v_end = position_velocity(dynamics, new.orbit, mu)
+    ctx = StepContext(t_s, step_s, env3, jnp.stack(r), jnp.stack(v), r_end, v_end, state.mass_kg, thrust,
+                      params.forces)
+    stepped = {m.name: m.step(params, extra[m.name], ctx) for m in states}
+    return {name: s for name, (s, _) in stepped.items()}, {name: rec for name, (_, rec) in stepped.items()}
 
 
 def _scan_first(body, carry, xs, n_active):

@@ -1,0 +1,100 @@
+"""The keys planned for a scenario's ``[navigation]`` table, declared as ``params.Field``s, and their validation.
+
+Not yet in the scenario schema (``geojax.scenario_schema``): the filter is not in the closed loop.  ``validate``
+checks a table as the schema will, one ``ValueError`` naming the key (``navigation.stations[0].lat_deg: ...``),
+so that the checks exist, tested, before the keys are wired.
+"""
+
+from __future__ import annotations
+
+import math
+
+from geojax.navigation.measurements import MODELS
+from geojax.params import NUMBER, REQUIRED, Field, check_table, degrees
+
+MAX_SIGMA = 1.0e6  # no measurement noise or bias reaches this in its unit (1000 km, 1000 km/s): a unit slip
+
+SIGMA = dict(lower=0.0, upper=MAX_SIGMA, lower_inclusive=True)
+DAY_S = 86400.0
+
+FIELDS = {
+    "model": Field(str, "gaussian_fix", choices=("gaussian_fix", "ekf"),
+                   doc="Li 2022's Gaussian fix (today's numbers) or the extended Kalman filter"),
+    "filter_forces": Field(str, "loop", choices=("loop", "two_body"),
+                           doc="the filter's prediction model: the loop's force model, or point-mass gravity"),
+    "snc_mps2_per_rthz": Field(NUMBER, 0.0, **SIGMA, si="snc_mps2_per_rthz",
+                               doc="state-noise compensation: white acceleration noise density per axis"),
+    "burn_magnitude_sigma_pct": Field(NUMBER, 0.0, lower=0.0, upper=100.0, lower_inclusive=True,
+                                      si="burn_magnitude_sigma", to_si=0.01, doc="burn magnitude error, 1 sigma"),
+    "burn_pointing_sigma_deg": Field(NUMBER, 0.0, lower=0.0, upper=90.0, lower_inclusive=True,
+                                     si="burn_pointing_sigma_rad", to_si=degrees,
+                                     doc="burn pointing error per perpendicular axis, 1 sigma"),
+    "initial_sigma_r_m": Field(NUMBER, 1000.0, **SIGMA, doc="the filter's initial position sigma per axis"),
+    "initial_sigma_v_mps": Field(NUMBER, 0.1, **SIGMA, doc="the filter's initial velocity sigma per axis"),
+    "stations": Field(list, [], doc="the ground stations, a list of tables ([[navigation.stations]])"),
+    "gnss": Field(dict, None, doc="a GNSS-in-GEO receiver ([navigation.gnss]); absent: none"),
+}
+
+SCHEDULE_FIELDS = {
+    "cadence_s": Field(NUMBER, DAY_S, lower=0.0, upper=1.0e3 * DAY_S, doc="time between pass starts"),
+    "pass_s": Field(NUMBER, DAY_S, lower=0.0, upper=1.0e3 * DAY_S, doc="pass length (= cadence_s: continuous)"),
+    "phase_s": Field(NUMBER, 0.0, lower=-1.0e3 * DAY_S, upper=1.0e3 * DAY_S, lower_inclusive=True,
+                     doc="start of a pass, s since the start of the run"),
+    "outages_s": Field(list, [], doc="windows [start_s, stop_s] without tracking"),
+}
+
+STATION_FIELDS = {
+    "lat_deg": Field(NUMBER, REQUIRED, lower=-90.0, upper=90.0, lower_inclusive=True, doc="geodetic latitude (WGS-84)"),
+    "lon_deg": Field(NUMBER, REQUIRED, lower=-180.0, upper=360.0, lower_inclusive=True, doc="east longitude"),
+    "alt_m": Field(NUMBER, 0.0, lower=-1.0e4, upper=1.0e5, doc="height above the WGS-84 ellipsoid"),
+    "mask_deg": Field(NUMBER, 5.0, lower=-90.0, upper=90.0, lower_inclusive=True, doc="elevation mask"),
+    "measurements": Field(list, ["range"], doc=f"measurement types, of {', '.join(k for k in MODELS if k != 'gnss')}"),
+    "range_sigma_m": Field(NUMBER, 5.0, **SIGMA, doc="two-way range noise, 1 sigma"),
+    "range_bias_sigma_m": Field(NUMBER, 0.0, **SIGMA, doc="range bias drawn per sample, 1 sigma"),
+    "range_rate_sigma_mps": Field(NUMBER, 1.0e-3, **SIGMA, doc="two-way range-rate noise, 1 sigma"),
+    "range_rate_bias_sigma_mps": Field(NUMBER, 0.0, **SIGMA, doc="range-rate bias drawn per sample, 1 sigma"),
+    "angles_sigma_deg": Field(NUMBER, 0.01, **SIGMA, doc="azimuth and elevation noise, 1 sigma each"),
+    "angles_bias_sigma_deg": Field(NUMBER, 0.0, **SIGMA, doc="azimuth and elevation bias per sample, 1 sigma"),
+    **SCHEDULE_FIELDS,
+}
+
+GNSS_FIELDS = {
+    "sigma_m": Field(NUMBER, 10.0, **SIGMA, doc="position-fix noise per axis, 1 sigma"),
+    "bias_sigma_m": Field(NUMBER, 0.0, **SIGMA, doc="position-fix bias per axis drawn per sample, 1 sigma"),
+    **SCHEDULE_FIELDS,
+}
+
+
+def validate(table: dict, prefix: str = "navigation.") -> dict:
+    """The ``[navigation]`` table checked and completed with defaults; ``ValueError`` naming the first bad key."""
+    out = check_table(prefix, table, FIELDS)
+    if not out["stations"] and out["gnss"] is None and out["model"] == "ekf":
+        raise ValueError(f"{prefix}stations: the filter needs a station or [{prefix}gnss], got neither")
+    out["stations"] = [_station(f"{prefix}stations[{i}].", s) for i, s in enumerate(out["stations"])]
+    if out["gnss"] is not None:
+        out["gnss"] = _tracker(f"{prefix}gnss.", out["gnss"], GNSS_FIELDS)
+    return out
+
+
+def _station(prefix: str, table) -> dict:
+    out = _tracker(prefix, table, STATION_FIELDS)
+    kinds = [k for k in MODELS if k != "gnss"]
+    if not out["measurements"]:
+        raise ValueError(f"{prefix}measurements: must name at least one of {', '.join(map(repr, kinds))}, got []")
+    for i, kind in enumerate(out["measurements"]):
+        if kind not in kinds:
+            raise ValueError(f"{prefix}measurements[{i}]: must be one of {', '.join(map(repr, kinds))}, got {kind!r}")
+    return out
+
+
+def _tracker(prefix: str, table, fields: dict) -> dict:
+    """A station's or the receiver's table, with its schedule's checks across keys."""
+    out = check_table(prefix, table, fields)
+    if out["pass_s"] > out["cadence_s"]:
+        raise ValueError(f"{prefix}pass_s: must be <= cadence_s ({out['cadence_s']:g}), got {out['pass_s']!r}")
+    for i, window in enumerate(out["outages_s"]):
+        if not (isinstance(window, list) and len(window) == 2
+                and all(isinstance(x, NUMBER) and not isinstance(x, bool) and math.isfinite(x) for x in window)
+                and window[0] < window[1]):
+            raise ValueError(f"{prefix}outages_s[{i}]: must be [start_s, stop_s] with start_s < stop_s, got {window!r}")
+    return out

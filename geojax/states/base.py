@@ -1,0 +1,82 @@
+"""The protocol of the loop's further states (DESIGN.md layer 5): data plus pure functions, as controllers are.
+
+Beyond the orbit and the mass, the closed loop (``geojax.loop.simulate``) carries further states of the
+spacecraft -- the wheels' momentum (``states.momentum``), later a navigation filter's estimate and covariance --
+through one extension point: a tuple of ``StateModel`` s, static (chosen from the scenario,
+``states.of_config``), whose states ride in the loop's carry and whose records in ``CycleRecord.states`` and
+``StepRecord.states``, dicts keyed by the model's ``name``.  A model is pure functions in the optax manner:
+
+* ``init(params, r_eci_m, v_eci_mps) -> state``: once, from the true initial position and velocity;
+* ``cycle(params, state, start) -> state`` (optional): at each cycle's start, before the controller plans
+  (``CycleStart``: the true state, the cycle's key);
+* ``step(params, state, context) -> (state, step_record)``: once per integration step, after the orbit's step
+  (``StepContext``: the true state at the step's start and end, the thrust held over it, the environment);
+* ``summary(params, state_at_start, state_at_end, step_records) -> cycle_record``: the cycle's record from the
+  step records ([n_steps, ...]), kept always (extremes, so a check covers every step without keeping them);
+* ``metrics(params, cycle_records, n_steps_total, run_s) -> ({name: []}, failed)``: its scalar metrics (units in
+  the names) and whether the sample failed in its way; ``status`` is then the meaning of the status code that
+  ``failed`` sets (one of ``loop.metrics.STATUS_MEANINGS``; None: never fails);
+* ``columns(cycle_records) -> {name: numpy array}`` (optional): its per-cycle series in edge units (``/cycles``).
+
+With no model (every scenario that asks for none) the carry and the records hold empty dicts: no leaf, the same
+program, every number as without the extension point (``tests/test_momentum.py`` checks it against main's code).
+
+How a navigation filter fits: its state is the estimate and covariance; ``cycle`` runs the update
+with the cycle's measurement (drawn from ``CycleStart.key``), ``step`` the time update with the thrust flown, and
+the controller's ``Estimate`` is then read from it -- the one hook not built yet, a model's optional
+``estimate(params, state, estimate) -> Estimate`` that the loop would call where it builds the estimate today.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, NamedTuple
+
+import jax.numpy as jnp
+
+from geojax.physics.dynamics import Thrust
+from geojax.physics.forces import Environment, ForceModel
+
+
+class CycleStart(NamedTuple):
+    """What the loop tells ``StateModel.cycle`` at a cycle's start."""
+
+    index: jnp.ndarray  # [] int, cycle number from 0
+    t_s: jnp.ndarray  # [] s since the start of the run
+    r_eci_m: jnp.ndarray  # [3] true position
+    v_eci_mps: jnp.ndarray  # [3] true velocity
+    mass_kg: jnp.ndarray  # []
+    key: jnp.ndarray  # the model's own key this cycle: fold_in(the cycle's key, STATE_KEY_OFFSET + its place)
+
+
+# A model's key at a cycle start is the cycle's key folded with this plus its place in the tuple, apart from the
+# streams the loop and the controllers draw (rows of normal(key_k), fold_in(key_k, 1)).
+STATE_KEY_OFFSET = 1 << 16
+
+
+class StepContext(NamedTuple):
+    """What the loop tells ``StateModel.step`` about an integration step."""
+
+    t_s: jnp.ndarray  # [] step start, s since the start of the run
+    step_s: float
+    env: Environment  # at the step's three RK4 stage times (start, middle, end), leaves [3, ...]
+    r_eci_m: jnp.ndarray  # [3] true position at the step start
+    v_eci_mps: jnp.ndarray  # [3] true velocity at the step start
+    r_end_eci_m: jnp.ndarray  # [3] true position at the step end
+    v_end_eci_mps: jnp.ndarray  # [3] true velocity at the step end
+    mass_kg: jnp.ndarray  # [] at the step start
+    thrust: Thrust  # held over the step (as flown: stopped without propellant)
+    force_model: ForceModel
+
+
+class StateModel(NamedTuple):
+    """A further state of the spacecraft that the loop carries (the protocol above).  Its functions are
+    module-level, so a model is the same hashable object every time (a static argument of the compiled loop)."""
+
+    name: str  # its key in the loop's carry and records, and its table's name in ``states.REGISTRY``
+    init: Callable
+    step: Callable
+    summary: Callable
+    metrics: Callable
+    cycle: Callable | None = None
+    status: str | None = None
+    columns: Callable | None = None
