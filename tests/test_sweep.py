@@ -189,9 +189,15 @@ def test_fompc_results_do_not_depend_on_the_device_count_or_the_width(tmp_path):
     assert a["status"]["code"][0, 1].tolist() == [3, 3]  # the wide Delta-i limit leaves the latitude box
     for other in others:
         b = store.read_h5(other)[0]
-        for group in ("metrics", "cycles", "status"):
+        for group in ("metrics", "status"):
             for name in a[group]:
                 np.testing.assert_array_equal(b[group][name], a[group][name], err_msg=f"{other.name}: {group}/{name}")
+        # The per-cycle series to the last bit but one: on an AMD EPYC without AVX-512 (jaxlib 0.10.2) one cycle
+        # mean of 80, lon_deg[0, 1, 0, 15], moved by one unit in the last place (4.4e-16) at 128 lanes, at main
+        # 66ca5fa as well; every metric and status stays bit for bit.
+        for name in a["cycles"]:
+            np.testing.assert_allclose(b["cycles"][name], a["cycles"][name], rtol=1e-15, atol=0,
+                                       err_msg=f"{other.name}: cycles/{name}")
 
 
 def test_a_stray_parts_folder_is_refused_in_one_line(tmp_path, capsys):
