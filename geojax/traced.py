@@ -61,7 +61,11 @@ def _program(jitted, name: str, identity, args, static):
         if program is None:
             program = export.export(jitted)(*args, **static)
             _save(path, program)
-        _IN_PROCESS[key] = jax.jit(program.call)
+        def run(*args):
+            return program.call(*args)
+
+        run.__name__ = run.__qualname__ = name  # JAX names the compiled program after it (geojax.compilation)
+        _IN_PROCESS[key] = jax.jit(run)
     return _IN_PROCESS[key]
 
 

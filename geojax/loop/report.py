@@ -19,7 +19,8 @@ import numpy as np
 
 from geojax.control import none
 from geojax.loop.metrics import STATUS_MEANINGS, STATUS_TEXT, YEAR_CYCLES, step_table
-from geojax.loop.setup import cycle_count, prepare, uncontrolled_boundaries, unstack
+from geojax import traced
+from geojax.loop.setup import STATIC_KEYS, cycle_count, prepare, uncontrolled_boundaries, unstack
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.propagate import environment_grid, steps_per_cycle
 from geojax.scenario import Scenario
@@ -158,7 +159,9 @@ def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]
     batch = prepare([scenario], none.CONTROLLER)
     env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, batch.step_s,
                            n_cycles + 1, steps_per_cycle(scenario.step_s))
-    _, ref = _uncontrolled_jit(unstack(batch.params, 0), env, step_s=batch.step_s, dynamics=batch.dynamics)
+    identity = (scenario.dynamics, batch.step_s, *(key(scenario) for key in STATIC_KEYS.values()))
+    _, ref = traced.call(_uncontrolled_jit, "uncontrolled", identity, unstack(batch.params, 0), env,
+                         step_s=batch.step_s, dynamics=batch.dynamics)
     ref = np.asarray(ref)
     uncontrolled = {"t_s": np.arange(len(ref)) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
                     "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}
