@@ -20,7 +20,7 @@ import numpy as np
 from geojax.control import none
 from geojax.loop.metrics import STATUS_MEANINGS, STATUS_TEXT, YEAR_CYCLES, step_table
 from geojax import traced
-from geojax.loop.setup import STATIC_KEYS, cycle_count, prepare, uncontrolled_boundaries, unstack
+from geojax.loop.setup import cycle_count, prepare, program_identity, uncontrolled_boundaries, unstack
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.propagate import environment_grid, steps_per_cycle
 from geojax.scenario import Scenario
@@ -159,7 +159,7 @@ def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]
     batch = prepare([scenario], none.CONTROLLER)
     env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, batch.step_s,
                            n_cycles + 1, steps_per_cycle(scenario.step_s))
-    identity = (scenario.dynamics, batch.step_s, *(key(scenario) for key in STATIC_KEYS.values()))
+    identity = program_identity(scenario, "uncontrolled", batch.step_s)
     _, ref = traced.call(_uncontrolled_jit, "uncontrolled", identity, unstack(batch.params, 0), env,
                          step_s=batch.step_s, dynamics=batch.dynamics)
     ref = np.asarray(ref)

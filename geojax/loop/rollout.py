@@ -22,7 +22,7 @@ from geojax.loop.metrics import cycle_table, summarize
 from geojax.export import trajectory
 from geojax.loop import report
 from geojax import traced
-from geojax.loop.setup import STATIC_KEYS, Batch, controller_of, prepare, reference, unstack
+from geojax.loop.setup import Batch, controller_of, prepare, program_identity, reference, unstack
 from geojax.params import static_settings
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
@@ -165,13 +165,14 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     summarized = dict(n_cycles=batch.n_cycles, step_s=batch.step_s,
                       steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1])
     # A registered controller's programs are kept traced between runs (``geojax.traced``); a user's are not.
-    identity = None if controller is not None else (
-        scenarios[0].controller, repr(sorted(static_settings(scenarios[0].config["controller"],
-                                                              batch.controller.fields).items())),
-        scenarios[0].dynamics, lanes, keep_steps, batch.step_s, *(key(scenarios[0]) for key in STATIC_KEYS.values()))
+    identity = None if controller is not None else program_identity(
+        scenarios[0], scenarios[0].controller, repr(sorted(static_settings(scenarios[0].config["controller"],
+                                                                        batch.controller.fields).items())),
+        lanes, keep_steps, batch.step_s)
+    per_duration = None if identity is None else (*identity, batch.n_cycles)  # the metrics' static cycle count
     if on_compiled is None:
         final, records = traced.call(closed_loop_batch, "closed_loop", identity, *args, **static)
-        metrics = traced.call(metrics_batch, "metrics", identity, args[0], final, records, **summarized)
+        metrics = traced.call(metrics_batch, "metrics", per_duration, args[0], final, records, **summarized)
     else:
         begun = time.perf_counter()
         loop_program = traced.compiled(closed_loop_batch, "closed_loop", identity, *args, **static)
@@ -180,7 +181,8 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
         begun = time.perf_counter()
         final, records = jax.block_until_ready(loop_program(*args))
         run_s = time.perf_counter() - begun
-        metrics_program = traced.compiled(metrics_batch, "metrics", identity, args[0], final, records, **summarized)
+        metrics_program = traced.compiled(metrics_batch, "metrics", per_duration, args[0], final, records,
+                                          **summarized)
         begun = time.perf_counter()
         metrics = jax.block_until_ready(metrics_program(args[0], final, records))
         run_s += time.perf_counter() - begun

@@ -139,7 +139,7 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     segments = reference_segments(env, n_cycles, width, segment_cycles) if width else None
     ref = None
     if width and not per_sample:
-        identity = (first.dynamics, step_s, width, *(key(first) for key in STATIC_KEYS.values()))
+        identity = program_identity(first, "reference", step_s, width)
         ref = traced.call(_reference_jit, "reference", identity, params[0], segments, step_s=step_s, dynamics=dynamics,
                           width=width)
     shared = Shared(cycles_env, ref)
@@ -198,6 +198,14 @@ STATIC_KEYS = {"integration.step_s": lambda sc: steps_per_cycle(sc.step_s), "dur
                "forces.moon_shadow": lambda sc: sc.config["forces"]["moon_shadow"],
                "forces.ephemeris": lambda sc: sc.config["forces"]["ephemeris"],
                "attitude.wheels": lambda sc: sc.config["attitude"]["wheels"]}
+
+
+def program_identity(sc: Scenario, *settings) -> tuple:
+    """What, beside the arguments' shapes, fixes a traced program of ``sc`` (``geojax.traced``): the keys of
+    ``STATIC_KEYS`` but the duration and the epoch, whose values reach the programs as arguments (the environment
+    grid, the cycle count, shapes of their own), and the caller's ``settings`` (controller, lanes, ...)."""
+    return (*settings, *(value(sc) for key, value in STATIC_KEYS.items()
+                         if key not in ("duration.days", "epoch.utc", "epoch.ut1_minus_utc_s")))
 
 
 def _check_static(scenarios: list[Scenario], controller: Controller, skip: tuple[str, ...] = ()) -> None:
