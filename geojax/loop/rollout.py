@@ -16,6 +16,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from geojax.control import REGISTRY
 from geojax.control.base import Controller, keeps_steps
 from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
@@ -165,7 +166,8 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     summarized = dict(n_cycles=batch.n_cycles, step_s=batch.step_s,
                       steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1])
     # A registered controller's programs are kept traced between runs (``geojax.traced``); a user's are not.
-    identity = None if controller is not None else program_identity(
+    shipped = controller is None and scenarios[0].controller in REGISTRY  # its code is in traced's digest
+    identity = None if not shipped else program_identity(
         scenarios[0], scenarios[0].controller, repr(sorted(static_settings(scenarios[0].config["controller"],
                                                                         batch.controller.fields).items())),
         lanes, keep_steps, batch.step_s)
