@@ -61,8 +61,9 @@ def _program(jitted, name: str, identity, args, static):
         if program is None:
             program = export.export(jitted)(*args, **static)
             _save(path, program)
-        def run(*args):
-            return program.call(*args)
+
+        def run(*values):
+            return program.call(*values)
 
         run.__name__ = run.__qualname__ = name  # JAX names the compiled program after it (geojax.compilation)
         _IN_PROCESS[key] = jax.jit(run)
