@@ -62,6 +62,10 @@ DESCRIPTIONS = {
     "burns_per_thruster_per_orbit": "burns per thruster per orbit",
     "mean_beta_deg": "mean pitch angle of the burns",
     "cycles_without_solution": "cycles whose plan had no solution",
+    # controller.recovery (geojax.control.recovery)
+    "recovery_cycles": "cycles flown by the re-acquisition law (controller.recovery), out of the box or unsolved",
+    "dv_recovery_mps": "delta-V of the re-acquisition law's cycles (included in dv_per_year_mps)",
+    "recovering": "whether the re-acquisition law flew this cycle (controller.recovery)",
     "code": "status: " + STATUS_TEXT,
     "lon_deg": "one-cycle mean longitude (east)",
     "ex": "one-cycle mean eccentricity vector, x (MEE f)", "ey": "one-cycle mean eccentricity vector, y (MEE g)",

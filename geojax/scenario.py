@@ -337,7 +337,7 @@ def controller_fields(table, controller=None) -> dict[str, Field]:
     kind = table.get("kind", "none") if isinstance(table, dict) else "none"
     if kind == OWN_KIND:
         return {"kind": Field(str, OWN_KIND)}
-    return {"kind": Field(str, "none"), **_lookup(kind).FIELDS}
+    return {**SCHEMA["controller"], **_lookup(kind).FIELDS}
 
 
 def _check_orbit(orbit: dict) -> None:

@@ -39,6 +39,7 @@ import numpy as np
 
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.elements import wrap_angle
+from geojax.control.recovery import recovery_metrics
 from geojax.params import station_target
 from geojax.states import REGISTRY as STATE_MODELS
 
@@ -86,6 +87,8 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int) -> di
     if "fired_s" in cycles.controller:
         out.update(burn_metrics(cycles.controller, n_cycles))
         out.update(dv_split_per_year(cycles.controller, cycles.dv_mps, n_cycles * cycle_s))
+    if "recovering" in cycles.controller:  # control.recovery: its cycles and Delta-V apart
+        out.update(recovery_metrics(cycles.controller, cycles.dv_mps))
     failures = []  # (failed, code) of the further states, in their order
     for name, record in cycles.states.items():
         model = STATE_MODELS[name]
@@ -225,6 +228,8 @@ def cycle_table(records) -> dict[str, np.ndarray]:
         })
     if "solved" in rec:
         table["status"] = np.where(rec["solved"], 0, 1).astype(np.int8)
+    if "recovering" in rec:
+        table["recovering"] = np.asarray(rec["recovering"]).astype(np.int8)
     for name, record in c.states.items():
         columns = STATE_MODELS[name].columns
         if columns is not None:

@@ -24,7 +24,7 @@ import numpy as np
 
 from geojax import traced
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
-from geojax.control import lookup, none
+from geojax.control import lookup, recovery, none
 from geojax.control.base import Controller
 from geojax.control.predictor import Reference, station_mee
 from geojax.physics.dynamics import SpacecraftState
@@ -105,7 +105,11 @@ def controller_of(scenarios: list[Scenario]) -> Controller:
     kinds = {sc.controller for sc in scenarios}
     if len(kinds) > 1:
         raise ValueError(f"controller.kind: one per batch, got {sorted(kinds)}")
-    return lookup(kinds.pop()).make([sc.config["controller"] for sc in scenarios])
+    tables = [sc.config["controller"] for sc in scenarios]
+    if len({table.get("recovery", False) for table in tables}) > 1:
+        raise ValueError("controller.recovery: sets the compiled controller; one value per batch")
+    controller = lookup(kinds.pop()).make(tables)
+    return recovery.with_recovery(controller) if tables[0].get("recovery", False) else controller
 
 
 def prepare(scenarios: list[Scenario], controller: Controller | None = None,
