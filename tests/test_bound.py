@@ -192,6 +192,7 @@ def ten_days():
     return sc, bound(sc, free_end=True)
 
 
+@pytest.mark.slow
 def test_bound_holds_the_box_and_never_exceeds_a_controller(ten_days):
     # li2022 over 10 days: the re-simulated plan holds the box in the closed loop, its Delta-V is the plan's,
     # and the QFFC (which also holds the box, and need not end where it started) flies at least the free-end bound.
@@ -228,6 +229,7 @@ def test_periodic_end_returns_to_the_start_and_costs_at_least_the_drift_it_cance
     assert periodic.resim_status == 0
 
 
+@pytest.mark.slow
 def test_bound_of_a_gimballed_feedback_scenario_is_below_the_lyapunov_law():
     sc = geojax.load_scenario("katz2025-constant", {"duration.days": 4})
     result = bound(sc, free_end=True)
@@ -243,6 +245,7 @@ def test_bound_of_a_gimballed_feedback_scenario_is_below_the_lyapunov_law():
         bound(sc, acquisition_days=10.0)
 
 
+@pytest.mark.slow
 def test_cli_bound_writes_results_and_refuses_an_impossible_box(tmp_path, capsys):
     # One real process end to end, periodic by default (Gazzino's x(T) = x(0), recorded), and the end condition
     # can only cost more than the free end of the same horizon (a program with more rows).

@@ -38,6 +38,7 @@ MINE = Controller(stateless_init, no_plan, proportional_thrust, fields={
 })
 
 
+@pytest.mark.slow
 def test_a_controller_written_in_a_test_runs_through_simulate_sweep_and_tune(tmp_path):
     """Conservation check: with no thrust the same loop gives no Delta-V; with the law, the Delta-V equals
     the mass spent through the rocket equation (m0 (1 - exp(-dv / (Isp g0)))), and a stiffer inclination
@@ -73,6 +74,7 @@ def status_sweep(tmp_path, grid: str, name: str, controller: str = "qffc", days:
         return {k: f[f"metrics/{k}"][()] for k in f["metrics"]}, f["status/code"][()]
 
 
+@pytest.mark.slow
 def test_box_exits_get_their_own_status_and_leave_neighbours_unchanged(tmp_path):
     """A station 0.2 deg east of where the satellite is held leaves the longitude box at once; an uncontrolled
     start inclined 0.069 deg (MEE k = 6e-4; the latitude swings by i every orbit) leaves the latitude box
@@ -89,6 +91,7 @@ def test_box_exits_get_their_own_status_and_leave_neighbours_unchanged(tmp_path)
     assert np.all(status[0, 0] == STATUS_OK) and np.all(status[0, 1] == STATUS_LEFT_LAT_BOX)
 
 
+@pytest.mark.slow
 def test_sweeps_over_srp_area_and_an_initial_state_dispersion(tmp_path):
     """Second method: a sweep over the SRP area runs each sample's own predictor reference inside the batch;
     at the scenario's own area it must give the single run's Delta-V (shared reference), and without SRP
@@ -153,6 +156,7 @@ def test_a_propellant_that_cannot_last_one_step_is_refused_at_load(overrides, me
 
 
 
+@pytest.mark.slow
 def test_a_controller_of_ones_own_is_named_by_import_path(tmp_path, capsys):
     """``controller.kind = "module:NAME"`` in a scenario file and a sweep's ``controllers``, through the command
     line, with the width the controller declares (16 lanes); bad paths are one line, exit 2."""

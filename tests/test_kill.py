@@ -110,6 +110,7 @@ def check(tmp_path, expected, what: str) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["kill.toml", "out.h5"], what
 
 
+@pytest.mark.slow
 def test_killed_at_every_write_and_resumed_on_either_device_count(straight, tmp_path):
     """One sweep killed three times, each resume on another device count: while a chunk is written (1
     device), while the results file is written (2 devices), while the parts are removed (1 device); the

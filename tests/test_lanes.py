@@ -34,6 +34,7 @@ cycles = true
 """
 
 
+@pytest.mark.slow
 def test_a_wide_batch_writes_the_same_file_bit_for_bit(tmp_path):
     """1024 QFFC lanes against the default 128, 20 days with errors: before the cycle sums were taken in order
     (``loop.metrics.sum_over_cycles``) ``mean_beta_deg`` moved by 4.5e-16 between these widths."""
@@ -48,6 +49,7 @@ def test_a_wide_batch_writes_the_same_file_bit_for_bit(tmp_path):
             np.testing.assert_array_equal(wide[group][name], default[group][name], err_msg=f"{group}/{name}")
 
 
+@pytest.mark.slow
 def test_the_memory_model_covers_what_xla_allocates():
     """The model's bytes per lane (margin taken off) against ``memory_analysis`` of the compiled QFFC batch on
     the CPU (temporaries, arguments, outputs): at least what XLA plans, and not wildly more."""

@@ -18,6 +18,8 @@ from geojax.physics.dynamics import SpacecraftState
 from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.physics.propagate import CARTESIAN
 
+pytestmark = pytest.mark.slow  # years of rollouts: the slow tier (README, "The tests")
+
 DAYS = 731.0  # two years: the reference of one uncontrolled run is ~1.8 deg from the station at the end
 # Natural drift of a GEO inclination, 0.75-0.95 deg/yr over the 18.6-year lunar node cycle (Soop, Handbook of
 # Geostationary Orbits, Sec. 4.3); the upper end bounds how far a re-started reference can get from the station.

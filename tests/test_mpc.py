@@ -143,6 +143,7 @@ def test_padding_the_horizon_changes_nothing(planning):
     np.testing.assert_allclose(plans[10][1], plans[6][1], atol=1e-6 * np.abs(plans[6][1]).max())
 
 
+@pytest.mark.slow
 def test_twenty_days_hold_the_box_between_the_inclination_floor_and_the_qffc():
     """Closed loop on 20 days: status 0, every plan certified, flown within the arms' pitch limit.  Its Delta-V
     lies between the QFFC's on the same days (which corrects the full deviation every cycle) and a closed-form
@@ -168,6 +169,7 @@ def test_twenty_days_hold_the_box_between_the_inclination_floor_and_the_qffc():
     assert floor_mps < dv_mps < qffc_run.metrics["dv_per_year_mps"] * to_run
 
 
+@pytest.mark.slow
 def test_a_sweep_over_the_horizon_compiles_once(tmp_path, monkeypatch):
     """Two horizons in one sweep: the plan is traced once (one compiled rollout), both points hold the box."""
     traced = []
@@ -195,6 +197,7 @@ def test_bad_input_is_one_line(overrides, message):
     assert "\n" not in str(error.value)
 
 
+@pytest.mark.slow
 def test_tune_differentiates_through_the_interior_point():
     """The MPC runs in ``tune`` (forward-mode derivatives through the solver's loop).  Physics as the check:
     a wider inclination window absorbs more of the natural drift, so the descent step widens Delta i_max."""

@@ -139,6 +139,7 @@ def real():
             bound(scenario(BOX_DEG), slot_steps=1, free_end=True))
 
 
+@pytest.mark.slow
 def test_real_plan_both_schemes_keep_the_constraints_and_cost_at_least_the_bound(real):
     sc, relaxed, optimum = real
     accel = float(sc.config["thrusters"]["thrust_n"]) / float(sc.config["spacecraft"]["mass_kg"])

@@ -124,6 +124,7 @@ def test_worker_placement_shares_each_nodes_cores():
     assert cluster.default_chunk(1000, nodes[::2]) is None
 
 
+@pytest.mark.slow
 def test_a_sweep_on_two_nodes_is_bit_for_bit_the_local_run(two_nodes, local, tmp_path, chunk_writes):
     spec, expected = local
     out = sweep.run_sweep(sweep.load(spec), tmp_path / "ray.h5", chunk=CHUNK, progress=False, ray=two_nodes)
@@ -132,6 +133,7 @@ def test_a_sweep_on_two_nodes_is_bit_for_bit_the_local_run(two_nodes, local, tmp
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ray.h5"]
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_sweep_leaves_the_results_unchanged(two_nodes, local, tmp_path, chunk_writes):
     """SIGKILL to one worker process once the first chunk is in: Ray restarts it and retries its chunks."""
     spec, expected = local
@@ -151,6 +153,7 @@ def test_a_worker_killed_mid_sweep_leaves_the_results_unchanged(two_nodes, local
     assert sorted(chunk_writes.values()) == [1] * 6
 
 
+@pytest.mark.slow
 def test_a_killed_driver_resumes_on_the_cluster(two_nodes, local, tmp_path):
     spec, expected = local
     out = tmp_path / "ray.h5"
@@ -194,6 +197,7 @@ def test_workers_without_ray_is_refused(local, tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_a_local_start_finishes_beside_a_killed_cluster(tmp_path):
     """Issue 43, item 17: after a Ray head was killed (SIGKILL, its GCS server and raylet too), ``--ray`` hung
     ten minutes on "Failed to connect to GCS": ``ray.init()`` joined the dead cluster Ray had recorded.  Now

@@ -21,7 +21,9 @@ def test_the_documentation_has_its_examples():
     assert counts["python.md"] >= 3  # a batch, a controller of one's own (simulate, sweep, tuning), reading results
 
 
-@pytest.mark.parametrize("page", [p for p in PAGES if python_examples(p)], ids=lambda p: p.name)
+# python.md runs a year-long sweep and tuning: the slow tier
+@pytest.mark.parametrize("page", [pytest.param(p, marks=[pytest.mark.slow] if p.name == "python.md" else [])
+                                  for p in PAGES if python_examples(p)], ids=lambda p: p.name)
 def test_the_python_examples_run_as_written(page, tmp_path, monkeypatch, capsys):
     """Each example in a namespace of its own (a reader copies one block; its files stay for the next)."""
     monkeypatch.chdir(tmp_path)

@@ -89,6 +89,7 @@ def test_simulate_save_is_the_command_s_file_for_a_planner_and_a_feedback_law(na
     assert figures and all(f.stat().st_size > 10_000 for f in figures)
 
 
+@pytest.mark.slow
 def test_bound_save_is_the_command_s_file(tmp_path, capsys):
     command, library = tmp_path / "command.h5", tmp_path / "library.h5"
     assert cli.main(["bound", "li2022-qffc", "--days", "1", "--slot-steps", "8", "--free-end", "--out",

@@ -94,6 +94,7 @@ def test_arm_limits_are_array_leaves_one_compilation_for_a_batch():
     assert float(np.max(batch.records.cycles.controller["burns"].beta_rad[0, :, 0])) <= float(betas[0]) + 1e-12
 
 
+@pytest.mark.slow
 def test_fompc_twenty_days_stay_in_the_box_and_repeat():
     # The FOMPC holds longitude and eccentricity like the QFFC and lets the inclination lag,
     # within Delta i_max = 8e-5 (plus the predictor's error); same seed, same run.

@@ -97,6 +97,7 @@ ON_CPU = jax.default_backend() == "cpu"
 HOST_DEVICES = pytest.mark.skipif(not ON_CPU, reason="XLA host devices: the CPU's device-count invariance")
 
 
+@pytest.mark.slow
 @HOST_DEVICES
 def test_two_host_devices_give_the_same_results(straight, tmp_path):
     _, d = straight
@@ -170,6 +171,7 @@ seed = 3
 """
 
 
+@pytest.mark.slow
 def test_fompc_results_do_not_depend_on_the_device_count_or_the_width(tmp_path):
     """Issue 19, defect 4: with the batch sharded by a plain ``jit``, XLA's SPMD pipeline fused the FOMPC's
     annealing differently on two devices and sample (0, 1) moved by 1.4e-14 m/s/yr from cycle 17 on.  Each

@@ -28,6 +28,7 @@ def own_scenario(tmp_path):
     return path
 
 
+@pytest.mark.slow
 def test_a_controller_of_ones_own_is_tuned_through_the_command_line(own_scenario, tmp_path, capsys):
     """The law's own gain, named by its alias in the file and in Python alike, tuned over 2 days by the CLI.
     Physics as the check: the thrust only damps the out-of-plane velocity and grows with the gain, so every

@@ -201,6 +201,7 @@ def test_registered_and_one_burn_per_cycle():
     assert np.all(table["burn_ns_s"] == 3426.0)  # five flies t_min (Table 1)
 
 
+@pytest.mark.slow
 def test_a_year_of_example_one_at_a_coarse_step():
     """Independent check: Table 3 and Table 2, example one: Delta-V within 10 % of 44.04 m/s/yr, the path
     five -> two -> normal, the one-cycle mean inclination within 0.03 deg of the target after capture; the
