@@ -38,8 +38,8 @@ hypervisor took from this virtual machine ("steal") are recorded; a
 measurement disturbed by more than 0.2 cores in all is repeated (up to 2 extra
 attempts, 1 for calls over a minute) and the fastest undisturbed call kept.
 
-Run ``python benchmarks/propagate.py`` (full, about 15 minutes on 2 cores) or
-``--quick`` (30 days, small batches, under 2 minutes).  Results go to
+Run ``python benchmarks/propagate.py`` (full: 180 s on 2 cores in the run that wrote its results) or
+``--quick`` (30 days, small batches).  Results go to
 ``benchmarks/results/propagate.json`` and ``.md``.
 """
 
