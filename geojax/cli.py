@@ -155,7 +155,7 @@ def _detail(args):
 def _overrides(args) -> dict:
     names = {"days": "duration.days", "step": "integration.step_s", "controller": "controller.kind",
              "horizon": "controller.horizon", "h_rv": "errors.h_rv", "h_att": "errors.h_att",
-             **{flag: f"errors.{flag}" for flag in ("sigma3_r_m", "sigma3_v_mps", "sigma3_att_deg")}}
+             **{flag: f"errors.{flag}" for flag in ("sigma3_r_m", "sigma3_v_mps", "sigma3_att_deg", "sigma3_dv_pct")}}
     return {key: getattr(args, flag) for flag, key in names.items() if getattr(args, flag, None) is not None}
 
 

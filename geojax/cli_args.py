@@ -78,6 +78,8 @@ def parser() -> argparse.ArgumentParser:
                      "per component in m/s (errors.sigma3_v_mps)")
     sim.add_argument("--sigma3-att-deg", type=float, metavar="DEG", help="attitude error of the burns, 3-sigma in yaw "
                      "and pitch in deg (errors.sigma3_att_deg: sets H_att)")
+    sim.add_argument("--sigma3-dv-pct", type=float, metavar="PCT", help="magnitude (thrust level) error of each burn, "
+                     "3-sigma in %% of the planned (errors.sigma3_dv_pct; a planner's burns)")
     sim.add_argument("--out", help="write /metrics and /cycles to this HDF5 file")
     sim.add_argument("--plots", help="folder for the figures")
     sim.add_argument("--oem", metavar="FILE", help="write the true state at each cycle start and the end as a CCSDS "

@@ -110,6 +110,10 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "sigma3_att_deg": Field(_NUMBER, None, lower=0.0, lower_inclusive=True, upper=1e4, symbol="3σ_att",
                                 doc="attitude error of the burns, 3-sigma in yaw and in pitch, in deg: sets "
                                     "errors.h_att instead of giving it"),
+        "sigma3_dv_pct": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=100.0, si="sigma3_dv_frac",
+                               to_si=0.01, symbol="3σ_ΔV", unit="%",
+                               doc="execution error of each burn's magnitude (its thrust level, the plan "
+                                   "unaware), 3-sigma in % of the planned; 0: none"),
         # How the attitude error enters (control.burns; studies/ablation/li_attitude_error.py): its yaw and pitch
         # parts scaled (1: eq. (47) as printed), one draw shared by a cycle's two burns instead of one each, and
         # the burns' magnitudes re-fitted to the directions flown (the plan knows the error) instead of kept.

@@ -12,7 +12,11 @@ timing); a suspended burn that would run past the end of the cycle is cut
 there.  Each burn is flown with Gaussian yaw and pitch errors (1-sigma
 ``errors.h_att`` x 0.05 deg / 3, Li 2022 eqs. (47)-(48)), drawn as row 1 of
 ``normal(key_k, (2, 6))`` (the loop's orbit-determination fix takes row 0),
-added to the planned angles of the direction flown (``attitude_error_rad``).
+added to the planned angles of the direction flown (``attitude_error_rad``), and with a magnitude error: each
+burn's thrust level scaled by 1 + e, e Gaussian with 1-sigma ``errors.sigma3_dv_pct`` / 3 %, drawn as
+``normal(fold_in(key_k, MAGNITUDE_KEY), (2,))`` (``magnitude_scale``), the burn's planned duration kept (the
+plan does not know the error; the mass flow follows the thrust at the stated Isp).  At 0 % the scale is exactly
+1 and every number is as without the key.
 The readings the paper leaves open are switches of ``errors`` (the ablation
 ``studies/ablation/li_attitude_error.py`` measures each): the yaw and pitch
 parts scaled apart (``att_yaw``, ``att_pitch``), one draw for both burns of a
@@ -35,6 +39,9 @@ from geojax.physics.propulsion import delta_v_direction_rsw, firing_fraction, su
 from geojax.physics.trig import sincos
 
 NOMINAL_3SIGMA_ATT_DEG = 0.05  # Li 2022, eq. (48)
+# ``fold_in`` constant of the magnitude errors' draw from the cycle's key (the FOMPC's search takes 1; the further
+# states ``states.base.STATE_KEY_OFFSET`` and up).
+MAGNITUDE_KEY = 2
 
 
 class BurnPlan(NamedTuple):
@@ -48,6 +55,7 @@ class BurnPlan(NamedTuple):
     prediction: jnp.ndarray  # [6] predicted mean elements at the end of the cycle, without burns
     ns_fraction: jnp.ndarray  # [] north-south correction flown, as a fraction of the QFFC's (1 for the QFFC)
     start_s: jnp.ndarray  # [2] when each burn starts firing, s from the cycle start (after the shadow it met)
+    magnitude_scale: jnp.ndarray  # [2] thrust level flown over the planned (1 + the execution error)
 
 
 def fly(params, burns, prediction, ns_fraction, estimate, context, key) -> BurnPlan:
@@ -67,7 +75,14 @@ def fly(params, burns, prediction, ns_fraction, estimate, context, key) -> BurnP
     grid = jnp.arange(n_steps + 1) * step_s
     clock_start = jnp.interp(start, grid, clock)
     return BurnPlan(burns, burn_s, clock, clock_start, directions, prediction, ns_fraction,
-                    firing_start_s(clock, clock_start, step_s))
+                    firing_start_s(clock, clock_start, step_s), magnitude_scale(params.errors, key))
+
+
+def magnitude_scale(errors, key):
+    """The thrust level [2] each of a cycle's two burns flies, over the planned: 1 + e with e ~ N(0, (sigma3 /
+    3)^2), ``errors["sigma3_dv_frac"]`` the 3-sigma fraction (exactly 1 at 0)."""
+    draws = jax.random.normal(jax.random.fold_in(key, MAGNITUDE_KEY), (2,))
+    return 1.0 + errors["sigma3_dv_frac"] / 3 * draws
 
 
 def firing_start_s(clock, clock_start, step_s):
@@ -114,7 +129,8 @@ def thrust(params, plan: BurnPlan, t, state, environment) -> Thrust:
     j, step_s = environment.index, environment.step_s
     fraction = firing_fraction(plan.clock[j], plan.clock[j + 1], plan.clock_start, plan.burn_s, step_s)
     direction = jnp.where(fraction[0] > 0, plan.directions_rsw[0], plan.directions_rsw[1])
-    return Thrust(direction, params.thrusters["thrust_n"], params.thrusters["isp_s"], jnp.sum(fraction))
+    level = jnp.where(fraction[0] > 0, plan.magnitude_scale[0], plan.magnitude_scale[1])
+    return Thrust(direction, params.thrusters["thrust_n"] * level, params.thrusters["isp_s"], jnp.sum(fraction))
 
 
 def record(plan: BurnPlan) -> dict:

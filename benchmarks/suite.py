@@ -1,0 +1,97 @@
+"""The test suite's time, per tier and per file (issue 40, item 5): where the suite's minutes go.
+
+Runs ``python -m pytest -q`` (the default tier, what the README and CI run) and, with ``--slow``, the slow tier
+(``-m slow``), each with a JUnit report, and writes ``benchmarks/results/suite.{md,json}``: the wall time of
+each tier, the summed test time, and the slowest files and tests.  ``--junit NAME=FILE`` reads a report an
+earlier run wrote instead of running that tier (the results then name the file it came from).  Tests share one
+compilation cache per run (``tests/conftest.py``), so a file's time is mostly the XLA compilations it is the
+first to ask for; the slowest files are where a shared fixture or a shorter run saves the most.
+
+    python benchmarks/suite.py                # the default tier, about as long as the README says
+    python benchmarks/suite.py --slow         # both tiers
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from harness import results
+
+ROOT = Path(__file__).resolve().parents[1]
+TIERS = {"default": [], "slow": ["-m", "slow"]}
+
+
+def read_junit(path: Path) -> list[tuple[str, str, float]]:
+    """(file, test, seconds) of every test case of a JUnit report (setup and teardown included, as pytest
+    counts them)."""
+    cases = []
+    for case in ET.parse(path).iter("testcase"):
+        cases.append((case.get("classname").split(".")[-1] + ".py", case.get("name"), float(case.get("time"))))
+    return cases
+
+
+def run_tier(name: str, report: Path) -> float:
+    """Run one tier with a JUnit report; its wall time, s."""
+    begun = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "pytest", "-q", *TIERS[name], f"--junitxml={report}"], cwd=ROOT)
+    return time.perf_counter() - begun
+
+
+def tier_summary(cases, wall_s: float | None, source: str, top: int) -> dict:
+    by_file = collections.Counter()
+    counts = collections.Counter()
+    for file, _, seconds in cases:
+        by_file[file] += seconds
+        counts[file] += 1
+    return {"source": source, "wall_s": wall_s, "tests": len(cases), "test_s": sum(s for *_, s in cases),
+            "files": [{"file": f, "tests": counts[f], "test_s": s} for f, s in by_file.most_common(top)],
+            "slowest": [{"test": f"{f}::{t}", "test_s": s} for f, t, s in sorted(cases, key=lambda c: -c[2])[:top]]}
+
+
+def markdown(summaries: dict) -> list[str]:
+    lines = ["| tier | tests | wall | summed test time | source |", "|---|---:|---:|---:|---|"]
+    for name, s in summaries.items():
+        wall = "—" if s["wall_s"] is None else f"{s['wall_s'] / 60:.1f} min"
+        lines.append(f"| {name} | {s['tests']} | {wall} | {s['test_s'] / 60:.1f} min | {s['source']} |")
+    for name, s in summaries.items():
+        lines += ["", f"## {name}: the slowest files", "", "| file | tests | s |", "|---|---:|---:|"]
+        lines += [f"| {f['file']} | {f['tests']} | {f['test_s']:.0f} |" for f in s["files"]]
+        lines += ["", f"## {name}: the slowest tests", "", "| test | s |", "|---|---:|"]
+        lines += [f"| `{t['test']}` | {t['test_s']:.0f} |" for t in s["slowest"]]
+    return lines
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--slow", action="store_true", help="run the slow tier too")
+    parser.add_argument("--junit", action="append", default=[], metavar="TIER=FILE",
+                        help="read this tier's JUnit report instead of running it")
+    parser.add_argument("--top", type=int, default=20, help="files and tests listed per tier")
+    parser.add_argument("--out", type=Path, default=results.RESULTS_DIR)
+    args = parser.parse_args(argv)
+    run = results.start()
+    given = dict(item.split("=", 1) for item in args.junit)
+    unknown = set(given) - set(TIERS)
+    if unknown:
+        parser.error(f"--junit: tiers are {', '.join(TIERS)}, got {', '.join(sorted(unknown))}")
+    summaries = {}
+    for name in TIERS:
+        if name in given:
+            summaries[name] = tier_summary(read_junit(Path(given[name])), None, given[name], args.top)
+        elif name == "default" or args.slow:
+            report = args.out / f"suite-{name}.xml"
+            wall_s = run_tier(name, report)
+            summaries[name] = tier_summary(read_junit(report), wall_s, "this run", args.top)
+            report.unlink()
+    print(results.write(args.out / "suite", run, "The test suite's time", {"tiers": summaries}, markdown(summaries)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
