@@ -163,6 +163,7 @@ def test_every_command_takes_q_and_v_and_documents_days(command, capsys):
         assert "sidereal-day cycles" in " ".join(help_text.split())
 
 
+@pytest.mark.slow
 def test_quiet_prints_only_the_files_written_and_days_mean_cycles_everywhere(tmp_path, capsys):
     sim, prop = tmp_path / "sim.h5", tmp_path / "prop.h5"
     assert cli.main(["simulate", "li2022-qffc", "--days", "4", "--out", str(sim), "-q"]) == 0

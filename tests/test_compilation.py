@@ -86,6 +86,7 @@ def test_lanes_padded_to_a_power_of_two_leave_each_sample_as_it_was(qffc, padded
     _equal(jax.tree_util.tree_map(lambda x: x[:2], three.metrics), padded.metrics, "metrics")
 
 
+@pytest.mark.slow
 def test_the_cache_serves_the_same_numbers_as_no_cache(tmp_path, qffc, padded):
     """A cold cache (the program traced, kept, compiled), a warm one in the same folder (loaded), and the cache
     off (plain ``jit``): the same bits.  Each run in its own process, as a user's runs are."""

@@ -96,6 +96,7 @@ def test_srp_closed_form_at_one_au():
     np.testing.assert_allclose(a, [-4.5605e-6 * 1.6 * 200 / 5000, 0, 0], rtol=1e-12, atol=1e-20)
 
 
+@pytest.mark.slow
 def test_shadow_skipped_for_a_sunlit_batch_gives_the_same_numbers_and_derivatives():
     """The batch-level skip of the shadow function (``fusion.skipped_where_idle``): against the plain function
     on GEO positions across the umbra, penumbra and sunlight (bit for bit), on a batch wholly in sunlight

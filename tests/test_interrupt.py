@@ -65,6 +65,7 @@ def data(path):
         return {f"{g}/{k}": f[g][k][()] for g in ("metrics", "status", "grid") for k in f[g]}
 
 
+@pytest.mark.slow
 def test_ctrl_c_in_a_sweep_says_what_is_saved_and_resume_finishes_the_same_file(tmp_path):
     (tmp_path / "s.toml").write_text(SPEC)
     parts = tmp_path / "s.h5.parts"

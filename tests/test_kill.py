@@ -122,6 +122,7 @@ def test_killed_at_every_write_and_resumed_on_either_device_count(straight, tmp_
     check(tmp_path, expected, "three kills")
 
 
+@pytest.mark.slow
 def test_killed_at_a_random_moment_and_resumed(straight, tmp_path):
     expected, straight_s = straight
     kill_after_s = random.Random("kill-random").uniform(3.0, 3.0 + 2 * straight_s)  # seeded: the same each run

@@ -65,6 +65,7 @@ def test_chunk_size_does_not_change_results(straight, tmp_path):
         np.testing.assert_array_equal(other[name], d[name])
 
 
+@pytest.mark.slow
 def test_killed_sweep_resumes_to_the_same_data(straight, tmp_path, monkeypatch):
     spec, d = straight
     out = tmp_path / "resumed.h5"

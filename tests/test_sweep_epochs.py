@@ -75,6 +75,7 @@ def test_the_epoch_is_a_coordinate_of_the_results(straight):
         assert [v.decode() for v in f["grid/epoch__utc"][()]] == DATES
 
 
+@pytest.mark.slow
 def test_a_killed_epoch_sweep_resumes_to_the_same_data(straight, tmp_path, monkeypatch):
     spec, out = straight
     resumed = tmp_path / "resumed.h5"

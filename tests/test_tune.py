@@ -131,6 +131,7 @@ def test_sqp_walks_into_the_box_and_never_back_out():
     assert result.best_dv_per_year_mps <= np.min(np.where(violation == 0, dv, np.inf))
 
 
+@pytest.mark.slow
 def test_cli_tune_writes_results_and_rejects_bad_files(tmp_path):
     good = tmp_path / "t.toml"
     good.write_text('scenario = "katz2025-constant"\ndays = 2.0\nstarts = 2\niterations = 0\n')
