@@ -116,6 +116,7 @@ def test_a_child_gets_its_devices_and_its_core():
     assert flags.split()[-1] == f"{COUNT}=1" and platform == "cpu" and cores == [core]
 
 
+@pytest.mark.slow
 def test_a_benchmark_runs_end_to_end_in_its_quick_mode(tmp_path):
     """``benchmarks/core.py`` at its smallest (no baselines, batch 1, one cycle, no closed loop, one round) writes
     its two files in the harness's format, under ``--out``."""

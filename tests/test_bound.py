@@ -209,6 +209,7 @@ def test_bound_holds_the_box_and_never_exceeds_a_controller(ten_days):
     assert float(qffc.metrics["dv_per_year_mps"]) >= result.bound_per_year_mps
 
 
+@pytest.mark.slow
 def test_periodic_end_returns_to_the_start_and_costs_at_least_the_drift_it_cancels(ten_days):
     """li2022 over 10 days, periodic (the default) beside the free end.  (1) The flown plan ends where it
     started: its inclination vector (MEE h, k) within 1 % of the uncontrolled change over the horizon.

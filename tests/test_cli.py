@@ -58,6 +58,7 @@ def test_bad_force_keys_exit_2(tmp_path, capsys):
     assert "forces.gravity_degree: must be >= 2 and < 21, got 40" in err and err.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_demo_writes_its_figure(tmp_path, capsys):
     assert cli.main(["demo", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
@@ -68,6 +69,7 @@ def test_demo_writes_its_figure(tmp_path, capsys):
     assert (tmp_path / "li2022-qffc.h5").is_file() and (tmp_path / "li2022-qffc.png").is_file()
 
 
+@pytest.mark.slow
 def test_simulate_writes_metrics_and_cycles(tmp_path, capsys):
     out = tmp_path / "sim.h5"
     assert cli.main(["simulate", "li2022-qffc", "--days", "5", "--out", str(out)]) == 0

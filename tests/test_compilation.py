@@ -49,6 +49,7 @@ def test_cycle_slots_cover_every_duration_with_half_to_spare():
     assert len({cycle_slots(n) for n in range(1, 3000)}) == 14
 
 
+@pytest.mark.slow
 def test_a_run_in_a_longer_compiled_loop_is_bit_for_bit_the_exact_loops(qffc, padded):
     """The second method: ``rollout`` (one scan over exactly the run's cycles, metrics in the same program), as
     every sweep and tuning compiles it; every metric and per-cycle record equal bit for bit."""

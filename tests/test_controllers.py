@@ -222,6 +222,7 @@ def test_a_controller_without_keys_runs_when_passed_in_python():
     assert int(result.status) == 0 and float(result.metrics["mass_used_kg"]) == 0.0
 
 
+@pytest.mark.slow
 def test_the_command_imports_ones_own_module_from_the_current_folder(tmp_path):
     """Issue 43, item 12: ``geojax sweep`` found ``my_laws:LAW`` only with ``PYTHONPATH=.``.  The real console
     script, run in the folder of ``my_laws.py`` with the sweep file elsewhere, imports it."""

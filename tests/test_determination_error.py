@@ -50,6 +50,7 @@ ABSOLUTE = {"errors.sigma3_r_m": 0.9, "errors.sigma3_v_mps": 1.5e-4, "errors.sig
 MULTIPLES = {"errors.h_rv": 3.0, "errors.h_att": 3.0}
 
 
+@pytest.mark.slow
 def test_absolute_errors_give_the_numbers_of_the_equivalent_multiples_bit_for_bit():
     """Second method: the same 3-day QFFC run with the errors given as 3-sigma values and as multiples H of
     Li 2022's nominal (0.9 m = 3 x 0.3 m, ...), one batch (one compilation), the same seed; and a run without

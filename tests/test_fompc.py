@@ -61,6 +61,7 @@ def _cost(fractions, x0, ref_mean, cycle_s, mpc):
     return fompc.horizon_cost(fractions, x0, ref_mean, TARGET, 0.3, LIMITS, cycle_s, 0.0, mpc)
 
 
+@pytest.mark.slow
 def test_fompc_cost_is_never_above_the_qffc(windows):
     x0 = start_states(16)
     keys = jax.random.split(jax.random.key(1), 16)

@@ -127,6 +127,7 @@ def test_rows_follow_the_qffc_burn_effect_and_the_drift(planning):
                                atol=1e-12)
 
 
+@pytest.mark.slow
 def test_padding_the_horizon_changes_nothing(planning):
     """A horizon of 6 padded to 10 cycles plans what a program of exactly 6 cycles plans (the mask)."""
     plans = {}

@@ -43,6 +43,7 @@ def run_with_devices(count, path):
 HOST_DEVICES = pytest.mark.skipif(jax.default_backend() != "cpu", reason="XLA host devices: the CPU's device count")
 
 
+@pytest.mark.slow
 @HOST_DEVICES
 def test_two_devices_match_one(tmp_path):
     one = run_with_devices(1, tmp_path / "one.npy")

@@ -170,6 +170,7 @@ def test_a_killed_driver_resumes_on_the_cluster(two_nodes, local, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ray.h5"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("address", ["127.0.0.1:1", "ray://127.0.0.1:1", "no-port", "host:99999"])
 def test_an_unreachable_address_is_one_line_exit_2_nothing_written(local, tmp_path, capsys, address):
     spec, _ = local

@@ -146,6 +146,7 @@ def test_existing_output_without_resume_is_refused(tmp_path, capsys):
     assert out.read_bytes() == b"not ours"
 
 
+@pytest.mark.slow
 def test_per_cycle_records_agree_with_the_metrics(tmp_path):
     """``cycles = true`` keeps /cycles/<name> [controller, grid, reps, cycle]; recomputed from them, the longitude
     excursion equals the metric and the ΔV delivered per cycle adds up to the run's ΔV."""

@@ -39,6 +39,7 @@ def straight(tmp_path_factory):
     return spec, sweep.run_sweep(spec, tmp / "straight.h5", chunk=3, progress=False)
 
 
+@pytest.mark.slow
 def test_each_sample_is_a_simulate_run_of_the_scenario_started_that_day(straight):
     spec, out = straight
     ds = geojax.open_results(out)
