@@ -1,4 +1,4 @@
-"""The test suite's time, per tier and per file (issue 40, item 5): where the suite's minutes go.
+"""The test suite's time, per tier and per file: where the suite's minutes go.
 
 Runs ``python -m pytest -q`` (the default tier, what the README and CI run) and, with ``--slow``, the slow tier
 (``-m slow``), each with a JUnit report, and writes ``benchmarks/results/suite.{md,json}``: the wall time of

@@ -272,6 +272,7 @@ def test_cli_bound_writes_results_and_refuses_an_impossible_box(tmp_path, capsys
         bound(geojax.load_scenario("li2022-qffc", {"duration.days": 1}), slot_steps=5)
 
 
+@pytest.mark.slow
 def test_gazzino_scenario_takes_its_four_fixed_thrusters_from_the_layout_key():
     # The scenario names its layout (thrusters.layout = "fixed4"): four thrusters, the flown plan holds the box,
     # the bound (full box, free end: about the same trajectory as the plan) is below the plan (flown within the box less its 1e-3 margin).  Second method for the

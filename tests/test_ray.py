@@ -182,6 +182,7 @@ def test_an_unreachable_address_is_one_line_exit_2_nothing_written(local, tmp_pa
     assert time.perf_counter() - start < 30
 
 
+@pytest.mark.slow
 def test_ray_missing_is_one_line_exit_2_nothing_written(local, tmp_path, capsys, monkeypatch):
     spec, _ = local
     monkeypatch.setitem(sys.modules, "ray", None)  # `import ray` raises ImportError
@@ -191,6 +192,7 @@ def test_ray_missing_is_one_line_exit_2_nothing_written(local, tmp_path, capsys,
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_workers_without_ray_is_refused(local, tmp_path, capsys):
     spec, _ = local
     assert cli.main(["sweep", str(spec), "--out", str(tmp_path / "x.h5"), "--workers", "2"]) == 2

@@ -31,6 +31,7 @@ def sweep_file(tmp_path_factory):
     return sweep.run_sweep(sweep.load(tmp / "s.toml"), tmp / "s.h5", progress=False)
 
 
+@pytest.mark.slow
 def test_a_sweep_opens_with_named_dimensions_coordinates_and_units(sweep_file):
     ds = open_results(sweep_file)
     dv = ds.dv_per_year_mps

@@ -13,6 +13,8 @@ from geojax import cli, scenario, store, sweep
 from geojax.loop.rollout import simulate
 from geojax.physics.frames import earth_rotation_angle_rad
 
+pytestmark = pytest.mark.slow  # sweeps over epochs, each a closed loop per start: the slow tier
+
 DATES = ["2027-01-01T12:00:00", "2036-07-01T00:00:00"]
 SPEC = f"""
 name = "epochs"
