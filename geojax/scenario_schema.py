@@ -10,7 +10,8 @@ from geojax.params import LOG, NUMBER as _NUMBER, REQUIRED, Field, degrees
 from geojax.physics import constants as c
 from geojax.physics.forces import ForceModel
 from geojax.physics.geopotential import MAX_DEGREE as MAX_GRAVITY_DEGREE
-from geojax.states.momentum import DEFAULT_CAPACITY_NMS, DEFAULT_INERTIA_KG_M2
+from geojax.states.momentum import (DEFAULT_CAPACITY_NMS, DEFAULT_DUMP_GAIN_PER_S, DEFAULT_INERTIA_KG_M2,
+                                    DEFAULT_THRUST_ARM_M, DEFAULT_TRANSIENT_FRACTION)
 
 MAX_ORBIT_KM = 2.0e6  # beyond Earth's Hill sphere (1.5e6 km)
 MAX_ANGLE_RAD, MAX_ANGLE_DEG = 1.0e3, 1.0e5  # about 160 and 280 turns: more is a unit slip
@@ -169,6 +170,30 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "srp_offset_array_m": Field(list, [0.0, 0.0, 0.0], length=3, si="srp_offset_array_m", unit="m",
                                     doc="centre of pressure less centre of mass along the solar array's axis (the "
                                         "orbit normal), across it, along its Sun-facing normal: SRP torque"),
+        "thrust_arm_m": Field(_NUMBER, DEFAULT_THRUST_ARM_M, lower=0.0, lower_inclusive=True, upper=100.0,
+                              si="thrust_arm_m", symbol="L_thr", unit="m",
+                              doc="distance from the centre of mass to each thruster's nozzle (the gimbal a "
+                                  "dumping tilt turns about): the tilt's moment arm"),
+        "dump_angle_max_deg": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=90.0,
+                                    si="dump_angle_max_rad", to_si=degrees, symbol="δ_max",
+                                    doc="largest tilt of a thrust line off the centre of mass to unload the "
+                                        "wheels during burns; 0: no dumping"),
+        "dump_gain_per_s": Field(_NUMBER, DEFAULT_DUMP_GAIN_PER_S, lower=0.0, upper=1e3,
+                                 si="dump_gain_per_s", symbol="k_dump", unit="1/s", transform=LOG,
+                                 doc="the dumping law's gain: the torque asked of a tilt is -k_dump times the "
+                                     "measured wheel momentum"),
+        "dump_transient_fraction": Field(_NUMBER, DEFAULT_TRANSIENT_FRACTION, lower=0.0, lower_inclusive=True,
+                                         upper=1.0, si="dump_transient_fraction", symbol="f_tr", unit="",
+                                         doc="the most momentum, as a fraction of a wheel's capacity, a burn may "
+                                             "leave for the next burn to empty (the rest: margin for the torques "
+                                             "meanwhile)"),
+        "tank_offset_body_m": Field(list, [0.0, 0.0, 0.0], length=3, si="tank_offset_body_m", unit="m",
+                                    doc="the propellant's centre less the starting centre of mass, body axes: the "
+                                        "centre of mass moves as propellant is used (thrust and SRP torques)"),
+        "wheel_momentum_sigma_nms": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6,
+                                          si="wheel_momentum_sigma_nms", symbol="σ_h", unit="N m s",
+                                          doc="1-sigma error per axis of the measured wheel momentum the dumping "
+                                              "law reads (one draw per cycle)"),
     },
 }
 

@@ -26,7 +26,9 @@ from geojax.loop.simulate import simulate as closed_loop
 from geojax.physics import constants as c
 from geojax.physics.ephemeris import sun_position_eci_m
 from geojax.physics.frames import earth_rotation_angle_rad
-from geojax.states.base import StateModel
+from geojax.physics.dynamics import Thrust
+from geojax.states import momentum
+from geojax.states.base import StateModel, ThrustContext
 
 ROOT = Path(__file__).resolve().parents[1]
 # main just before the further states existed (5657130 added them): the numbers every run without them must keep
@@ -260,10 +262,14 @@ def test_extension_point_carries_a_state_through_steps_and_cycles(pad):
     ("attitude.inertia_kg_m2", [1e4, float("nan"), 1e4, 0, 0, 0], "attitude.inertia_kg_m2: must be a list of 6 finite"),
     ("attitude.inertia_kg_m2", [1e4, 1e3, 1e3, 0, 0, 0], "attitude.inertia_kg_m2: not a physical inertia tensor"),
     ("attitude.srp_offset_body_m", [0.1, 0.0], "attitude.srp_offset_body_m: must be a list of 3"),
+    ("attitude.dump_angle_max_deg", 95.0, "attitude.dump_angle_max_deg: must be >= 0 and < 90"),
+    ("attitude.dump_gain_per_s", float("nan"), "attitude.dump_gain_per_s: must be a finite number"),
+    ("attitude.dump_gain_per_s", 0.0, "attitude.dump_gain_per_s: must be > 0"),
+    ("attitude.tank_offset_body_m", [0.0, float("inf"), 0.0], "attitude.tank_offset_body_m: must be a list of 3"),
 ])
 def test_bad_input_is_refused_with_one_line_naming_the_key(tmp_path, capsys, key, value, says):
     table, name = key.split(".")
-    text = scenario.read_text("li2022") + f"\n[{table}]\nwheels = true\n{name} = {json.dumps(value).replace('NaN', 'nan')}\n"
+    text = scenario.read_text("li2022") + f"\n[{table}]\nwheels = true\n{name} = {json.dumps(value).replace('NaN', 'nan').replace('Infinity', 'inf')}\n"
     path = tmp_path / "bad.toml"
     path.write_text(text)
     before = sorted(p.name for p in tmp_path.iterdir())
@@ -273,9 +279,167 @@ def test_bad_input_is_refused_with_one_line_naming_the_key(tmp_path, capsys, key
     assert sorted(p.name for p in tmp_path.iterdir()) == before
 
 
+def test_a_dumping_tilt_needs_a_thrust_arm(tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text(scenario.read_text("li2022-momentum").replace("thrust_arm_m = 2.5", "thrust_arm_m = 0.0"))
+    assert cli.main(["simulate", str(path), "--out", str(tmp_path / "out.h5")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "attitude.thrust_arm_m: a dumping tilt" in err, err
+    assert not (tmp_path / "out.h5").exists()
+
+
 def test_attitude_keys_need_the_wheels_and_an_srp_offset_needs_srp():
     with pytest.raises(ValueError, match=r"attitude.wheel_capacity_nms: read only where attitude.wheels = true"):
         scenario.load("li2022", {"attitude.wheel_capacity_nms": 20.0})
     with pytest.raises(ValueError, match=r"attitude.srp_offset_array_m: an SRP torque needs SRP"):
         scenario.load("li2022", {"attitude.wheels": True, "attitude.srp_offset_array_m": [0.1, 0, 0],
                                  "forces.srp": False})
+
+
+# --- the thrusters' torques and dumping (``momentum.thrust``) ---
+
+def _params(**attitude):
+    sc = _wheels(days=1, **attitude)
+    return jax.tree_util.tree_map(lambda x: x[0], setup.prepare([sc]).params)
+
+
+def _wheels_state(h_body):
+    zero, none = jnp.zeros(()), jnp.zeros(3)
+    return momentum.Wheels(none, jnp.asarray(h_body, float), zero, zero, zero, zero, zero, none, none, zero, none,
+                           none, zero)
+
+
+def _at(mass_kg=5000.0):
+    """A step at the station: r along ECI x, v along y (body x = ECI y, y = -ECI z, z = -ECI x)."""
+    return ThrustContext(jnp.asarray(0.0), 900.0, jnp.asarray([42164.2e3, 0.0, 0.0]),
+                         jnp.asarray([0.0, 3074.66, 0.0]), jnp.asarray(mass_kg))
+
+
+def _rsw_to_body(d):
+    return np.array([d[1], -d[2], -d[0]])  # the nadir body axes are (S, -W, -R)
+
+
+@pytest.mark.parametrize("theta_deg, bound_nms", [(30.0, 100.0), (10.0, 100.0), (10.0, 20.0), (2.0, 100.0)])
+def test_the_two_burn_remainder_is_what_the_next_burn_can_empty(theta_deg, bound_nms):
+    """``remainder_nms`` against its defining conditions, checked here by hand: it keeps the momentum along the
+    burn (r . u = h . u: a tilt's torque is perpendicular to u); where its norm |h . u| / sin(theta) fits the bound
+    it has no part along the next line (r . u_o = 0), so the next burn's one-burn least squares empties it (two
+    projections to zero, where the one-burn law leaves (h . u) cos(theta)); beyond the bound its norm is the bound;
+    lines within 3 deg and no other line give the one-burn least squares."""
+    rng = np.random.default_rng(int(theta_deg * 10 + bound_nms))
+    u = np.array([0.2, 0.9, -0.3])
+    u /= np.linalg.norm(u)
+    side = np.cross(u, [1.0, 0.0, 0.0])
+    side /= np.linalg.norm(side)
+    u_o = -(np.cos(np.radians(theta_deg)) * u + np.sin(np.radians(theta_deg)) * side)  # antiparallel as Li's
+    h = rng.normal(size=3) * 4.0 + 3.0 * u
+    r = np.asarray(momentum.remainder_nms(jnp.asarray(h), jnp.asarray(u), jnp.asarray(u_o), bound_nms))
+    assert np.dot(r, u) == pytest.approx(np.dot(h, u), rel=1e-12)
+    one = np.dot(h, u) * u
+    if theta_deg < 3.0:
+        np.testing.assert_allclose(r, one, rtol=1e-12)
+    elif abs(np.dot(h, u)) / np.sin(np.radians(theta_deg)) <= bound_nms:
+        # the next burn empties all but r's part along u_o: nothing
+        assert abs(np.dot(r, u_o)) < 1e-12 * np.linalg.norm(r)
+        assert np.linalg.norm(r) == pytest.approx(abs(np.dot(h, u)) / np.sin(np.radians(theta_deg)), rel=1e-9)
+    else:
+        assert np.linalg.norm(r) == pytest.approx(bound_nms, rel=1e-12)
+        assert abs(np.dot(r, u_o)) < abs(np.dot(one, u_o))
+    np.testing.assert_allclose(np.asarray(momentum.remainder_nms(jnp.asarray(h), jnp.asarray(u), jnp.zeros(3),
+                                                                bound_nms)), one, rtol=1e-12)
+
+
+@pytest.mark.parametrize("h_body, direction_rsw", [
+    ([3.0, -1.0, 7.0], [0.2, 0.4, np.sqrt(0.8)]),  # a north-south burn with Li's yaw and pitch
+    ([30.0, 20.0, -40.0], [0.0, 1.0, 0.0]),  # along-track; the tilt saturates
+    ([0.0, 5.0, 0.0], [0.0, 0.0, -1.0]),  # momentum along the thrust: no torque can reach it
+])
+def test_the_dumping_tilt_makes_the_torque_of_a_line_turned_about_its_nozzle(h_body, direction_rsw):
+    """The torque the hook reports is r_n x F u' computed here from the geometry alone: the nozzle at L behind the
+    centre of mass on the planned line (r_n = -L u_hat), the flown direction u' it returns; u' is a unit vector
+    within delta_max of u_hat; the torque never adds momentum (h . tau <= 0) and, for a first burn (no other line
+    yet), is the asked -(1 - exp(-k T)) / T h less its part along u_hat where it fits within delta_max (then
+    exactly: the one-burn least squares)."""
+    params = _params(dump_angle_max_deg=5.0, thrust_arm_m=2.5, dump_gain_per_s=1e-4)
+    flown = Thrust(jnp.asarray(direction_rsw), jnp.asarray(0.5), jnp.asarray(2250.0), jnp.asarray(1.0))
+    state, tilted = momentum.thrust(params, _wheels_state(h_body), flown, _at())
+    u_hat, u_new = _rsw_to_body(np.asarray(direction_rsw)), _rsw_to_body(np.asarray(tilted.direction_rsw))
+    expected = np.cross(-2.5 * u_hat, 0.5 * u_new)
+    np.testing.assert_allclose(np.asarray(state.thrust_torque_body_nm), expected, atol=1e-12)
+    assert np.linalg.norm(u_new) == pytest.approx(1.0, abs=1e-12)
+    assert np.degrees(np.arccos(min(1.0, np.dot(u_hat, u_new)))) <= 5.0 + 1e-9
+    h = np.asarray(h_body)
+    assert np.dot(h, expected) <= 1e-15
+    asked = -(1 - np.exp(-1e-4 * 900.0)) / 900.0 * h
+    asked_perp = asked - np.dot(asked, u_hat) * u_hat
+    if np.linalg.norm(asked_perp) <= 2.5 * 0.5 * np.sin(np.radians(5.0)):
+        np.testing.assert_allclose(expected, asked_perp, atol=1e-12)
+    else:  # saturated: the asked direction at the largest tilt
+        assert np.linalg.norm(expected) == pytest.approx(2.5 * 0.5 * np.sin(np.radians(5.0)), rel=1e-9)
+        assert np.dot(expected, asked_perp) / np.linalg.norm(asked_perp) == pytest.approx(
+            np.linalg.norm(expected), rel=1e-9)
+    assert float(state.cross_force_n) == pytest.approx(0.5 * np.linalg.norm(u_new - np.dot(u_new, u_hat) * u_hat),
+                                                       rel=1e-9, abs=1e-15)
+
+
+def test_no_tilt_flies_the_controllers_direction_exactly_and_a_moved_centre_of_mass_leaves_f_times_its_shift():
+    """At delta_max = 0 the direction is the controller's to the bit and without a tank offset no torque; with the
+    propellant's centre p off the starting centre of mass, after using dm of propellant the centre of mass is at
+    dc = -(dm / m) p (the mass-weighted mean, here by hand), and a line still aimed at the old centre leaves
+    tau = (r_n - dc) x F = -dc x F."""
+    direction = jnp.asarray([0.3, 0.5, -np.sqrt(0.66)])
+    flown = Thrust(direction, jnp.asarray(0.5), jnp.asarray(2250.0), jnp.asarray(0.7))
+    state, tilted = momentum.thrust(_params(), _wheels_state([10.0, 10.0, 10.0]), flown, _at(4900.0))
+    assert np.array_equal(np.asarray(tilted.direction_rsw), np.asarray(direction))
+    assert np.all(np.asarray(state.thrust_torque_body_nm) == 0.0) and float(state.cross_force_n) == 0.0
+
+    p = np.array([0.0, 0.0, -1.2])  # the tank 1.2 m above the centre of mass (anti-nadir)
+    state, _ = momentum.thrust(_params(tank_offset_body_m=p.tolist()), _wheels_state([10.0, 10.0, 10.0]), flown,
+                               _at(4900.0))
+    # 5000 kg at 0 = 4900 kg at dc plus 100 kg at p
+    dc = (5000.0 * np.zeros(3) - 100.0 * p) / 4900.0
+    force = 0.7 * 0.5 * _rsw_to_body(np.asarray(direction))
+    np.testing.assert_allclose(np.asarray(state.thrust_torque_body_nm), -np.cross(dc, force), rtol=1e-12)
+
+
+def test_dumping_holds_the_wheels_that_saturate_without_it():
+    """li2022-momentum over 6 days, dumping on and off in one batch (the tilt limit is a leaf): off, the SRP offset
+    fills the 50 N m s wheels at 12 N m s a day and the run ends "wheels saturated" (status 6, kept); on, the wheels
+    stay within the law's transient bound (3/4 of the capacity) plus a day's SRP momentum, the thrust's torque
+    undoes the SRP's (the net momentum after 6 days under a quarter of what it is without), and the Delta-V changes by under 1 %."""
+    on = scenario.load("li2022-momentum", {"duration.days": 6})
+    off = scenario.load("li2022-momentum", {"duration.days": 6, "attitude.dump_angle_max_deg": 0.0})
+    from geojax.loop.rollout import simulate_batch
+    result = simulate_batch([on, off])
+    m = {k: np.asarray(v) for k, v in result.metrics.items()}
+    assert list(result.status) == [0, STATUS_WHEELS_SATURATED]
+    assert m["max_wheel_momentum_nms"][0] < 0.75 * 50.0 + 12.0 < 50.0 < m["max_wheel_momentum_nms"][1]
+    assert m["wheel_momentum_per_day_nms"][1] == pytest.approx(12.0, rel=0.05)
+    assert m["wheel_momentum_per_day_nms"][0] < 0.25 * m["wheel_momentum_per_day_nms"][1]
+    assert m["thrust_torque_impulse_nms"][0] > m["srp_torque_impulse_nms"][0] - 12.0
+    assert m["thrust_torque_impulse_nms"][1] == 0.0 and m["dump_cross_dv_mps"][1] == 0.0
+    assert 0.0 < m["dump_cross_dv_mps"][0] < 0.01 * m["dv_per_year_mps"][0] * 6 / 365.25
+    assert m["dv_per_year_mps"][0] == pytest.approx(m["dv_per_year_mps"][1], rel=0.01)
+
+
+@pytest.mark.slow
+def test_a_year_of_li2022_momentum_keeps_box_and_wheels_in_every_draw_and_saturates_without_dumping():
+    """Issue 41's year check: li2022-momentum, 16 draws of Li's nominal errors (H_rv = H_att = 1), dumping on and
+    off on the same draws in one batch.  On: every draw keeps the box and its wheels under capacity (status 0).
+    Off: every draw saturates its 50 N m s wheels within days (status 6), while its orbit is the dumping-free one.
+    The Delta-V spent on momentum (on less off, draw by draw) is under 5 % of the station keeping's."""
+    from geojax.loop.rollout import simulate_batch
+    errors = {"duration.days": 365.25, "errors.h_rv": 1.0, "errors.h_att": 1.0}
+    on = scenario.load("li2022-momentum", errors)
+    off = scenario.load("li2022-momentum", {**errors, "attitude.dump_angle_max_deg": 0.0})
+    seeds = np.concatenate([np.arange(16), np.arange(16)])
+    result = simulate_batch([on] * 16 + [off] * 16, seeds=seeds)
+    status = np.asarray(result.status)
+    assert np.all(status[:16] == 0), status[:16]
+    assert np.all(status[16:] == STATUS_WHEELS_SATURATED), status[16:]
+    peak = np.asarray(result.records.cycles.states["wheels"].max_abs_nms).max(axis=-1)  # [sample, cycle]
+    first_day = np.argmax(peak[16:] > 50.0, axis=1) + 1
+    assert np.all(first_day <= 7), first_day
+    dv = np.asarray(result.metrics["dv_per_year_mps"])
+    spent = dv[:16] - dv[16:]
+    assert np.all(np.abs(spent) < 0.05 * dv[16:]), spent

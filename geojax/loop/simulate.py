@@ -30,7 +30,8 @@ kept only on request (``keep_steps``).
 Beyond the orbit and the mass the loop carries the spacecraft's further states (``geojax.states``: the wheels'
 momentum), one extension point: ``states`` is a static tuple of ``StateModel`` s whose states ride in the carry
 (a dict by name), updated after each orbit step (``StateModel.step``) and at each cycle start
-(``StateModel.cycle``), with records in ``CycleRecord.states`` and ``StepRecord.states``.  With none, every dict
+(``StateModel.cycle``), and which may change the thrust flown over a step (``StateModel.thrust``: the wheels'
+dumping tilt), with records in ``CycleRecord.states`` and ``StepRecord.states``.  With none, every dict
 is empty: no leaf, the same program and numbers.
 """
 
@@ -51,7 +52,7 @@ from geojax.physics.fusion import materialized
 from geojax.physics.integrate import rk4_step
 from geojax.params import Params
 from geojax.physics.propagate import MEE, CycleMeans, Dynamics, cycle_means
-from geojax.states.base import STATE_KEY_OFFSET, CycleStart, StateModel, StepContext
+from geojax.states.base import STATE_KEY_OFFSET, CycleStart, StateModel, StepContext, ThrustContext
 
 # Li 2022, eq. (48): nominal 3-sigma determination errors per component, scaled by H_rv (the attitude's:
 # control.burns).
@@ -174,6 +175,9 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
                                        StepEnvironment(env3, step_s, j, jnp.stack(r), jnp.stack(v)))
             has_propellant = state.mass_kg > params.spacecraft["dry_mass_kg"]  # else the thrusters stop
             thrust = thrust._replace(on_fraction=jnp.where(has_propellant, thrust.on_fraction, 0.0))
+            extra, thrust = _thrust_hooks(states, params, extra, thrust,
+                                          ThrustContext(ctx.t_s + j * step_s, step_s, jnp.stack(r), jnp.stack(v),
+                                                        state.mass_kg))
             east = _to_ecef(env3.cos_earth_angle[0], env3.sin_earth_angle[0])
             lon, tan_lat = subsatellite_lon_tan_lat_xyz(*east(r))  # latitudes once per cycle, from extremes
             accel = thrust.on_fraction * thrust.thrust_n / state.mass_kg
@@ -242,6 +246,16 @@ def _cycle_start(states, params, extra: dict, dynamics, state, k, t_s, cycle_key
         start = CycleStart(k, t_s, r, v, state.mass_kg, jax.random.fold_in(cycle_key, STATE_KEY_OFFSET + place))
         extra[m.name] = m.cycle(params, extra[m.name], start)
     return extra
+
+
+def _thrust_hooks(states, params, extra: dict, thrust, context: ThrustContext):
+    """The further states and the thrust after their ``thrust`` hooks, in the tuple's order (unchanged without
+    hooks)."""
+    for m in states:
+        if m.thrust is not None:
+            extra = dict(extra)
+            extra[m.name], thrust = m.thrust(params, extra[m.name], thrust, context)
+    return extra, thrust
 
 
 def _steps(states, params, extra: dict, dynamics, state, new, r, v, thrust, env3, t_s, step_s, mu):

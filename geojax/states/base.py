@@ -11,6 +11,10 @@ through one extension point: a tuple of ``StateModel`` s, static (chosen from th
   (``CycleStart``: the true state, the cycle's key);
 * ``step(params, state, context) -> (state, step_record)``: once per integration step, after the orbit's step
   (``StepContext``: the true state at the step's start and end, the thrust held over it, the environment);
+* ``thrust(params, state, thrust, context) -> (state, thrust)`` (optional): before each orbit step, on the
+  thrust the controller commands (``physics.dynamics.Thrust``, stopped without propellant): the model may change
+  what is flown (the wheels' dumping tilt) and note in its state what it did, for its ``step``; the orbit then
+  flies the returned thrust (``ThrustContext``: the true state at the step's start, the step);
 * ``summary(params, state_at_start, state_at_end, step_records) -> cycle_record``: the cycle's record from the
   step records ([n_steps, ...]), kept always (extremes, so a check covers every step without keeping them);
 * ``metrics(params, cycle_records, n_steps_total, run_s) -> ({name: []}, failed)``: its scalar metrics (units in
@@ -68,6 +72,16 @@ class StepContext(NamedTuple):
     force_model: ForceModel
 
 
+class ThrustContext(NamedTuple):
+    """What the loop tells ``StateModel.thrust`` about the step the thrust is held over."""
+
+    t_s: jnp.ndarray  # [] step start, s since the start of the run
+    step_s: float
+    r_eci_m: jnp.ndarray  # [3] true position at the step start
+    v_eci_mps: jnp.ndarray  # [3] true velocity at the step start
+    mass_kg: jnp.ndarray  # [] at the step start
+
+
 class StateModel(NamedTuple):
     """A further state of the spacecraft that the loop carries (the protocol above).  Its functions are
     module-level, so a model is the same hashable object every time (a static argument of the compiled loop)."""
@@ -80,3 +94,4 @@ class StateModel(NamedTuple):
     cycle: Callable | None = None
     status: str | None = None
     columns: Callable | None = None
+    thrust: Callable | None = None

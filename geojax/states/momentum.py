@@ -29,16 +29,47 @@ is conserved to rounding, ``tests/test_momentum.py``).  The torques (ECI):
   tau_b = 3 mu / r^5 (r_b x I r_b).  At nadir, r_b = (0, 0, -r) and tau_b = 3 n^2 (-I_yz, I_xz, 0): zero for
   principal body axes (the default tensor), constant for a product of inertia.
 
-Thruster torques (the thrust lines' offsets from the centre of mass) and dumping are not modelled yet: every
-controller fires through the centre of mass (docs/momentum.md says what is not built yet).
+* the thrusters: every controller aims its thrust line through the centre of mass of the run's start (Li 2022,
+  Sec. 2: "the torque-free direction that passes through the center of mass"), each nozzle at
+  ``attitude.thrust_arm_m`` from it on that line (r_n = -L u_hat, u_hat the thrust's unit direction).  Two
+  torques follow.  The centre of mass moves as propellant is used (``attitude.tank_offset_body_m``: the
+  propellant's centre p less the starting centre of mass; the centre of mass is then at
+  dc = -(m0 - m) / m p), so a line through the old centre leaves tau = -dc x F (the SRP offset moves by -dc
+  too).  And a dumping tilt (below) turns the line about the nozzle.
+
+Dumping (``thrust``, the model's hook on the thrust flown, before the orbit's step).  During a burn the line of
+action is tilted by delta about the nozzle, u' = cos(delta) u_hat + s, s perpendicular to u_hat with
+|s| = sin(delta): the torque r_n x F u' = -L F (u_hat x s), any torque perpendicular to u_hat up to
+L F sin(delta_max) (``attitude.dump_angle_max_deg``).  No tilt can reach the momentum along the line itself,
+and the planners fire two burns an orbit whose lines are nearly parallel in inertial space (Li's QFFC: 9 deg
+apart at the median cycle of a year, 2 deg at the least; the thrusters sit on one face and the burns are half
+an orbit apart), so a burn that simply empties what it can (the one-burn least squares, h -> (h . u) u) leaves
+the momentum along the common line to grow: measured, 60 N m s over Li's year with 12 N m s a day of SRP
+momentum.  The law therefore allocates over two burns (``remainder_nms``): each burn leaves the momentum r that
+the next burn, along the previous burn's line u_o (the same thruster at the same node an orbit ago), can empty,
+r . u_o = 0 (with r . u = h . u, the least such r), amplified by 1 / sin(theta) for lines theta apart and
+bounded to ``attitude.dump_transient_fraction`` of the capacity (the rest is the margin for the torques until
+the next burn).  The burn asks the torque that takes the measured momentum h_m (h_w plus a per-cycle Gaussian
+error of ``attitude.wheel_momentum_sigma_nms`` per axis) toward r at the rate k_dump
+(``attitude.dump_gain_per_s``), held over the step's firing time T as its exact zero-order hold,
+tau* = -(1 - exp(-k_dump T)) (h_m - r) / T: at most all of it, so stable at any gain (k_dump h held over a
+900 s step overshoots beyond 2 / 900 s); tau* is perpendicular to u by construction, s = (u x tau*) / (L F),
+scaled back to sin(delta_max) where longer.  The cost is the planner's: the thrust along the planned direction
+falls to F cos(delta) (at most 0.4 % at 5 deg) and F sin(delta) goes across it; the next cycle's plan, which
+sees the orbit flown, makes both up (the paired run without dumping measures the Delta-V;
+``dump_cross_dv_mps`` is the across part).  The body axes are the RSW axes permuted (x = S, y = -W, z = -R), so
+the hook works on the controller's RSW direction directly.
 
 The default inertia tensor (``DEFAULT_INERTIA_KG_M2``) is an estimate for a satellite of Li 2022's class (5000
 kg, 200 m^2 of SRP area), no manufacturer publishing one: a 4600 kg bus as a uniform box 2.5 m (x) x 2.5 m (y) x
 3.5 m (z), and two 200 kg wings of 20 m x 5 m (100 m^2 each) on the y axis (the array axis), their centres 12.75
 m from the centre of mass, as thin plates turning about y (their width's share of Ixx and Izz averaged over the
 turn): Ixx = 7091.7 + 78358.3 + 416.7, Iyy = 7091.7 + 833.3, Izz = 4791.7 + 78358.3 + 416.7 kg m^2, principal.
-The default capacity, 50 N m s per wheel, is the wheels planned for Li's satellite with a centre-of-pressure
-offset (the li2022-momentum scenario to come).
+The default capacity, 50 N m s per wheel, is the wheels of the li2022-momentum scenario.  The default thrust arm,
+2.5 m: the anti-nadir face of that 3.5 m bus 1.75 m from its centre plus 0.75 m of arm reach (Li 2022 gives no
+arm dimensions).  The default dump gain, 0.01 /s, takes a 900 s step of burn all the way (1 - exp(-9)); the
+default transient fraction, 3/4, leaves a quarter of the capacity (12.5 N m s of 50) for a day's SRP momentum of
+li2022-momentum (12 N m s); both are choices, measured in ``studies/momentum/li_dumping.py``.
 """
 
 from __future__ import annotations
@@ -52,12 +83,16 @@ import numpy as np
 from geojax.physics.attitude import (array_frame, body_rate_rad_s, gravity_gradient_torque_body, inertia_matrix,
                                      nadir_frame, srp_force_eci_n)
 from geojax.physics.constants import SECONDS_PER_DAY
-from geojax.states.base import StateModel, StepContext
+from geojax.physics.dynamics import Thrust
+from geojax.states.base import StateModel, StepContext, ThrustContext
 
 NAME = "wheels"
 # (Ixx, Iyy, Izz, Ixy, Ixz, Iyz), kg m^2: the estimate of the module docstring.
 DEFAULT_INERTIA_KG_M2 = (85866.7, 7925.0, 83566.7, 0.0, 0.0, 0.0)
 DEFAULT_CAPACITY_NMS = 50.0
+DEFAULT_THRUST_ARM_M = 2.5
+DEFAULT_DUMP_GAIN_PER_S = 0.01
+DEFAULT_TRANSIENT_FRACTION = 0.75
 # ``time_above_80pct_capacity_fraction`` counts the step starts where a wheel holds more than this of its capacity.
 HIGH_FRACTION = 0.8
 SATURATED = "wheels saturated"
@@ -71,6 +106,14 @@ class Wheels(NamedTuple):
     srp_impulse_nms: jnp.ndarray  # [] integral of |tau_srp| dt since the start of the run, N m s
     gravity_gradient_impulse_nms: jnp.ndarray  # [] integral of |tau_gg| dt since the start, N m s
     steps_above: jnp.ndarray  # [] step starts so far with a wheel above HIGH_FRACTION of its capacity
+    thrust_impulse_nms: jnp.ndarray  # [] integral of |tau_thrust| dt since the start, N m s
+    cross_dv_mps: jnp.ndarray  # [] the Delta-V the dumping tilts put across the planned directions, m/s
+    error_nms: jnp.ndarray  # [3] this cycle's error of the measured wheel momentum, body axes
+    thrust_torque_body_nm: jnp.ndarray  # [3] the thrust's torque over the current step (``thrust``), body axes
+    cross_force_n: jnp.ndarray  # [] the thrust across the planned direction over the current step (mean), N
+    line_eci: jnp.ndarray  # [3] the unit thrust direction of the latest firing step, ECI (0: none yet)
+    other_line_eci: jnp.ndarray  # [3] that of the burn before the latest (more than 90 deg from it), ECI
+    firing: jnp.ndarray  # [] whether the latest step fired (0 or 1)
 
 
 class WheelStep(NamedTuple):
@@ -88,6 +131,8 @@ class WheelCycle(NamedTuple):
     srp_impulse_nms: jnp.ndarray  # [] integral of |tau_srp| dt from the run's start to the cycle end
     gravity_gradient_impulse_nms: jnp.ndarray  # [] the same of the gravity gradient
     steps_above: jnp.ndarray  # [] step starts from the run's start with a wheel above HIGH_FRACTION of capacity
+    thrust_impulse_nms: jnp.ndarray  # [] integral of |tau_thrust| dt from the run's start to the cycle end
+    cross_dv_mps: jnp.ndarray  # [] the dumping tilts' Delta-V across the plan from the run's start to the cycle end
 
 
 def init(params, r_eci_m, v_eci_mps) -> Wheels:
@@ -97,33 +142,125 @@ def init(params, r_eci_m, v_eci_mps) -> Wheels:
     inertia = inertia_matrix(a["inertia_kg_m2"])
     c = nadir_frame(r_eci_m, v_eci_mps)
     zero = jnp.zeros_like(h0[0])
-    return Wheels(c.T @ (inertia @ body_rate_rad_s(r_eci_m, v_eci_mps) + h0), h0, zero, zero, zero)
+    none = jnp.zeros_like(h0)
+    return Wheels(c.T @ (inertia @ body_rate_rad_s(r_eci_m, v_eci_mps) + h0), h0, zero, zero, zero, zero, zero,
+                  none, none, zero, none, none, zero)
+
+
+def cycle(params, state: Wheels, start) -> Wheels:
+    """At a cycle start: this cycle's error of the measured wheel momentum (Gaussian, 1-sigma
+    ``attitude.wheel_momentum_sigma_nms`` per axis, from the model's own key)."""
+    sigma = params.attitude["wheel_momentum_sigma_nms"]
+    return state._replace(error_nms=sigma * jax.random.normal(start.key, (3,), state.error_nms.dtype))
+
+
+def thrust(params, state: Wheels, flown: Thrust, ctx: ThrustContext):
+    """The dumping law on the thrust flown over a step (the module docstring): ``(state, thrust)``, the thrust
+    with its line tilted within ``attitude.dump_angle_max_deg`` and the state noting the thrust's torque (tilt and
+    centre-of-mass shift, body axes) and the force across the plan for ``step``.  No tilt at a 0 deg limit, the
+    direction then exactly the controller's."""
+    a = params.attitude
+    d = flown.direction_rsw
+    u_b = jnp.stack([d[1], -d[2], -d[0]])  # body = (S, -W, -R)
+    size = jnp.linalg.norm(u_b)  # 1, or less for a mean of time-shared directions
+    force_n = flown.thrust_n * size  # while firing
+    firing = (flown.on_fraction > 0) & (force_n > 0)
+    u_hat = u_b / jnp.where(size > 0, size, 1.0)
+    c = nadir_frame(ctx.r_eci_m, ctx.v_eci_mps)
+    u_eci = c.T @ u_hat
+    # the other burn's line: the latest line of the burn before this one (a burn starts where the direction
+    # turns more than 90 deg from the last one fired)
+    new_burn = firing & (jnp.dot(u_eci, state.line_eci) < 0)
+    other_eci = jnp.where(new_burn, state.line_eci, state.other_line_eci)
+    h_m = state.h_body_nms + state.error_nms
+    left = remainder_nms(h_m, u_hat, c @ other_eci, a["dump_transient_fraction"] * a["wheel_capacity_nms"])
+    # the change held over the step's firing time T (zero-order hold): a fraction 1 - exp(-k T) of the way to
+    # what is left, as dh/dt = -k (h - left) would go over T; never more than all of it (stable at any gain)
+    firing_s = flown.on_fraction * ctx.step_s
+    fraction = -jnp.expm1(-a["dump_gain_per_s"] * firing_s)
+    wanted = -fraction * (h_m - left) / jnp.where(firing_s > 0, firing_s, 1.0)  # torque while firing, _|_ u_hat
+    lever = a["thrust_arm_m"] * force_n
+    tilt = jnp.cross(u_hat, wanted) / jnp.where(lever > 0, lever, 1.0)
+    length = jnp.linalg.norm(tilt)
+    sin_max = jnp.sin(a["dump_angle_max_rad"])
+    tilt = tilt * jnp.where(length > sin_max, sin_max / jnp.where(length > 0, length, 1.0), 1.0)
+    tilt = jnp.where(firing & (lever > 0), tilt, 0.0)
+    cos = jnp.sqrt(1.0 - jnp.sum(tilt * tilt))
+    u_new_b = u_b + size * ((cos - 1.0) * u_hat + tilt)  # exactly u_b without a tilt
+    shift = com_shift_body_m(params, ctx.mass_kg)
+    torque = flown.on_fraction * (-a["thrust_arm_m"] * force_n * jnp.cross(u_hat, tilt)
+                                  - jnp.cross(shift, flown.thrust_n * u_new_b))
+    cross_n = flown.on_fraction * force_n * jnp.linalg.norm(tilt)
+    direction = jnp.stack([-u_new_b[2], u_new_b[0], -u_new_b[1]])
+    state = state._replace(thrust_torque_body_nm=torque, cross_force_n=cross_n,
+                           line_eci=jnp.where(firing, u_eci, state.line_eci), other_line_eci=other_eci,
+                           firing=firing.astype(state.firing.dtype))
+    return state, flown._replace(direction_rsw=direction)
+
+
+def remainder_nms(h, u_hat, u_other, bound_nms):
+    """[3] the momentum a burn along ``u_hat`` leaves in the wheels under the two-burn allocation: a tilt's torque
+    is perpendicular to u_hat, so what is left has h's component along u_hat; of those, the least that the next
+    burn (along the line ``u_other``, the burn before this one: the planners fire the same thruster at the same
+    node each orbit) can then empty, r . u_other = 0, is r_2 = (h . u) (u - c u_o) / (1 - c^2), c = u . u_o (the
+    least-norm solution of r . u = h . u, r . u_o = 0).  Its norm is |h . u| / sin(theta), theta the angle between
+    the lines: where it would exceed ``bound_nms`` (``attitude.dump_transient_fraction`` of the capacity) the
+    remainder goes only part of the way
+    from the one-burn least squares r_1 = (h . u) u (both have r . u = h . u; r_2 - r_1 is perpendicular to u, so
+    |r|^2 = |r_1|^2 + lambda^2 |r_2 - r_1|^2 fixes lambda); with no other line yet, or lines within 3 deg of
+    parallel, r_1."""
+    along = jnp.dot(h, u_hat)
+    one = along * u_hat
+    c = jnp.dot(u_hat, u_other)
+    sin2 = 1.0 - c * c
+    usable = (jnp.dot(u_other, u_other) > 0.5) & (sin2 > np.sin(np.radians(3.0)) ** 2)
+    two = along * (u_hat - c * u_other) / jnp.where(usable, sin2, 1.0)
+    step_to = two - one
+    room = jnp.sqrt(jnp.maximum(bound_nms ** 2 - jnp.dot(one, one), 0.0))
+    span = jnp.linalg.norm(step_to)
+    lam = jnp.clip(room / jnp.where(span > 0, span, 1.0), 0.0, 1.0)
+    return jnp.where(usable, one + lam * step_to, one)
+
+
+def com_shift_body_m(params, mass_kg):
+    """dc [3]: the centre of mass less the run's starting one, body axes, with the propellant used (m0 - m) gone
+    from ``attitude.tank_offset_body_m``."""
+    m0 = params.initial.mass_kg
+    return -(m0 - mass_kg) / mass_kg * params.attitude["tank_offset_body_m"]
 
 
 def step(params, state: Wheels, ctx: StepContext):
-    """One integration step: the torques at the step's start and end, their impulse (trapezoid rule) added to
-    H_eci, the wheels' momentum in body axes at the end."""
+    """One integration step: the torques at the step's start and end, their impulse (trapezoid rule; the
+    thrust's, held in body axes over the step, turned with the body) added to H_eci, the wheels' momentum in body
+    axes at the end."""
     a, fm = params.attitude, ctx.force_model
     inertia = inertia_matrix(a["inertia_kg_m2"])
+    shift = com_shift_body_m(params, ctx.mass_kg)
     at = lambda j: jax.tree_util.tree_map(lambda x: x[j], ctx.env)  # noqa: E731
-    srp0, gg0, _ = torques(a, inertia, ctx.r_eci_m, ctx.v_eci_mps, at(0), fm)
-    srp1, gg1, c1 = torques(a, inertia, ctx.r_end_eci_m, ctx.v_end_eci_mps, at(2), fm)
+    srp0, gg0, c0 = torques(a, inertia, ctx.r_eci_m, ctx.v_eci_mps, at(0), fm, shift)
+    srp1, gg1, c1 = torques(a, inertia, ctx.r_end_eci_m, ctx.v_end_eci_mps, at(2), fm, shift)
     half = ctx.step_s / 2
-    h_total = state.h_total_eci_nms + half * ((srp0 + gg0) + (srp1 + gg1))
+    thrust0, thrust1 = c0.T @ state.thrust_torque_body_nm, c1.T @ state.thrust_torque_body_nm
+    h_total = state.h_total_eci_nms + half * ((srp0 + gg0) + (srp1 + gg1)) + half * (thrust0 + thrust1)
     h_end = c1 @ h_total - inertia @ body_rate_rad_s(ctx.r_end_eci_m, ctx.v_end_eci_mps)
     above = jnp.max(jnp.abs(state.h_body_nms)) > HIGH_FRACTION * a["wheel_capacity_nms"]
-    new = Wheels(h_total, h_end,
-                 state.srp_impulse_nms + half * (jnp.linalg.norm(srp0) + jnp.linalg.norm(srp1)),
-                 state.gravity_gradient_impulse_nms + half * (jnp.linalg.norm(gg0) + jnp.linalg.norm(gg1)),
-                 state.steps_above + above)
+    new = state._replace(
+        h_total_eci_nms=h_total, h_body_nms=h_end,
+        srp_impulse_nms=state.srp_impulse_nms + half * (jnp.linalg.norm(srp0) + jnp.linalg.norm(srp1)),
+        gravity_gradient_impulse_nms=state.gravity_gradient_impulse_nms
+        + half * (jnp.linalg.norm(gg0) + jnp.linalg.norm(gg1)),
+        steps_above=state.steps_above + above,
+        thrust_impulse_nms=state.thrust_impulse_nms + ctx.step_s * jnp.linalg.norm(state.thrust_torque_body_nm),
+        cross_dv_mps=state.cross_dv_mps + ctx.step_s * state.cross_force_n / ctx.mass_kg)
     return new, WheelStep(state.h_body_nms)
 
 
-def torques(attitude: dict, inertia, r_eci_m, v_eci_mps, env, fm):
-    """(tau_srp, tau_gg) [3] each, ECI axes, N m, at one instant (``env``), and the ECI -> body rotation [3, 3]."""
+def torques(attitude: dict, inertia, r_eci_m, v_eci_mps, env, fm, com_shift_body_m=0.0):
+    """(tau_srp, tau_gg) [3] each, ECI axes, N m, at one instant (``env``), and the ECI -> body rotation [3, 3];
+    the centre of pressure's offset taken from the centre of mass moved by ``com_shift_body_m``."""
     c = nadir_frame(r_eci_m, v_eci_mps)
-    offset = c.T @ attitude["srp_offset_body_m"] + array_frame(r_eci_m, v_eci_mps, env.r_sun_eci_m).T @ \
-        attitude["srp_offset_array_m"]
+    offset = c.T @ (attitude["srp_offset_body_m"] - com_shift_body_m) + \
+        array_frame(r_eci_m, v_eci_mps, env.r_sun_eci_m).T @ attitude["srp_offset_array_m"]
     srp = jnp.cross(offset, srp_force_eci_n(r_eci_m, env, fm))
     gg = c.T @ gravity_gradient_torque_body(c @ r_eci_m, inertia, fm.mu_m3_s2)
     return srp, gg, c
@@ -133,14 +270,15 @@ def summary(params, start: Wheels, end: Wheels, steps: WheelStep) -> WheelCycle:
     """The cycle's record: per-wheel extremes over its step starts and its end, the running totals."""
     h = jnp.concatenate([steps.h_nms, end.h_body_nms[None]])
     return WheelCycle(jnp.max(jnp.abs(h), axis=0), start.h_body_nms, end.h_body_nms, end.srp_impulse_nms,
-                      end.gravity_gradient_impulse_nms, end.steps_above)
+                      end.gravity_gradient_impulse_nms, end.steps_above, end.thrust_impulse_nms, end.cross_dv_mps)
 
 
 def metrics(params, cycles: WheelCycle, n_steps_total: int, run_s: float):
     """({name: []}, saturated): the largest wheel momentum, its secular growth per day (the net change of h_w
     between the run's first and last cycle boundaries, one orbit apart each, so the orbit-periodic part drops
-    out), the torque impulse per source, the fraction of step starts above 80 % of capacity; saturated where a
-    wheel exceeded its capacity (``attitude.wheel_capacity_nms``) at any step start or cycle end."""
+    out), the torque impulse per source (SRP, gravity gradient, thrust: the dumped momentum and the centre of
+    mass's shift), the Delta-V the dumping tilts put across the plan, the fraction of step starts above 80 % of
+    capacity; saturated where a wheel exceeded its capacity (``attitude.wheel_capacity_nms``) at any step start or cycle end."""
     peak = jnp.max(cycles.max_abs_nms)
     out = {
         "max_wheel_momentum_nms": peak,
@@ -149,6 +287,8 @@ def metrics(params, cycles: WheelCycle, n_steps_total: int, run_s: float):
         "srp_torque_impulse_nms": cycles.srp_impulse_nms[-1],
         "gravity_gradient_impulse_nms": cycles.gravity_gradient_impulse_nms[-1],
         "time_above_80pct_capacity_fraction": cycles.steps_above[-1] / n_steps_total,
+        "thrust_torque_impulse_nms": cycles.thrust_impulse_nms[-1],
+        "dump_cross_dv_mps": cycles.cross_dv_mps[-1],
     }
     return out, peak > params.attitude["wheel_capacity_nms"]
 
@@ -162,14 +302,15 @@ def columns(cycles: WheelCycle) -> dict:
     return out
 
 
-MODEL = StateModel(NAME, init, step, summary, metrics, status=SATURATED, columns=columns)
+MODEL = StateModel(NAME, init, step, summary, metrics, cycle=cycle, status=SATURATED, columns=columns,
+                   thrust=thrust)
 
 
 def validate(config: dict) -> None:
     """Checks across the ``[attitude]`` table at load (``ValueError`` naming the key): every key but ``wheels``
     is read only where ``attitude.wheels = true``; the inertia tensor is physical (positive definite, each
     principal moment at most the sum of the other two); an SRP offset needs SRP (``forces.srp`` and
-    ``spacecraft.srp_area_m2`` > 0)."""
+    ``spacecraft.srp_area_m2`` > 0); a dumping tilt needs a thrust arm."""
     from geojax.scenario_schema import SCHEMA  # the schema imports this module's defaults
 
     table = config["attitude"]
@@ -185,6 +326,9 @@ def validate(config: dict) -> None:
         raise ValueError(f"attitude.inertia_kg_m2: not a physical inertia tensor (principal moments "
                          f"{', '.join(f'{m:g}' for m in moments)} kg m^2: each must be > 0 and at most the sum of "
                          f"the other two), got {table['inertia_kg_m2']!r}")
+    if table["dump_angle_max_deg"] > 0 and table["thrust_arm_m"] == 0:
+        raise ValueError(f"attitude.thrust_arm_m: a dumping tilt (attitude.dump_angle_max_deg = "
+                         f"{table['dump_angle_max_deg']:g}) needs a thrust arm > 0, got 0")
     has_srp = config["forces"]["srp"] and config["spacecraft"]["srp_area_m2"] > 0
     for key in ("srp_offset_body_m", "srp_offset_array_m"):
         if any(table[key]) and not has_srp:
