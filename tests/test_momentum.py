@@ -406,7 +406,8 @@ def test_dumping_holds_the_wheels_that_saturate_without_it():
     """li2022-momentum over 6 days, dumping on and off in one batch (the tilt limit is a leaf): off, the SRP offset
     fills the 50 N m s wheels at 12 N m s a day and the run ends "wheels saturated" (status 6, kept); on, the wheels
     stay within the law's transient bound (3/4 of the capacity) plus a day's SRP momentum, the thrust's torque
-    undoes the SRP's (the net momentum after 6 days under a quarter of what it is without), and the Delta-V changes by under 1 %."""
+    undoes the SRP's (the net momentum after 6 days under a quarter of what it is without), the tilts put under
+    5 % of the run's Delta-V across the plan, and the Delta-V changes by under 1 %."""
     on = scenario.load("li2022-momentum", {"duration.days": 6})
     off = scenario.load("li2022-momentum", {"duration.days": 6, "attitude.dump_angle_max_deg": 0.0})
     from geojax.loop.rollout import simulate_batch
@@ -418,7 +419,7 @@ def test_dumping_holds_the_wheels_that_saturate_without_it():
     assert m["wheel_momentum_per_day_nms"][0] < 0.25 * m["wheel_momentum_per_day_nms"][1]
     assert m["thrust_torque_impulse_nms"][0] > m["srp_torque_impulse_nms"][0] - 12.0
     assert m["thrust_torque_impulse_nms"][1] == 0.0 and m["dump_cross_dv_mps"][1] == 0.0
-    assert 0.0 < m["dump_cross_dv_mps"][0] < 0.01 * m["dv_per_year_mps"][0] * 6 / 365.25
+    assert 0.0 < m["dump_cross_dv_mps"][0] < 0.05 * m["dv_per_year_mps"][0] * 6 / 365.25
     assert m["dv_per_year_mps"][0] == pytest.approx(m["dv_per_year_mps"][1], rel=0.01)
 
 
