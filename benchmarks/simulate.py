@@ -52,8 +52,9 @@ def main() -> None:
                         {"rows": rows}, markdown(rows)))
 
 
-def measure(controller: str, days: float, batch: int) -> dict:
-    """One row: ``batch`` samples of ``li2022-<controller>`` with their own error draws, compiled once."""
+def measure(controller: str, days: float, batch: int, name: str | None = None) -> dict:
+    """One row: ``batch`` samples of ``li2022-<controller>`` (or of the scenario ``name``) with their own error
+    draws, compiled once."""
     import jax
     import jax.numpy as jnp
     import numpy as np
@@ -64,7 +65,7 @@ def measure(controller: str, days: float, batch: int) -> dict:
     from geojax.parallel import replicate, shard_batch
     from geojax.physics import constants as c
 
-    sc = scenario.load(f"li2022-{controller}", {"duration.days": days, "errors.h_rv": 1.0, "errors.h_att": 1.0})
+    sc = scenario.load(name or f"li2022-{controller}", {"duration.days": days, "errors.h_rv": 1.0, "errors.h_att": 1.0})
     setup = prepare([sc])
     setup = setup._replace(shared=replicate(setup.shared))
     one = rollout_fn(setup, lanes=max(1, batch // jax.device_count()))
@@ -78,7 +79,7 @@ def measure(controller: str, days: float, batch: int) -> dict:
     dv_year = np.asarray(final.dv_mps) * 365.25 * 86400 / (setup.n_cycles * c.SIDEREAL_DAY_S)
     per_orbit = timing.best_s / (setup.n_cycles * batch)
     paper = PAPER_S_PER_ORBIT[controller]
-    row = {"controller": controller, "days": days, "batch": batch, "cycles": setup.n_cycles,
+    row = {"controller": controller, "scenario": sc.name, "days": days, "batch": batch, "cycles": setup.n_cycles,
            "devices": jax.device_count(), "compile_s": compile_s, "run_s": timing.best_s,
            "s_per_orbit_per_sample": per_orbit, "speedup_vs_paper": paper / per_orbit if paper else None,
            "dv_per_year_mps_mean": float(dv_year.mean()), "dv_per_year_mps_std": float(dv_year.std())}

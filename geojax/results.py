@@ -86,6 +86,9 @@ DESCRIPTIONS = {
     "srp_torque_impulse_nms": "integral of |SRP torque| over the run (centre-of-pressure offset)",
     "gravity_gradient_impulse_nms": "integral of |gravity-gradient torque| over the run",
     "time_above_80pct_capacity_fraction": "fraction of the step starts with a wheel above 80 % of its capacity",
+    "thrust_torque_impulse_nms": "integral of |thrust torque| over the run (dumping tilts, the centre of mass's "
+                                 "shift): the momentum the thrusters moved",
+    "dump_cross_dv_mps": "Delta-V the dumping tilts put across the planned thrust directions over the run",
     **{f"wheel_{axis}_nms": f"the {axis} wheel's momentum at the cycle end, body axes" for axis in "xyz"},
     **{f"wheel_max_abs_{axis}_nms": f"largest |momentum| of the {axis} wheel within the cycle" for axis in "xyz"},
 }

@@ -41,11 +41,11 @@ Dumping (``thrust``, the model's hook on the thrust flown, before the orbit's st
 action is tilted by delta about the nozzle, u' = cos(delta) u_hat + s, s perpendicular to u_hat with
 |s| = sin(delta): the torque r_n x F u' = -L F (u_hat x s), any torque perpendicular to u_hat up to
 L F sin(delta_max) (``attitude.dump_angle_max_deg``).  No tilt can reach the momentum along the line itself,
-and the planners fire two burns an orbit whose lines are nearly parallel in inertial space (Li's QFFC: 9 deg
-apart at the median cycle of a year, 2 deg at the least; the thrusters sit on one face and the burns are half
-an orbit apart), so a burn that simply empties what it can (the one-burn least squares, h -> (h . u) u) leaves
-the momentum along the common line to grow: measured, 60 N m s over Li's year with 12 N m s a day of SRP
-momentum.  The law therefore allocates over two burns (``remainder_nms``): each burn leaves the momentum r that
+and the planners fire two burns an orbit whose lines are nearly parallel in inertial space (Li's QFFC: 9.8 deg
+apart at the median cycle of a year, under 2.3 deg in a tenth of them; the thrusters sit on one face and the
+burns are half an orbit apart), so a burn that simply empties what it can (the one-burn least squares,
+h -> (h . u) u) leaves the momentum along the common line to grow: 60 N m s over Li's year with 12 N m s a day
+of SRP momentum, against 43 N m s under the two-burn law (``studies/momentum/results/li_dumping.md``).  The law therefore allocates over two burns (``remainder_nms``): each burn leaves the momentum r that
 the next burn, along the previous burn's line u_o (the same thruster at the same node an orbit ago), can empty,
 r . u_o = 0 (with r . u = h . u, the least such r), amplified by 1 / sin(theta) for lines theta apart and
 bounded to ``attitude.dump_transient_fraction`` of the capacity (the rest is the margin for the torques until
