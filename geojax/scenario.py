@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import importlib.resources
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -133,7 +134,9 @@ def started_at(name_or_path: str | Path, utc: str, overrides: dict | None = None
 
 
 def with_overrides(raw: dict, overrides: dict | None) -> dict:
-    """``raw`` with dotted keys set (``{"thrusters.thrust_n": 0.3}``); a key must name a table and a field."""
+    """``raw`` with dotted keys set (``{"thrusters.thrust_n": 0.3}``); a key must name a table and a field.  One
+    element of a list key is set as ``TABLE.KEY[i]`` (``{"attitude.srp_offset_array_m[0]": 0.2}``: the others are
+    the file's, or the key's defaults), so that a sweep can vary it as an axis."""
     raw = {k: dict(v) if isinstance(v, dict) else v for k, v in raw.items()}
     for dotted, value in (overrides or {}).items():
         table, _, key = str(dotted).rpartition(".")
@@ -142,8 +145,25 @@ def with_overrides(raw: dict, overrides: dict | None) -> dict:
                              f"{', '.join(t for t in SCHEMA if t)} (e.g. \"duration.days\")")
         if not isinstance(raw.setdefault(table, {}), dict):
             raise ValueError(f"{table}: must be a table")
+        element = _ELEMENT.fullmatch(key)
+        if element:
+            key, index = element.group(1), int(element.group(2))
+            field = SCHEMA[table].get(key)
+            if field is None or field.kind is not list or not field.length:
+                raise ValueError(f"{dotted}: {table}.{key} is not a list key of the [{table}] table")
+            if index >= field.length:
+                raise ValueError(f"{dotted}: {table}.{key} has {field.length} elements (indices 0 to "
+                                 f"{field.length - 1})")
+            values = list(raw[table].get(key, field.default))
+            if len(values) != field.length:
+                raise ValueError(f"{table}.{key}: must be a list of {field.length} finite numbers, got {values!r}")
+            values[index] = value
+            value = values
         raw[table][key] = value
     return raw
+
+
+_ELEMENT = re.compile(r"(\w+)\[(\d+)\]")
 
 
 def read_toml_file(path: str | Path, kind: str) -> tuple[dict, str]:

@@ -218,7 +218,7 @@ def test_saturated_wheels_are_status_6_and_the_sample_is_kept():
     assert "wheel_max_abs_x_nms" in result.cycles()
 
 
-def _counter_init(params, r, v):
+def _counter_init(params, r, v, env, force_model):
     return {"steps": jnp.zeros(()), "cycles": jnp.zeros(()), "t_s": jnp.zeros(())}
 
 
@@ -306,7 +306,7 @@ def _params(**attitude):
 def _wheels_state(h_body):
     zero, none = jnp.zeros(()), jnp.zeros(3)
     return momentum.Wheels(none, jnp.asarray(h_body, float), zero, zero, zero, zero, zero, none, none, zero, none,
-                           none, zero)
+                           none, none, none, none, zero)
 
 
 def _at(mass_kg=5000.0):

@@ -226,7 +226,8 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
                                                     windows[0]))
     xs = (jnp.arange(n_cycles), env, osc_ref, windows)
     r0, v0 = position_velocity(dynamics, params.initial.orbit, mu) if states else (None, None)
-    carry = (params.initial, initial_state, {m.name: m.init(params, r0, v0) for m in states})
+    env0 = jax.tree_util.tree_map(lambda x: x[0, 0, 0], env) if states else None  # the run's first instant
+    carry = (params.initial, initial_state, {m.name: m.init(params, r0, v0, env0, fm) for m in states})
     body = jax.checkpoint(one_cycle)
     if shared.n_active is None:
         (final, _, _), (cycles, steps) = jax.lax.scan(body, carry, xs)

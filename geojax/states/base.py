@@ -6,7 +6,8 @@ through one extension point: a tuple of ``StateModel`` s, static (chosen from th
 ``states.of_config``), whose states ride in the loop's carry and whose records in ``CycleRecord.states`` and
 ``StepRecord.states``, dicts keyed by the model's ``name``.  A model is pure functions in the optax manner:
 
-* ``init(params, r_eci_m, v_eci_mps) -> state``: once, from the true initial position and velocity;
+* ``init(params, r_eci_m, v_eci_mps, env, force_model) -> state``: once, from the true initial position and
+  velocity and the environment at that instant (``Environment``, one instant);
 * ``cycle(params, state, start) -> state`` (optional): at each cycle's start, before the controller plans
   (``CycleStart``: the true state, the cycle's key);
 * ``step(params, state, context) -> (state, step_record)``: once per integration step, after the orbit's step

@@ -111,6 +111,9 @@ class Wheels(NamedTuple):
     error_nms: jnp.ndarray  # [3] this cycle's error of the measured wheel momentum, body axes
     thrust_torque_body_nm: jnp.ndarray  # [3] the thrust's torque over the current step (``thrust``), body axes
     cross_force_n: jnp.ndarray  # [] the thrust across the planned direction over the current step (mean), N
+    srp_eci_nm: jnp.ndarray  # [3] the SRP torque at the latest step end, ECI (the next step's start)
+    gravity_gradient_eci_nm: jnp.ndarray  # [3] the gravity-gradient torque there
+    thrust_start_eci_nm: jnp.ndarray  # [3] the thrust's torque over the current step, ECI axes at its start
     line_eci: jnp.ndarray  # [3] the unit thrust direction of the latest firing step, ECI (0: none yet)
     other_line_eci: jnp.ndarray  # [3] that of the burn before the latest (more than 90 deg from it), ECI
     firing: jnp.ndarray  # [] whether the latest step fired (0 or 1)
@@ -135,16 +138,16 @@ class WheelCycle(NamedTuple):
     cross_dv_mps: jnp.ndarray  # [] the dumping tilts' Delta-V across the plan from the run's start to the cycle end
 
 
-def init(params, r_eci_m, v_eci_mps) -> Wheels:
-    """The wheels at the run's start: ``attitude.initial_momentum_nms`` (body axes)."""
+def init(params, r_eci_m, v_eci_mps, env, fm) -> Wheels:
+    """The wheels at the run's start: ``attitude.initial_momentum_nms`` (body axes), and the torques there."""
     a = params.attitude
     h0 = a["initial_momentum_nms"]
     inertia = inertia_matrix(a["inertia_kg_m2"])
-    c = nadir_frame(r_eci_m, v_eci_mps)
+    srp, gg, c = torques(a, inertia, r_eci_m, v_eci_mps, env, fm)
     zero = jnp.zeros_like(h0[0])
     none = jnp.zeros_like(h0)
     return Wheels(c.T @ (inertia @ body_rate_rad_s(r_eci_m, v_eci_mps) + h0), h0, zero, zero, zero, zero, zero,
-                  none, none, zero, none, none, zero)
+                  none, none, zero, srp, gg, none, none, none, zero)
 
 
 def cycle(params, state: Wheels, start) -> Wheels:
@@ -192,7 +195,7 @@ def thrust(params, state: Wheels, flown: Thrust, ctx: ThrustContext):
                                   - jnp.cross(shift, flown.thrust_n * u_new_b))
     cross_n = flown.on_fraction * force_n * jnp.linalg.norm(tilt)
     direction = jnp.stack([-u_new_b[2], u_new_b[0], -u_new_b[1]])
-    state = state._replace(thrust_torque_body_nm=torque, cross_force_n=cross_n,
+    state = state._replace(thrust_torque_body_nm=torque, thrust_start_eci_nm=c.T @ torque, cross_force_n=cross_n,
                            line_eci=jnp.where(firing, u_eci, state.line_eci), other_line_eci=other_eci,
                            firing=firing.astype(state.firing.dtype))
     return state, flown._replace(direction_rsw=direction)
@@ -230,22 +233,22 @@ def com_shift_body_m(params, mass_kg):
 
 
 def step(params, state: Wheels, ctx: StepContext):
-    """One integration step: the torques at the step's start and end, their impulse (trapezoid rule; the
-    thrust's, held in body axes over the step, turned with the body) added to H_eci, the wheels' momentum in body
-    axes at the end."""
+    """One integration step: the torques at the step's start (carried from the step before) and end, their
+    impulse (trapezoid rule; the thrust's, held in body axes over the step, turned with the body) added to
+    H_eci, the wheels' momentum in body axes at the end."""
     a, fm = params.attitude, ctx.force_model
     inertia = inertia_matrix(a["inertia_kg_m2"])
-    shift = com_shift_body_m(params, ctx.mass_kg)
-    at = lambda j: jax.tree_util.tree_map(lambda x: x[j], ctx.env)  # noqa: E731
-    srp0, gg0, c0 = torques(a, inertia, ctx.r_eci_m, ctx.v_eci_mps, at(0), fm, shift)
-    srp1, gg1, c1 = torques(a, inertia, ctx.r_end_eci_m, ctx.v_end_eci_mps, at(2), fm, shift)
+    end_env = jax.tree_util.tree_map(lambda x: x[2], ctx.env)
+    srp1, gg1, c1 = torques(a, inertia, ctx.r_end_eci_m, ctx.v_end_eci_mps, end_env, fm,
+                            com_shift_body_m(params, ctx.mass_kg))
+    srp0, gg0 = state.srp_eci_nm, state.gravity_gradient_eci_nm
     half = ctx.step_s / 2
-    thrust0, thrust1 = c0.T @ state.thrust_torque_body_nm, c1.T @ state.thrust_torque_body_nm
-    h_total = state.h_total_eci_nms + half * ((srp0 + gg0) + (srp1 + gg1)) + half * (thrust0 + thrust1)
+    h_total = state.h_total_eci_nms + half * ((srp0 + gg0) + (srp1 + gg1)) + half * (
+        state.thrust_start_eci_nm + c1.T @ state.thrust_torque_body_nm)
     h_end = c1 @ h_total - inertia @ body_rate_rad_s(ctx.r_end_eci_m, ctx.v_end_eci_mps)
     above = jnp.max(jnp.abs(state.h_body_nms)) > HIGH_FRACTION * a["wheel_capacity_nms"]
     new = state._replace(
-        h_total_eci_nms=h_total, h_body_nms=h_end,
+        h_total_eci_nms=h_total, h_body_nms=h_end, srp_eci_nm=srp1, gravity_gradient_eci_nm=gg1,
         srp_impulse_nms=state.srp_impulse_nms + half * (jnp.linalg.norm(srp0) + jnp.linalg.norm(srp1)),
         gravity_gradient_impulse_nms=state.gravity_gradient_impulse_nms
         + half * (jnp.linalg.norm(gg0) + jnp.linalg.norm(gg1)),
