@@ -444,3 +444,20 @@ def test_a_year_of_li2022_momentum_keeps_box_and_wheels_in_every_draw_and_satura
     dv = np.asarray(result.metrics["dv_per_year_mps"])
     spent = dv[:16] - dv[16:]
     assert np.all(np.abs(spent) < 0.05 * dv[16:]), spent
+
+
+def test_one_element_of_a_list_key_is_an_override_and_a_sweep_axis(tmp_path):
+    """``TABLE.KEY[i]`` sets one element (the others the file's); a sweep file takes it as a grid axis, each point
+    loaded as a scenario (``sweep.load`` checks every point); bad indices and non-list keys are refused."""
+    sc = scenario.load("li2022-momentum", {"attitude.srp_offset_array_m[2]": 0.03})
+    assert sc.config["attitude"]["srp_offset_array_m"] == [0.1, 0.0, 0.03]
+    with pytest.raises(ValueError, match=r"has 3 elements \(indices 0 to 2\)"):
+        scenario.load("li2022-momentum", {"attitude.srp_offset_array_m[3]": 0.2})
+    with pytest.raises(ValueError, match="is not a list key of the \\[attitude\\] table"):
+        scenario.load("li2022-momentum", {"attitude.wheel_capacity_nms[0]": 20.0})
+    from geojax import sweep
+    path = tmp_path / "s.toml"
+    path.write_text('scenario = "li2022-momentum"\ncontrollers = ["qffc"]\n[set]\n"duration.days" = 2\n'
+                    '[grid]\n"attitude.srp_offset_array_m[0]" = [0.05, 0.2]\n')
+    spec = sweep.load(path)
+    assert spec.grid == {"attitude.srp_offset_array_m[0]": [0.05, 0.2]}
