@@ -23,7 +23,7 @@ from geojax.loop.metrics import cycle_table, summarize
 from geojax.export import trajectory
 from geojax.loop import report
 from geojax import traced
-from geojax.loop.setup import Batch, controller_of, prepare, program_identity, reference, unstack
+from geojax.loop.setup import Batch, controller_of, padded, prepare, program_identity, reference, unstack
 from geojax.params import static_settings
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
@@ -80,8 +80,11 @@ def loop(params: Params, key, shared: Shared, reference_env=None, *, controller:
     """``rollout`` without its metrics: ``(final state, records)``, the records over every cycle of
     ``shared.env`` (the run's first ``shared.n_active``, zeros beyond)."""
     if reference_env is not None:
-        shared = shared._replace(reference=reference(params, reference_env, step_s, dynamics,
-                                                     controller.reference_cycles))
+        own = reference(params, reference_env, step_s, dynamics, controller.reference_cycles)
+        slots = shared.env.earth_angle_rad.shape[0]  # the loop's cycle slots (``loop.setup.prepare(pad=True)``)
+        if own.osc.shape[0] < slots:
+            own = padded(own, slots)
+        shared = shared._replace(reference=own)
     return closed_loop(controller, params, shared, key, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps,
                        states=states)
 

@@ -151,12 +151,12 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
         # The environment and the reference are computed for the run's cycles as they always were (small
         # programs; their values at other lengths differ in the last bit, XLA's vector and scalar loops), then
         # repeated into the slots the loop skips.
-        shared = Shared(*_padded((cycles_env, ref), n_slots), jnp.asarray(n_cycles, jnp.int32))
+        shared = Shared(*padded((cycles_env, ref), n_slots), jnp.asarray(n_cycles, jnp.int32))
     return Batch(controller, stacked, shared, step_s, dynamics, n_cycles, segments, per_sample,
                  states_of(first.config))
 
 
-def _padded(tree, n_slots: int):
+def padded(tree, n_slots: int):
     """``tree``'s leaves [n, ...] with their last row repeated to [n_slots, ...]."""
     return jax.tree_util.tree_map(
         lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], n_slots - x.shape[0], axis=0)]), tree)
