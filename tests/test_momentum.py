@@ -26,6 +26,7 @@ from geojax.loop.simulate import simulate as closed_loop
 from geojax.physics import constants as c
 from geojax.physics.ephemeris import sun_position_eci_m
 from geojax.physics.frames import earth_rotation_angle_rad
+from geojax.control.base import Controller, coast, stateless_init
 from geojax.physics.dynamics import Thrust
 from geojax.states import momentum
 from geojax.states.base import StateModel, ThrustContext
@@ -461,3 +462,26 @@ def test_one_element_of_a_list_key_is_an_override_and_a_sweep_axis(tmp_path):
                     '[grid]\n"attitude.srp_offset_array_m[0]" = [0.05, 0.2]\n')
     spec = sweep.load(path)
     assert spec.grid == {"attitude.srp_offset_array_m[0]": [0.05, 0.2]}
+
+
+def _told_plan(params, controller_state, estimate, context, key):
+    return estimate.states["wheels"], controller_state
+
+
+TOLD = Controller(stateless_init, _told_plan, coast, record=lambda plan: {"told_nms": plan})
+
+
+@pytest.mark.parametrize("sigma", [0.0, 2.0])
+def test_the_controller_is_told_the_measured_wheel_momentum(sigma):
+    """``Estimate.states["wheels"]`` at a cycle start is the wheels' momentum there (the cycle record's start)
+    plus the cycle's measurement error: exactly it at sigma 0; at 2 N m s per axis, errors of that spread (40
+    cycles x 3 axes: the sample standard deviation within 25 %)."""
+    sc = _wheels(days=40, srp_offset_array_m=[0.1, 0.0, 0.0], wheel_momentum_sigma_nms=sigma)
+    result = simulate(sc, controller=TOLD)
+    told = np.asarray(result.records.cycles.controller["told_nms"])
+    start = np.asarray(result.records.cycles.states["wheels"].start_nms)
+    if sigma == 0.0:
+        np.testing.assert_array_equal(told, start)
+    else:
+        assert np.std(told - start) == pytest.approx(sigma, rel=0.25)
+        assert abs(np.mean(told - start)) < 3 * sigma / np.sqrt(told.size)

@@ -77,6 +77,9 @@ class Estimate(NamedTuple):
     mean: jnp.ndarray  # [6] mean (lon rad, drift rad/s, e_x, e_y, i_x, i_y); zeros without a reference
     mass_kg: jnp.ndarray  # [] on-board mass (the propellant gauge is taken as exact)
     t_s: jnp.ndarray  # [] cycle start, s since the start of the run
+    # {name: what a further state of the loop tells the controller} (``StateModel.estimate``, ``geojax.states``):
+    # ``states["wheels"]`` the measured wheel momentum [3], N m s, body axes, where the loop carries the wheels
+    states: dict = {}
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

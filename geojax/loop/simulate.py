@@ -31,7 +31,8 @@ Beyond the orbit and the mass the loop carries the spacecraft's further states (
 momentum), one extension point: ``states`` is a static tuple of ``StateModel`` s whose states ride in the carry
 (a dict by name), updated after each orbit step (``StateModel.step``) and at each cycle start
 (``StateModel.cycle``), and which may change the thrust flown over a step (``StateModel.thrust``: the wheels'
-dumping tilt), with records in ``CycleRecord.states`` and ``StepRecord.states``.  With none, every dict
+dumping tilt) or what the controller is told at a cycle start (``StateModel.estimate``: the measured wheel
+momentum, later a filter's state in place of the fix), with records in ``CycleRecord.states`` and ``StepRecord.states``.  With none, every dict
 is empty: no leaf, the same program and numbers.
 """
 
@@ -160,11 +161,10 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
         ctx = context(k, env_steps, window)
         extra = _cycle_start(states, params, extra, dynamics, state, k, ctx.t_s, cycle_key, mu)
         fix = measured_mee(dynamics, state.orbit, jax.random.normal(cycle_key, (2, 6))[0], params.errors, mu)
+        estimate = _estimate_hooks(states, params, extra, Estimate(fix, jnp.zeros(6), state.mass_kg, ctx.t_s))
         if width:
-            mean = estimate_mean(boundary_elements(fix, env_steps.earth_angle_rad[0, 0]), osc_ref_k, window[0], mu)
-        else:
-            mean = jnp.zeros(6)
-        estimate = Estimate(fix, mean, state.mass_kg, ctx.t_s)
+            estimate = estimate._replace(mean=estimate_mean(
+                boundary_elements(estimate.fix_mee, env_steps.earth_angle_rad[0, 0]), osc_ref_k, window[0], mu))
         plan, controller_state = controller.plan(params, controller_state, estimate, ctx, cycle_key)
 
         def step(carry, xs):
@@ -247,6 +247,15 @@ def _cycle_start(states, params, extra: dict, dynamics, state, k, t_s, cycle_key
         start = CycleStart(k, t_s, r, v, state.mass_kg, jax.random.fold_in(cycle_key, STATE_KEY_OFFSET + place))
         extra[m.name] = m.cycle(params, extra[m.name], start)
     return extra
+
+
+def _estimate_hooks(states, params, extra: dict, estimate: Estimate) -> Estimate:
+    """The controller's ``Estimate`` after the further states' ``estimate`` hooks, in the tuple's order (the fix
+    they leave is the one the mean elements are estimated from; unchanged without hooks)."""
+    for m in states:
+        if m.estimate is not None:
+            estimate = m.estimate(params, extra[m.name], estimate)
+    return estimate
 
 
 def _thrust_hooks(states, params, extra: dict, thrust, context: ThrustContext):

@@ -16,6 +16,10 @@ through one extension point: a tuple of ``StateModel`` s, static (chosen from th
   thrust the controller commands (``physics.dynamics.Thrust``, stopped without propellant): the model may change
   what is flown (the wheels' dumping tilt) and note in its state what it did, for its ``step``; the orbit then
   flies the returned thrust (``ThrustContext``: the true state at the step's start, the step);
+* ``estimate(params, state, estimate) -> Estimate`` (optional): at each cycle start, after ``cycle``, on what
+  the controller will be told (``control.base.Estimate``): the model may add what it measures to
+  ``estimate.states[name]`` (the wheels: their measured momentum) or replace the fix (a navigation filter: its
+  state); the mean elements are then estimated from the fix it leaves;
 * ``summary(params, state_at_start, state_at_end, step_records) -> cycle_record``: the cycle's record from the
   step records ([n_steps, ...]), kept always (extremes, so a check covers every step without keeping them);
 * ``metrics(params, cycle_records, n_steps_total, run_s) -> ({name: []}, failed)``: its scalar metrics (units in
@@ -26,10 +30,9 @@ through one extension point: a tuple of ``StateModel`` s, static (chosen from th
 With no model (every scenario that asks for none) the carry and the records hold empty dicts: no leaf, the same
 program, every number as without the extension point (``tests/test_momentum.py`` checks it against main's code).
 
-How a navigation filter fits: its state is the estimate and covariance; ``cycle`` runs the update
-with the cycle's measurement (drawn from ``CycleStart.key``), ``step`` the time update with the thrust flown, and
-the controller's ``Estimate`` is then read from it -- the one hook not built yet, a model's optional
-``estimate(params, state, estimate) -> Estimate`` that the loop would call where it builds the estimate today.
+How a navigation filter fits: its state is the estimate and covariance; ``step`` the time update with the
+thrust flown and the measurement updates at the step's times (their noise from a key its ``cycle`` keeps),
+and its ``estimate`` hook gives the controller the filter's state in place of the fix.
 """
 
 from __future__ import annotations
@@ -96,3 +99,4 @@ class StateModel(NamedTuple):
     status: str | None = None
     columns: Callable | None = None
     thrust: Callable | None = None
+    estimate: Callable | None = None

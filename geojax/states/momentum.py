@@ -225,6 +225,12 @@ def remainder_nms(h, u_hat, u_other, bound_nms):
     return jnp.where(usable, one + lam * step_to, one)
 
 
+def estimate(params, state: Wheels, told):
+    """What the controller is told at a cycle start: ``told.states["wheels"]``, the measured wheel momentum [3]
+    (N m s, body axes: h_w plus this cycle's error, as the dumping law reads it)."""
+    return told._replace(states={**told.states, NAME: state.h_body_nms + state.error_nms})
+
+
 def com_shift_body_m(params, mass_kg):
     """dc [3]: the centre of mass less the run's starting one, body axes, with the propellant used (m0 - m) gone
     from ``attitude.tank_offset_body_m``."""
@@ -306,7 +312,7 @@ def columns(cycles: WheelCycle) -> dict:
 
 
 MODEL = StateModel(NAME, init, step, summary, metrics, cycle=cycle, status=SATURATED, columns=columns,
-                   thrust=thrust)
+                   thrust=thrust, estimate=estimate)
 
 
 def validate(config: dict) -> None:
