@@ -485,3 +485,26 @@ def test_the_controller_is_told_the_measured_wheel_momentum():
     error = told[1] - start[1]
     assert np.std(error) == pytest.approx(2.0, rel=0.25)
     assert abs(np.mean(error)) < 3 * 2.0 / np.sqrt(error.size)
+
+
+@pytest.mark.slow
+def test_zone_nssk_fires_at_least_the_t_dump_its_measured_momentum_asks():
+    """Ye's zone NSSK with the wheels and a 5 deg tilt (100 N m s a day of SRP momentum: a 40 m^2 wing's centre
+    of pressure 5.12 m off): each cycle's north-south firing is at least max(t_min, |h_xz| / (L F sin 5 deg)),
+    computed here from the cycle-start momentum the wheels record (sigma 0: what the controller is told), at most
+    t_max; and it exceeds Ye's constant t_min where the momentum asks more."""
+    from geojax.control.zone_nssk import dump_time_s
+    sc = scenario.load("ye2022-ex1", {"duration.days": 6, "attitude.wheels": True,
+                                      "attitude.srp_offset_array_m": [5.12, 0.0, 0.0],
+                                      "attitude.dump_angle_max_deg": 5.0, "attitude.wheel_capacity_nms": 500.0})
+    result = simulate(sc)
+    h = np.asarray(result.records.cycles.states["wheels"].start_nms)
+    asked = np.hypot(h[:, 0], h[:, 2]) / (2.5 * 0.08 * np.sin(np.radians(5.0)))
+    ctl = sc.config["controller"]
+    fired = np.asarray(result.records.cycles.controller["burn_ns_s"])
+    assert np.all(fired >= np.minimum(np.maximum(ctl["t_min_s"], asked), ctl["t_max_s"]) - 1e-6)
+    assert np.all(fired <= ctl["t_max_s"] + 1e-6)
+    assert np.any(asked[1:] > ctl["t_min_s"]) and np.any(fired[1:] > ctl["t_min_s"] + 1.0)
+    params = jax.tree_util.tree_map(lambda x: x[0], setup.prepare([sc]).params)
+    np.testing.assert_allclose(np.asarray(jax.vmap(lambda w: dump_time_s(params, w, 0.08))(jnp.asarray(h))), asked,
+                               rtol=1e-12)

@@ -46,6 +46,11 @@ Readings of the paper (each stated where it is coded):
   drift model; ``tests/test_zone_nssk.py`` checks one against the other.
 * t_min, t_max and Delta_lambda_max are given (Table 3), not derived from
   eqs. (42)-(44); the checks of eqs. (40)-(41) are made at load (``validate``).
+  Where the loop carries the reaction wheels with a dumping tilt
+  (``geojax.states.momentum``), eq. (40)'s t_dump is no longer the constant
+  3207 s but what the measured momentum asks (``dump_time_s``): each cycle's
+  least firing time is max(t_min, t_dump), at most t_max
+  (``t_dump_from_momentum = false``: the constant alone, as the paper).
 
 East-west keeping is outside the paper.  Here the daily burn carries it: the
 thrust is tilted in-plane by at most ``tilt_max_deg`` (10 deg by default) and
@@ -93,6 +98,9 @@ FIELDS = {
     "t_min_s": Field(NUMBER, REQUIRED, lower=0.0, upper=SIDEREAL_DAY_S / 2, si="t_min_s"),
     # Eq. (40): t_min > t_dump, checked at load.
     "t_dump_s": Field(NUMBER, T_DUMP_S, lower=0.0, lower_inclusive=True, upper=SIDEREAL_DAY_S / 2),
+    # Where the loop carries the wheels with a dumping tilt: each cycle's least firing time is also what the
+    # measured momentum asks (``dump_time_s``); false: the constant t_dump_s alone, as the paper.
+    "t_dump_from_momentum": Field(bool, True, si="t_dump_from_momentum"),
     # Half-width of the SK sector around +y (Fig. 5, eq. (26)), Table 3.
     "dlambda_max_deg": Field(NUMBER, REQUIRED, lower=0.0, upper=90.0, si="dlambda_max_rad", to_si=degrees),
     # East-west (our choice, module docstring): in-plane tilt of the daily burn and the longitude time constant.
@@ -293,10 +301,14 @@ def plan_cycle(params, estimate, context):
     to_centre_s = jnp.mod(jnp.arctan2(-drift[1], -drift[0]) - l_start, 2 * jnp.pi) / (2 * jnp.pi) * cycle_s
     delta = i_now + to_centre_s / cycle_s * drift - (target - 0.5 * drift)  # eq. (56)
 
-    i_min = burn_inclination_rad(c["t_min_s"], mass, thrust_n)
+    t_min = c["t_min_s"]
+    if "wheels" in estimate.states:  # the loop carries the wheels (static): eq. (40)'s t_dump from the momentum
+        asked = dump_time_s(params, estimate.states["wheels"], thrust_n)
+        t_min = jnp.where(c["t_dump_from_momentum"] > 0, jnp.minimum(jnp.maximum(t_min, asked), c["t_max_s"]), t_min)
+    i_min = burn_inclination_rad(t_min, mass, thrust_n)
     i_max = burn_inclination_rad(c["t_max_s"], mass, thrust_n)
     w, amount = control_vector(delta, i_min, i_max, c["dlambda_max_rad"])
-    burn_ns = jnp.clip(burn_duration_s(jnp.hypot(amount[0], amount[1]), mass, thrust_n), c["t_min_s"], c["t_max_s"])
+    burn_ns = jnp.clip(burn_duration_s(jnp.hypot(amount[0], amount[1]), mass, thrust_n), t_min, c["t_max_s"])
 
     tilt = tilt_rad(params, estimate, ref, cycle_s, thrust_n * burn_ns / mass)
     v_mps = thrust_n * burn_ns / (mass * jnp.cos(tilt))
@@ -308,6 +320,19 @@ def plan_cycle(params, estimate, context):
                      jnp.stack([jnp.arcsin(-direction[2]), zero]), jnp.stack([centre, centre + jnp.pi]), zero,
                      jnp.asarray(True))
     return (w, i_now, delta, amount, drift, burn_ns, tilt), burns
+
+
+def dump_time_s(params, wheels_nms, thrust_n):
+    """Eq. (40)'s t_dump from the momentum to unload (where the loop carries the wheels and the thrust line may
+    tilt, ``geojax.states.momentum``): the firing time a tilt of at most delta_max about a nozzle L from the centre
+    of mass needs to empty the measured momentum's part across the north-pointing burn, |h_xz| / (L F sin
+    delta_max) (body x and z: the pitch wheel's axis y is the burn's own line, which no tilt reaches).  Its norm
+    is kept by the body's turn about the pitch axis until the burn; what the torques add meanwhile is the next
+    day's.  0 where no tilt is allowed."""
+    a = params.attitude
+    capacity_nm = a["thrust_arm_m"] * thrust_n * jnp.sin(a["dump_angle_max_rad"])
+    across = jnp.hypot(wheels_nms[0], wheels_nms[2])
+    return jnp.where(capacity_nm > 0, across / jnp.where(capacity_nm > 0, capacity_nm, 1.0), 0.0)
 
 
 def tilt_rad(params, estimate, ref, cycle_s, v_ns_mps):
