@@ -116,7 +116,6 @@ class Wheels(NamedTuple):
     thrust_start_eci_nm: jnp.ndarray  # [3] the thrust's torque over the current step, ECI axes at its start
     line_eci: jnp.ndarray  # [3] the unit thrust direction of the latest firing step, ECI (0: none yet)
     other_line_eci: jnp.ndarray  # [3] that of the burn before the latest (more than 90 deg from it), ECI
-    firing: jnp.ndarray  # [] whether the latest step fired (0 or 1)
 
 
 class WheelStep(NamedTuple):
@@ -147,7 +146,7 @@ def init(params, r_eci_m, v_eci_mps, env, fm) -> Wheels:
     zero = jnp.zeros_like(h0[0])
     none = jnp.zeros_like(h0)
     return Wheels(c.T @ (inertia @ body_rate_rad_s(r_eci_m, v_eci_mps) + h0), h0, zero, zero, zero, zero, zero,
-                  none, none, zero, srp, gg, none, none, none, zero)
+                  none, none, zero, srp, gg, none, none, none)
 
 
 def cycle(params, state: Wheels, start) -> Wheels:
@@ -196,8 +195,7 @@ def thrust(params, state: Wheels, flown: Thrust, ctx: ThrustContext):
     cross_n = flown.on_fraction * force_n * jnp.linalg.norm(tilt)
     direction = jnp.stack([-u_new_b[2], u_new_b[0], -u_new_b[1]])
     state = state._replace(thrust_torque_body_nm=torque, thrust_start_eci_nm=c.T @ torque, cross_force_n=cross_n,
-                           line_eci=jnp.where(firing, u_eci, state.line_eci), other_line_eci=other_eci,
-                           firing=firing.astype(state.firing.dtype))
+                           line_eci=jnp.where(firing, u_eci, state.line_eci), other_line_eci=other_eci)
     return state, flown._replace(direction_rsw=direction)
 
 
@@ -208,10 +206,9 @@ def remainder_nms(h, u_hat, u_other, bound_nms):
     node each orbit) can then empty, r . u_other = 0, is r_2 = (h . u) (u - c u_o) / (1 - c^2), c = u . u_o (the
     least-norm solution of r . u = h . u, r . u_o = 0).  Its norm is |h . u| / sin(theta), theta the angle between
     the lines: where it would exceed ``bound_nms`` (``attitude.dump_transient_fraction`` of the capacity) the
-    remainder goes only part of the way
-    from the one-burn least squares r_1 = (h . u) u (both have r . u = h . u; r_2 - r_1 is perpendicular to u, so
-    |r|^2 = |r_1|^2 + lambda^2 |r_2 - r_1|^2 fixes lambda); with no other line yet, or lines within 3 deg of
-    parallel, r_1."""
+    remainder goes only part of the way from the one-burn least squares r_1 = (h . u) u (both have
+    r . u = h . u; r_2 - r_1 is perpendicular to u, so |r|^2 = |r_1|^2 + lambda^2 |r_2 - r_1|^2 fixes lambda);
+    with no other line yet, or lines within 3 deg of parallel, r_1."""
     along = jnp.dot(h, u_hat)
     one = along * u_hat
     c = jnp.dot(u_hat, u_other)
