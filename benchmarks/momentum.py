@@ -4,9 +4,9 @@
 
 li2022-momentum (the wheels, the SRP offset's torque, dumping by tilting the arms; ``geojax.states.momentum``)
 against li2022-qffc (the same satellite and controller, no wheels), ``--batch`` samples with their own error draws
-(H_rv = H_att = 1) sharded over one XLA CPU device per core, each compiled once and timed after compilation,
-the best of three runs (``benchmarks/simulate.py``'s measure).  The figure is the ratio of sample-years per second, with over without
-(the target: at least 0.8).  Results: ``benchmarks/results/momentum.json`` and ``.md``.
+(H_rv = H_att = 1) sharded over one XLA CPU device per core, each compiled once and timed after compilation, the
+best of three runs (``benchmarks/simulate.py``'s measure). The figure is the ratio of sample-years per second, with
+over without (the target: at least 0.8). Results: ``benchmarks/results/momentum.json`` and ``.md``.
 """
 
 from __future__ import annotations

@@ -28,12 +28,12 @@ keeping the steps) and the controller's own records.  Per-step records are
 kept only on request (``keep_steps``).
 
 Beyond the orbit and the mass the loop carries the spacecraft's further states (``geojax.states``: the wheels'
-momentum), one extension point: ``states`` is a static tuple of ``StateModel`` s whose states ride in the carry
-(a dict by name), updated after each orbit step (``StateModel.step``) and at each cycle start
-(``StateModel.cycle``), and which may change the thrust flown over a step (``StateModel.thrust``: the wheels'
-dumping tilt) or what the controller is told at a cycle start (``StateModel.estimate``: the measured wheel
-momentum, later a filter's state in place of the fix), with records in ``CycleRecord.states`` and ``StepRecord.states``.  With none, every dict
-is empty: no leaf, the same program and numbers.
+momentum), one extension point: ``states`` is a static tuple of ``StateModel`` s whose states ride in the carry (a
+dict by name), updated after each orbit step (``StateModel.step``) and at each cycle start (``StateModel.cycle``),
+and which may change the thrust flown over a step (``StateModel.thrust``: the wheels' dumping tilt) or what the
+controller is told at a cycle start (``StateModel.estimate``: the measured wheel momentum, later a filter's state in
+place of the fix), with records in ``CycleRecord.states`` and ``StepRecord.states``. With none, every dict is empty:
+no leaf, the same program and numbers.
 """
 
 from __future__ import annotations

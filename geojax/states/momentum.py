@@ -37,28 +37,28 @@ is conserved to rounding, ``tests/test_momentum.py``).  The torques (ECI):
   dc = -(m0 - m) / m p), so a line through the old centre leaves tau = -dc x F (the SRP offset moves by -dc
   too).  And a dumping tilt (below) turns the line about the nozzle.
 
-Dumping (``thrust``, the model's hook on the thrust flown, before the orbit's step).  During a burn the line of
-action is tilted by delta about the nozzle, u' = cos(delta) u_hat + s, s perpendicular to u_hat with
-|s| = sin(delta): the torque r_n x F u' = -L F (u_hat x s), any torque perpendicular to u_hat up to
-L F sin(delta_max) (``attitude.dump_angle_max_deg``).  No tilt can reach the momentum along the line itself,
-and the planners fire two burns an orbit whose lines are nearly parallel in inertial space (Li's QFFC: 9.8 deg
-apart at the median cycle of a year, under 2.3 deg in a tenth of them; the thrusters sit on one face and the
-burns are half an orbit apart), so a burn that simply empties what it can (the one-burn least squares,
-h -> (h . u) u) leaves the momentum along the common line to grow: 60 N m s over Li's year with 12 N m s a day
-of SRP momentum, against 43 N m s under the two-burn law (``studies/momentum/results/li_dumping.md``).  The law therefore allocates over two burns (``remainder_nms``): each burn leaves the momentum r that
-the next burn, along the previous burn's line u_o (the same thruster at the same node an orbit ago), can empty,
-r . u_o = 0 (with r . u = h . u, the least such r), amplified by 1 / sin(theta) for lines theta apart and
-bounded to ``attitude.dump_transient_fraction`` of the capacity (the rest is the margin for the torques until
-the next burn).  The burn asks the torque that takes the measured momentum h_m (h_w plus a per-cycle Gaussian
-error of ``attitude.wheel_momentum_sigma_nms`` per axis) toward r at the rate k_dump
-(``attitude.dump_gain_per_s``), held over the step's firing time T as its exact zero-order hold,
-tau* = -(1 - exp(-k_dump T)) (h_m - r) / T: at most all of it, so stable at any gain (k_dump h held over a
-900 s step overshoots beyond 2 / 900 s); tau* is perpendicular to u by construction, s = (u x tau*) / (L F),
-scaled back to sin(delta_max) where longer.  The cost is the planner's: the thrust along the planned direction
-falls to F cos(delta) (at most 0.4 % at 5 deg) and F sin(delta) goes across it; the next cycle's plan, which
-sees the orbit flown, makes both up (the paired run without dumping measures the Delta-V;
-``dump_cross_dv_mps`` is the across part).  The body axes are the RSW axes permuted (x = S, y = -W, z = -R), so
-the hook works on the controller's RSW direction directly.
+Dumping (``thrust``, the model's hook on the thrust flown, before the orbit's step). During a burn the line of
+action is tilted by delta about the nozzle, u' = cos(delta) u_hat + s, s perpendicular to u_hat with |s| =
+sin(delta): the torque r_n x F u' = -L F (u_hat x s), any torque perpendicular to u_hat up to L F sin(delta_max)
+(``attitude.dump_angle_max_deg``). No tilt can reach the momentum along the line itself, and the planners fire two
+burns an orbit whose lines are nearly parallel in inertial space (Li's QFFC: 9.8 deg apart at the median cycle of a
+year, under 2.3 deg in a tenth of them; the thrusters sit on one face and the burns are half an orbit apart), so a
+burn that simply empties what it can (the one-burn least squares, h -> (h . u) u) leaves the momentum along the
+common line to grow: 60 N m s over Li's year with 12 N m s a day of SRP momentum, against 43 N m s under the
+two-burn law (``studies/momentum/results/li_dumping.md``). The law therefore allocates over two burns
+(``remainder_nms``): each burn leaves the momentum r that the next burn, along the previous burn's line u_o (the
+same thruster at the same node an orbit ago), can empty, r . u_o = 0 (with r . u = h . u, the least such r),
+amplified by 1 / sin(theta) for lines theta apart and bounded to ``attitude.dump_transient_fraction`` of the
+capacity (the rest is the margin for the torques until the next burn). The burn asks the torque that takes the
+measured momentum h_m (h_w plus a per-cycle Gaussian error of ``attitude.wheel_momentum_sigma_nms`` per axis) toward
+r at the rate k_dump (``attitude.dump_gain_per_s``), held over the step's firing time T as its exact zero-order
+hold, tau* = -(1 - exp(-k_dump T)) (h_m - r) / T: at most all of it, so stable at any gain (k_dump h held over a 900
+s step overshoots beyond 2 / 900 s); tau* is perpendicular to u by construction, s = (u x tau*) / (L F), scaled back
+to sin(delta_max) where longer. The cost is the planner's: the thrust along the planned direction falls to F
+cos(delta) (at most 0.4 % at 5 deg) and F sin(delta) goes across it; the next cycle's plan, which sees the orbit
+flown, makes both up (the paired run without dumping measures the Delta-V; ``dump_cross_dv_mps`` is the across
+part). The body axes are the RSW axes permuted (x = S, y = -W, z = -R), so the hook works on the controller's RSW
+direction directly.
 
 The default inertia tensor (``DEFAULT_INERTIA_KG_M2``) is an estimate for a satellite of Li 2022's class (5000
 kg, 200 m^2 of SRP area), no manufacturer publishing one: a 4600 kg bus as a uniform box 2.5 m (x) x 2.5 m (y) x
@@ -284,7 +284,8 @@ def metrics(params, cycles: WheelCycle, n_steps_total: int, run_s: float):
     between the run's first and last cycle boundaries, one orbit apart each, so the orbit-periodic part drops
     out), the torque impulse per source (SRP, gravity gradient, thrust: the dumped momentum and the centre of
     mass's shift), the Delta-V the dumping tilts put across the plan, the fraction of step starts above 80 % of
-    capacity; saturated where a wheel exceeded its capacity (``attitude.wheel_capacity_nms``) at any step start or cycle end."""
+    capacity; saturated where a wheel exceeded its capacity (``attitude.wheel_capacity_nms``) at any step start
+    or cycle end."""
     peak = jnp.max(cycles.max_abs_nms)
     out = {
         "max_wheel_momentum_nms": peak,

@@ -83,6 +83,7 @@ def summary(runs: dict, samples: int, days: float) -> dict:
     on, off, free = (runs[k]["metrics"] for k in ("dumping", "no_dumping", "torque_free"))
     dv_on, dv_off, dv_free = (np.asarray(m["dv_per_year_mps"]) for m in (on, off, free))
     spent = dv_on - dv_off
+    saturated_days = [d for d in runs["no_dumping"]["first_saturated_day"] if d]
     return {
         "samples": samples, "days": days,
         "dumping_statuses": sorted(set(runs["dumping"]["status"])),
@@ -92,8 +93,8 @@ def summary(runs: dict, samples: int, days: float) -> dict:
         "capacity_nms": scenario.load("li2022-momentum").config["attitude"]["wheel_capacity_nms"],
         "dumping_max_abs_mean_dlon_deg": float(np.max(on["max_abs_mean_dlon_deg"])),
         "no_dumping_saturated": sum(s == "wheels saturated" for s in runs["no_dumping"]["status"]),
-        "no_dumping_latest_saturation_day": max((d for d in runs["no_dumping"]["first_saturated_day"] if d), default=None),
-        "no_dumping_earliest_saturation_day": min((d for d in runs["no_dumping"]["first_saturated_day"] if d), default=None),
+        "no_dumping_latest_saturation_day": max(saturated_days, default=None),
+        "no_dumping_earliest_saturation_day": min(saturated_days, default=None),
         "dumping_draws_saturated": sum(d is not None for d in runs["dumping"]["first_saturated_day"]),
         "dv_dumping_mps": float(np.mean(dv_on)), "dv_no_dumping_mps": float(np.mean(dv_off)),
         "dv_torque_free_mps": float(np.mean(dv_free)),
