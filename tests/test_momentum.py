@@ -121,21 +121,7 @@ def test_srp_offset_along_the_array_axis_grows_momentum_at_d_times_the_perpendic
     result = simulate(sc)
     cycles = result.records.cycles.states["wheels"]
     run_s = len(cycles.end_nms) * c.SIDEREAL_DAY_S
-
-    t = np.arange(0.0, run_s + 1.0, 60.0)
-    station_rad = np.radians(sc.station_lon_deg)
-    theta = station_rad + np.asarray(earth_rotation_angle_rad(sc.epoch_tt_s + t, sc.epoch_tt_s, sc.tt_minus_ut1_s))
-    radius_m = 42164.16e3
-    r = radius_m * np.stack([np.cos(theta), np.sin(theta), np.zeros_like(t)], axis=-1)
-    sun = np.asarray(sun_position_eci_m(jnp.asarray(sc.epoch_tt_s + t), sc.epoch_tt_s))
-    rho = sun - r
-    dist = np.linalg.norm(rho, axis=-1, keepdims=True)
-    craft = sc.config["spacecraft"]
-    force = -sc.config["forces"]["srp_pressure_n_m2"] * (1 + craft["reflectivity"]) * craft["srp_area_m2"] * (
-        c.AU_M / dist) ** 2 * rho / dist
-    normal = np.array([0.0, 0.0, 1.0])  # the station's orbit is equatorial to 1e-3
-    torque = d_m * np.cross(normal, force)
-    expected = np.sum((torque[1:] + torque[:-1]) / 2 * np.diff(t)[:, None], axis=0)
+    t, force, torque, expected = _srp_quadrature(sc, d_m, run_s)
 
     got = np.linalg.norm(cycles.end_nms[-1] - cycles.start_nms[0])
     assert got == pytest.approx(np.linalg.norm(expected), rel=0.02)
@@ -149,6 +135,51 @@ def test_srp_offset_along_the_array_axis_grows_momentum_at_d_times_the_perpendic
         np.sum((np.linalg.norm(torque[1:], axis=-1) + np.linalg.norm(torque[:-1], axis=-1)) / 2 * np.diff(t)),
         rel=0.02)
     assert result.metrics["gravity_gradient_impulse_nms"] < 1e-9
+
+
+def _srp_quadrature(sc, d_m, run_s):
+    """(t [n], F [n, 3], tau [n, 3], the integral of tau) of d n_hat x F over ``run_s`` by a 60 s trapezoid, F the
+    SRP force from the Sun's position and the station's circular equatorial orbit, independent of the loop."""
+    t = np.arange(0.0, run_s + 1.0, 60.0)
+    station_rad = np.radians(sc.station_lon_deg)
+    theta = station_rad + np.asarray(earth_rotation_angle_rad(sc.epoch_tt_s + t, sc.epoch_tt_s, sc.tt_minus_ut1_s))
+    radius_m = 42164.16e3
+    r = radius_m * np.stack([np.cos(theta), np.sin(theta), np.zeros_like(t)], axis=-1)
+    sun = np.asarray(sun_position_eci_m(jnp.asarray(sc.epoch_tt_s + t), sc.epoch_tt_s))
+    rho = sun - r
+    dist = np.linalg.norm(rho, axis=-1, keepdims=True)
+    craft = sc.config["spacecraft"]
+    force = -sc.config["forces"]["srp_pressure_n_m2"] * (1 + craft["reflectivity"]) * craft["srp_area_m2"] * (
+        c.AU_M / dist) ** 2 * rho / dist
+    normal = np.array([0.0, 0.0, 1.0])  # the station's orbit is equatorial to 1e-3
+    torque = d_m * np.cross(normal, force)
+    return t, force, torque, np.sum((torque[1:] + torque[:-1]) / 2 * np.diff(t)[:, None], axis=0)
+
+
+@pytest.mark.slow
+def test_the_cli_run_of_li2022_momentum_without_dumping_stores_the_quadratures_momentum(tmp_path):
+    """Issue 41's check as a user runs it: ``geojax scenarios --show li2022-momentum`` edited to dumping off
+    (``dump_angle_max_deg = 0``), ``geojax simulate FILE --days 4``: the momentum its file records (the net change
+    of the wheels' momentum per day; the QFFC's burns fire through the centre of mass, so the SRP offset alone
+    drives it) within 2 % of the independent quadrature of d n_hat x F."""
+    import contextlib
+    import io
+
+    import h5py
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):
+        assert cli.main(["scenarios", "--show", "li2022-momentum"]) == 0
+    assert "dump_angle_max_deg = 5.0" in text.getvalue()
+    path = tmp_path / "mine.toml"
+    path.write_text(text.getvalue().replace("dump_angle_max_deg = 5.0", "dump_angle_max_deg = 0.0"))
+    assert cli.main(["simulate", str(path), "--days", "4", "--out", str(tmp_path / "run.h5")]) == 0
+    with h5py.File(tmp_path / "run.h5") as f:
+        per_day = float(f["metrics/wheel_momentum_per_day_nms"][()])
+        assert float(f["metrics/thrust_torque_impulse_nms"][()]) == 0.0
+    sc = scenario.load(path)
+    run_s = 4 * c.SIDEREAL_DAY_S
+    _, _, _, expected = _srp_quadrature(sc, 0.1, run_s)
+    assert per_day == pytest.approx(np.linalg.norm(expected) * c.SECONDS_PER_DAY / run_s, rel=0.02)
 
 
 def _mean_motion(sc):
