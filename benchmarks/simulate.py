@@ -52,9 +52,11 @@ def main() -> None:
                         {"rows": rows}, markdown(rows)))
 
 
-def measure(controller: str, days: float, batch: int, name: str | None = None, repeats: int = 1) -> dict:
+def measure(controller: str, days: float, batch: int, name: str | None = None, repeats: int = 1,
+            errors: dict | None = None) -> dict:
     """One row: ``batch`` samples of ``li2022-<controller>`` (or of the scenario ``name``) with their own error
-    draws, compiled once; the best of ``repeats`` runs."""
+    draws (``errors``: the overrides that set them; Li's nominal H_rv = H_att = 1 by default), compiled once; the
+    best of ``repeats`` runs."""
     import jax
     import jax.numpy as jnp
     import numpy as np
@@ -65,7 +67,8 @@ def measure(controller: str, days: float, batch: int, name: str | None = None, r
     from geojax.parallel import replicate, shard_batch
     from geojax.physics import constants as c
 
-    sc = scenario.load(name or f"li2022-{controller}", {"duration.days": days, "errors.h_rv": 1.0, "errors.h_att": 1.0})
+    errors = {"errors.h_rv": 1.0, "errors.h_att": 1.0} if errors is None else errors
+    sc = scenario.load(name or f"li2022-{controller}", {"duration.days": days, **errors})
     setup = prepare([sc])
     setup = setup._replace(shared=replicate(setup.shared))
     one = rollout_fn(setup, lanes=max(1, batch // jax.device_count()))

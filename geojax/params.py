@@ -130,9 +130,12 @@ class Params(NamedTuple):
     # The ``[attitude]`` table's leaves where the loop carries the wheels (``geojax.states.momentum``); else empty:
     # a state that is absent has no leaf.
     attitude: dict = {}
+    # The ``[navigation]`` table's leaves where the loop carries the filter (``geojax.states.navigation``:
+    # ``navigation.model = "ekf"``, the stations stacked on a leading axis); else empty.
+    navigation: dict = {}
 
 
-LEAF_TABLES = ("spacecraft", "thrusters", "station", "errors", "controller", "attitude")
+LEAF_TABLES = ("spacecraft", "thrusters", "station", "errors", "controller", "attitude", "navigation")
 
 
 def table_leaves(config_table: dict, fields: dict[str, Field]) -> dict:
@@ -205,5 +208,5 @@ def check_value(name: str, value: Any, field: Field) -> Any:
 def _kind_name(kinds) -> str:
     if float in kinds:
         return "a number"
-    names = {int: "an integer", str: "a string", bool: "true or false", list: "a list"}
+    names = {int: "an integer", str: "a string", bool: "true or false", list: "a list", dict: "a table"}
     return " or ".join(names[k] for k in kinds)

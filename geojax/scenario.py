@@ -32,6 +32,7 @@ from geojax.control.base import ARM_LIMIT_KEYS
 from geojax.scenario_schema import (EPHEMERIS_UTC_RANGE, NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M,
                                     NOMINAL_3SIGMA_V_MPS, ORBIT_KEYS, SCHEMA)
 from geojax.scenario_toml import to_toml
+from geojax.navigation import keys as navigation_keys
 from geojax.states import momentum
 
 try:
@@ -233,6 +234,7 @@ def _validate(raw: dict, controller=None) -> dict:
         validate(config)
     _check_honoured(config, module)
     momentum.validate(config)
+    config["navigation"] = navigation_keys.check_with(config)
     t = config["thrusters"]
     arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
     _check_propellant(config, module)

@@ -7,6 +7,7 @@ from __future__ import annotations
 from geojax.control.burns import NOMINAL_3SIGMA_ATT_DEG
 from geojax.loop.simulate import NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS
 from geojax.params import LOG, NUMBER as _NUMBER, REQUIRED, Field, degrees
+from geojax.navigation.keys import FIELDS as NAVIGATION_FIELDS
 from geojax.physics import constants as c
 from geojax.physics.forces import ForceModel
 from geojax.physics.geopotential import MAX_DEGREE as MAX_GRAVITY_DEGREE
@@ -195,6 +196,10 @@ SCHEMA: dict[str, dict[str, Field]] = {
                                           doc="1-sigma error per axis of the measured wheel momentum the dumping "
                                               "law reads (one draw per cycle)"),
     },
+    # Orbit determination (geojax.states.navigation, docs/navigation.md): Li 2022's Gaussian fix (the errors table)
+    # by default; `model = "ekf"` carries an extended Kalman filter on the stations' or receiver's tracking, and
+    # flies every burn with the execution errors given here.  Stations are [[navigation.stations]] sub-tables.
+    "navigation": NAVIGATION_FIELDS,
 }
 
 # The keys of ``orbit`` that each ``orbit.elements`` needs (every other one of them must be left out).

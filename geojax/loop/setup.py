@@ -35,6 +35,7 @@ from geojax.loop.simulate import Shared, simulate
 from geojax.params import LEAF_TABLES, Params, static_settings, table_leaves
 from geojax.physics.propagate import DYNAMICS, Dynamics, environment_grid, steps_per_cycle
 from geojax.scenario import SCHEMA, Scenario, controller_fields
+from geojax.states import navigation
 from geojax.states import of_config as states_of
 
 
@@ -97,6 +98,7 @@ def params_of(sc: Scenario, controller: Controller) -> Params:
     leaves = {t: table_leaves(cfg[t], fields[t]) for t in LEAF_TABLES}
     if not cfg["attitude"]["wheels"]:
         leaves["attitude"] = {}  # no state, no leaf
+    leaves["navigation"] = navigation.leaves_of(cfg["navigation"]) if cfg["navigation"]["model"] == "ekf" else {}
     return Params(initial, fm, **leaves)
 
 
@@ -201,7 +203,9 @@ STATIC_KEYS = {"integration.step_s": lambda sc: steps_per_cycle(sc.step_s), "dur
                                                     sc.config["forces"]["gravity_order"]),
                "forces.moon_shadow": lambda sc: sc.config["forces"]["moon_shadow"],
                "forces.ephemeris": lambda sc: sc.config["forces"]["ephemeris"],
-               "attitude.wheels": lambda sc: sc.config["attitude"]["wheels"]}
+               "attitude.wheels": lambda sc: sc.config["attitude"]["wheels"],
+               "navigation.model": lambda sc: (sc.config["navigation"]["model"],
+                                               navigation.layout_of(sc.config["navigation"]))}
 
 
 def program_identity(sc: Scenario, *settings) -> tuple:

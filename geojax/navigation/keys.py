@@ -1,8 +1,9 @@
-"""The keys planned for a scenario's ``[navigation]`` table, declared as ``params.Field``s, and their validation.
+"""The keys of a scenario's ``[navigation]`` table, declared as ``params.Field``s, and their validation.
 
-Not yet in the scenario schema (``geojax.scenario_schema``): the filter is not in the closed loop.  ``validate``
-checks a table as the schema will, one ``ValueError`` naming the key (``navigation.stations[0].lat_deg: ...``),
-so that the checks exist, tested, before the keys are wired.
+The table is part of the scenario schema (``geojax.scenario_schema``); its stations (``[[navigation.stations]]``)
+and receiver (``[navigation.gnss]``) are sub-tables checked here.  ``validate`` gives one ``ValueError`` naming
+the key (``navigation.stations[0].lat_deg: ...``).  With ``model = "ekf"`` the loop carries the filter
+(``geojax.states.navigation``); the default, ``"gaussian_fix"``, is Li 2022's fix and reads none of the other keys.
 """
 
 from __future__ import annotations
@@ -18,19 +19,22 @@ SIGMA = dict(lower=0.0, upper=MAX_SIGMA, lower_inclusive=True)
 DAY_S = 86400.0
 
 FIELDS = {
-    "model": Field(str, "gaussian_fix", choices=("gaussian_fix", "ekf"),
+    "model": Field(str, "gaussian_fix", choices=("gaussian_fix", "ekf"), static=True,
                    doc="Li 2022's Gaussian fix (today's numbers) or the extended Kalman filter"),
-    "filter_forces": Field(str, "loop", choices=("loop", "two_body"),
+    "filter_forces": Field(str, "loop", choices=("loop", "two_body"), static=True,
                            doc="the filter's prediction model: the loop's force model, or point-mass gravity"),
     "snc_mps2_per_rthz": Field(NUMBER, 0.0, **SIGMA, si="snc_mps2_per_rthz",
                                doc="state-noise compensation: white acceleration noise density per axis"),
     "burn_magnitude_sigma_pct": Field(NUMBER, 0.0, lower=0.0, upper=100.0, lower_inclusive=True,
-                                      si="burn_magnitude_sigma", to_si=0.01, doc="burn magnitude error, 1 sigma"),
+                                      si="burn_magnitude_sigma", to_si=0.01,
+                                      doc="every burn's thrust-level error, 1 sigma (the truth's, and the filter's "
+                                          "prior of it)"),
     "burn_pointing_sigma_deg": Field(NUMBER, 0.0, lower=0.0, upper=90.0, lower_inclusive=True,
                                      si="burn_pointing_sigma_rad", to_si=degrees,
-                                     doc="burn pointing error per perpendicular axis, 1 sigma"),
-    "initial_sigma_r_m": Field(NUMBER, 1000.0, **SIGMA, doc="the filter's initial position sigma per axis"),
-    "initial_sigma_v_mps": Field(NUMBER, 0.1, **SIGMA, doc="the filter's initial velocity sigma per axis"),
+                                     doc="every burn's pointing error per perpendicular axis, 1 sigma (the "
+                                         "truth's, and the filter's prior of it)"),
+    "initial_sigma_r_m": Field(NUMBER, 100.0, **SIGMA, doc="the filter's initial position sigma per axis"),
+    "initial_sigma_v_mps": Field(NUMBER, 0.01, **SIGMA, doc="the filter's initial velocity sigma per axis"),
     "stations": Field(list, [], doc="the ground stations, a list of tables ([[navigation.stations]])"),
     "gnss": Field(dict, None, doc="a GNSS-in-GEO receiver ([navigation.gnss]); absent: none"),
 }
@@ -98,3 +102,25 @@ def _tracker(prefix: str, table, fields: dict) -> dict:
                 and window[0] < window[1]):
             raise ValueError(f"{prefix}outages_s[{i}]: must be [start_s, stop_s] with start_s < stop_s, got {window!r}")
     return out
+
+
+def check_with(config: dict) -> dict:
+    """The ``[navigation]`` table of a validated scenario (``config``, its other tables checked) checked across
+    tables; returns it completed.  With the Gaussian fix no other key of the table is read; with the filter the
+    Gaussian fix's and the controllers' own execution errors (``errors.h_rv``, ``h_att``, ``sigma3_dv_pct``) must
+    be 0: the filter replaces the fix, and it must know the plan the burns' errors are drawn about (those are
+    ``burn_magnitude_sigma_pct`` and ``burn_pointing_sigma_deg`` here)."""
+    table = validate({k: v for k, v in config.get("navigation", {}).items() if v is not None})
+    if table["model"] == "gaussian_fix":
+        for key, field in FIELDS.items():
+            if key != "model" and table[key] != field.default:
+                raise ValueError(f"navigation.{key}: read only where navigation.model = \"ekf\", got {table[key]!r}; "
+                                 f"set navigation.model = \"ekf\" or leave it out")
+        return table
+    errors = config["errors"]
+    for key, why in (("h_rv", "the filter's estimate replaces the Gaussian fix"),
+                     ("h_att", "the burns' pointing error is navigation.burn_pointing_sigma_deg"),
+                     ("sigma3_dv_pct", "the burns' magnitude error is navigation.burn_magnitude_sigma_pct")):
+        if errors[key] != 0:
+            raise ValueError(f"errors.{key}: must be 0 with navigation.model = \"ekf\" ({why}), got {errors[key]!r}")
+    return table

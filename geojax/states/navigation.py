@@ -1,0 +1,489 @@
+"""Orbit determination in the loop: an extended Kalman filter on ground-station tracking (or a GNSS-in-GEO receiver)
+and the burns' execution errors, a state of the loop (``states.base``), selected by ``navigation.model = "ekf"``.
+
+What the model carries.  The filter's state is x = (p, f, g, h, k, L, eps, phi_R, phi_S, phi_W) [10]: the
+osculating modified equinoctial elements of the estimate (L continuous, the loop's own representation: its RK4 in
+MEE is the loop's integrator, so with ``filter_forces = "loop"`` the filter predicts exactly as the truth moves),
+and the current burn's execution error, a magnitude error eps (a fraction) and a pointing error phi [3] (a small
+rotation vector in RSW, rad), with its covariance P [10, 10].  It also carries the truth's execution error of the
+current burn, the measurement biases drawn for the sample, the thrust planned over the current step, and the
+cycle's consistency sums.
+
+The truth's execution errors (``thrust``, the model's hook on the thrust flown).  Every burn of every controller
+(a burn: a run of consecutive firing steps) is flown with its own drawn errors: thrust level (1 + eps) F and
+direction d + phi x d (its length kept), eps ~ N(0, sigma_m^2), phi ~ N(0, sigma_p^2 I) (the component of phi
+along d turns nothing, so the direction is off by sigma_p per perpendicular axis:
+``navigation.burn_magnitude_sigma_pct``, ``navigation.burn_pointing_sigma_deg``).  The filter knows the plan
+(the thrust the hook receives, the wheels' dumping tilt included where they ride first) and the errors'
+statistics: at a burn's start it resets its (eps, phi) to 0 with covariance diag(sigma_m^2, sigma_p^2 I) and no
+correlation (the last burn's errors are marginalised out: what they did to the orbit stays in P), and predicts
+with the planned thrust executed with its estimated (eps, phi), so the state transition matrix carries the burn's
+uncertainty into the orbit as it is flown, correlated over the burn's steps (a burn's error is one draw, not
+white noise per step).
+
+Time update (``step``): x through one RK4 step of the loop's MEE equations with the filter's force model
+(``filter_forces``: the loop's, or point-mass gravity alone, to study model error) and the true mass; the state
+transition matrix by ``jax.jacfwd`` of that step (``navigation.ekf.time_update``); plus state-noise compensation
+(``navigation.ekf.process_noise``, white acceleration of density ``snc_mps2_per_rthz`` per axis, Cartesian, taken
+into MEE by the Jacobian of the conversion at the predicted state).
+
+Measurement updates (``step``): at every step end (the step's length is the tracking interval, 900 s by
+default), each station's measurements of the types it makes (``navigation.measurements``: two-way range with
+light time, range rate, azimuth and elevation) and the receiver's position fix, simulated from the true state
+with the sample's bias and white noise (keys from the cycle's), weighted 0/1 by the station's schedule and by
+the true elevation against its mask (``navigation.schedule``), processed one station at a time in Joseph form
+(``navigation.ekf.measurement_update``; the azimuth's residual wrapped).  Biases are drawn once per sample and not
+estimated: with a bias the filter is knowingly inconsistent (NEES shows by how much).
+
+Decision (``estimate``): at each cycle start the controller is told the filter's elements as its fix (its L made
+continuous with the truth's, as the Gaussian fix is), and its covariance of the elements, ``states["navigation"]``
+[6, 6], for a controller that wants it.
+
+Records and metrics.  At each cycle start (``cycle``) the estimation error (estimate - truth) and the filter's
+1-sigma in radial, along-track and cross-track axes (position m, velocity m/s; the Cartesian covariance is J P J^T,
+J the Jacobian of MEE -> (r, v)) and the NEES of the six Cartesian components; over the cycle the NIS sum, its
+degrees of freedom, and the measurements used.  Metrics: the error's RMS and 95th percentile of |error| per axis
+over the cycle starts, the NEES averaged over them, the NIS averaged per degree of freedom, the measurements used.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from geojax.navigation import ekf
+from geojax.navigation.measurements import MODELS
+from geojax.navigation.schedule import Schedule, tracking_weight
+from geojax.navigation.stations import Station, station_eci_m, station_from_geodetic
+from geojax.physics.dynamics import SpacecraftState, Thrust, mee_rhs
+from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, wrap_angle
+from geojax.physics.frames import ecef_to_eci, rsw_basis
+from geojax.physics.fusion import skipped_where_idle
+from geojax.physics.integrate import rk4_step
+from geojax.states.base import StateModel
+
+NAME = "navigation"
+N_ORBIT = 6
+N_STATE = 10  # the elements, eps, phi [3]
+# ``fold_in`` constants of the model's draws from its cycle key (the step's draws fold the step index into
+# MEASUREMENT_KEY first).
+INITIAL_KEY, BIAS_KEY, MEASUREMENT_KEY, BURN_KEY = 0, 1, 2, 3
+
+
+class Layout(NamedTuple):
+    """What fixes the filter's compiled shape (static): each station's measurement types, the receiver, the
+    prediction model."""
+
+    stations: tuple[tuple[str, ...], ...]
+    gnss: bool
+    filter_forces: str
+
+
+class Navigation(NamedTuple):
+    """The carried state."""
+
+    x: jnp.ndarray  # [6] the estimate's elements: MEE (p m, f, g, h, k, L rad), L continuous
+    execution: jnp.ndarray  # [4] the estimate of the current burn's (eps, phi rad)
+    p: jnp.ndarray  # [10, 10] the covariance of (r m, v m/s, eps, phi), r and v ECI
+    key: jnp.ndarray  # the cycle's key (``cycle``), its draws folded from it
+    step_index: jnp.ndarray  # [] int, steps since the cycle start
+    bias: jnp.ndarray  # [n_components] the sample's measurement biases (drawn at cycle 0)
+    truth_execution: jnp.ndarray  # [4] the current burn's true (eps, phi)
+    firing: jnp.ndarray  # [] bool, whether the latest step fired
+    planned_direction_rsw: jnp.ndarray  # [3] the thrust planned over the current step (``thrust``)
+    planned_thrust_n: jnp.ndarray  # []
+    planned_on_fraction: jnp.ndarray  # []
+    isp_s: jnp.ndarray  # []
+    error_rsw: jnp.ndarray  # [6] estimate - truth at the cycle start, RSW (m, m/s)
+    sigma_rsw: jnp.ndarray  # [6] the filter's 1-sigma there, RSW (m, m/s)
+    nees: jnp.ndarray  # [] at the cycle start
+    nis_sum: jnp.ndarray  # [] over the cycle so far
+    nis_dof: jnp.ndarray  # [] degrees of freedom of those NIS
+    measurements: jnp.ndarray  # [] measurement components used over the cycle so far
+
+
+class NavigationCycle(NamedTuple):
+    """Per cycle (always kept)."""
+
+    error_rsw: jnp.ndarray  # [6] at the cycle start
+    sigma_rsw: jnp.ndarray  # [6]
+    nees: jnp.ndarray  # []
+    nis_sum: jnp.ndarray  # [] over the cycle
+    nis_dof: jnp.ndarray  # []
+    measurements: jnp.ndarray  # []
+
+
+# --- the scenario's leaves -------------------------------------------------------------------------------------
+
+def layout_of(table: dict) -> Layout:
+    """The static layout of a validated ``[navigation]`` table."""
+    return Layout(tuple(tuple(s["measurements"]) for s in table["stations"]), table["gnss"] is not None,
+                  table["filter_forces"])
+
+
+def leaves_of(table: dict) -> dict:
+    """``Params.navigation``: the SI leaves of a validated ``[navigation]`` table, stations stacked on a leading
+    axis (outages padded with empty windows)."""
+    stations, gnss = table["stations"], table["gnss"]
+    deg = np.pi / 180.0
+    out = {
+        "snc_mps2_per_rthz": table["snc_mps2_per_rthz"],
+        "burn_magnitude_sigma": table["burn_magnitude_sigma_pct"] / 100.0,
+        "burn_pointing_sigma_rad": table["burn_pointing_sigma_deg"] * deg,
+        "initial_sigma_r_m": table["initial_sigma_r_m"],
+        "initial_sigma_v_mps": table["initial_sigma_v_mps"],
+        "station_lat_rad": [s["lat_deg"] * deg for s in stations],
+        "station_lon_rad": [s["lon_deg"] * deg for s in stations],
+        "station_alt_m": [s["alt_m"] for s in stations],
+        "station_mask_rad": [s["mask_deg"] * deg for s in stations],
+        "range_sigma_m": [s["range_sigma_m"] for s in stations],
+        "range_bias_sigma_m": [s["range_bias_sigma_m"] for s in stations],
+        "range_rate_sigma_mps": [s["range_rate_sigma_mps"] for s in stations],
+        "range_rate_bias_sigma_mps": [s["range_rate_bias_sigma_mps"] for s in stations],
+        "angles_sigma_rad": [s["angles_sigma_deg"] * deg for s in stations],
+        "angles_bias_sigma_rad": [s["angles_bias_sigma_deg"] * deg for s in stations],
+        "station_cadence_s": [s["cadence_s"] for s in stations],
+        "station_pass_s": [s["pass_s"] for s in stations],
+        "station_phase_s": [s["phase_s"] for s in stations],
+        "station_outages_s": _padded([s["outages_s"] for s in stations]),
+    }
+    if gnss is not None:
+        out.update(gnss_sigma_m=gnss["sigma_m"], gnss_bias_sigma_m=gnss["bias_sigma_m"],
+                   gnss_cadence_s=gnss["cadence_s"], gnss_pass_s=gnss["pass_s"], gnss_phase_s=gnss["phase_s"],
+                   gnss_outages_s=_padded([gnss["outages_s"]])[0])
+    return {k: jnp.asarray(v, jnp.float64) for k, v in out.items()}
+
+
+def _padded(windows: list) -> np.ndarray:
+    """[n, k, 2] outage windows, each list padded to the longest with empty windows [0, 0)."""
+    k = max([len(w) for w in windows], default=0)
+    out = np.zeros((len(windows), k, 2))
+    for i, w in enumerate(windows):
+        if w:
+            out[i, : len(w)] = w
+    return out
+
+
+# --- the pieces --------------------------------------------------------------------------------------------------
+
+def executed(direction_rsw, thrust_n, eps, phi):
+    """(direction [3], thrust N) of a planned thrust flown with magnitude error ``eps`` and pointing error ``phi``
+    [3]: (d + phi x d) with d's length, (1 + eps) F.  Smooth at phi = 0 and at d = 0 (no burn)."""
+    turned = direction_rsw + jnp.cross(phi, direction_rsw)
+    size, turned_size = jnp.linalg.norm(direction_rsw), jnp.linalg.norm(turned)
+    scale = jnp.where(turned_size > 0, size / jnp.where(turned_size > 0, turned_size, 1.0), 1.0)
+    return turned * scale, (1.0 + eps) * thrust_n
+
+
+def _filter_forces(fm, layout: Layout):
+    if layout.filter_forces == "two_body":
+        return fm._replace(j2_on=0.0, c22_on=0.0, sun_on=0.0, moon_on=0.0, srp_on=0.0, gravity=None)
+    return fm
+
+
+def predict(x, execution, mass_kg, state: Navigation, env3, fm, step_s):
+    """The estimate's elements [6] one RK4 step later: the loop's MEE equations, the planned thrust executed with
+    the estimated (eps, phi) ``execution`` [4]."""
+    direction, thrust_n = executed(state.planned_direction_rsw, state.planned_thrust_n, execution[0], execution[1:])
+    thrust = Thrust(direction, thrust_n, state.isp_s, state.planned_on_fraction)
+    return rk4_step(mee_rhs, SpacecraftState(x, mass_kg, jnp.zeros_like(mass_kg)), env3, fm, thrust, step_s).orbit
+
+
+def transition(rv, mass_kg, state: Navigation, step_s, mu):
+    """The state transition matrix [10, 10] of (r, v, eps, phi) over one step: [[Phi, Gamma], [0, I]].
+
+    Phi [6, 6] and Gamma [6, 4] integrate the variational equations d Phi / dt = A Phi, d Gamma / dt = A Gamma + B
+    by RK4 along the point-mass trajectory from ``rv`` with the planned thrust, A = [[0, I], [G, 0]], G = mu / r^3
+    (3 r_hat r_hat^T - I) the point-mass gravity gradient, B = [[0], [d a_thrust / d (eps, phi)]] = [[0], [a R (d,
+    -[d x])]] (a the planned acceleration, R the RSW -> ECI rotation, d the planned direction).  The terms left
+    out of A, relative to G at GEO: J2's gradient 3 J2 (R_E / r)^2 = 9e-5, the Moon's and the Sun's 3e-5 and 1e-5,
+    the thrust frame's turning with the orbit a / (r G) = 5e-4; the RK4 error of Phi over a 900 s step (n h)^5 / 120
+    = 1e-8.  Written out rather than ``jax.jacfwd`` of the MEE step: 50 times cheaper on XLA's CPU, which copies
+    the step's producers into each of the ten tangents' kernels (140 against 2.7 us per sample-step, measured).
+    """
+    accel = state.planned_on_fraction * state.planned_thrust_n / mass_kg
+    d = state.planned_direction_rsw
+    d_cross = jnp.array([[0.0, -d[2], d[1]], [d[2], 0.0, -d[0]], [-d[1], d[0], 0.0]])
+    b_rsw = jnp.concatenate([d[:, None], -d_cross], axis=1)  # [3, 4]: d (direction) / d (eps, phi), RSW
+
+    def rates(y, phi, gamma):
+        r, v = y[:3], y[3:]
+        basis = rsw_basis(r, v).T  # columns R, S, W: RSW -> ECI
+        norm = jnp.linalg.norm(r)
+        r_hat = r / norm
+        g = mu / norm**3 * (3.0 * jnp.outer(r_hat, r_hat) - jnp.eye(3))
+        dy = jnp.concatenate([v, -mu * r / norm**3 + accel * basis @ d])
+        dphi = jnp.concatenate([phi[3:], g @ phi[:3]])
+        dgamma = jnp.concatenate([gamma[3:], g @ gamma[:3] + accel * basis @ b_rsw])
+        return dy, dphi, dgamma
+
+    def axpy(h, k, y):
+        return tuple(yi + h * ki for yi, ki in zip(y, k))
+
+    y0 = (rv, jnp.eye(6), jnp.zeros((6, 4)))
+    k1 = rates(*y0)
+    k2 = rates(*axpy(step_s / 2, k1, y0))
+    k3 = rates(*axpy(step_s / 2, k2, y0))
+    k4 = rates(*axpy(step_s, k3, y0))
+    _, phi, gamma = tuple(y + step_s / 6 * (a + 2 * b + 2 * c + e) for y, a, b, c, e in zip(y0, k1, k2, k3, k4))
+    return jnp.eye(N_STATE).at[:6, :6].set(phi).at[:6, 6:].set(gamma)
+
+
+def rv_of(x, mu):
+    """ECI (r, v) [6] of the estimate's elements [6]."""
+    return jnp.concatenate(mee_to_cartesian(x[:6], mu))
+
+
+def elements_of(rv, near, mu):
+    """The elements [6] of ECI (r, v) [6], L continuous with the elements ``near``."""
+    x = cartesian_to_mee(rv[:3], rv[3:], mu)
+    return x.at[5].set(near[5] + wrap_angle(x[5] - near[5]))
+
+
+def stations_of(nav: dict) -> Station:
+    return station_from_geodetic(nav["station_lat_rad"], nav["station_lon_rad"], nav["station_alt_m"])
+
+
+def components(layout: Layout) -> list[tuple[int, str]]:
+    """(tracker, type) of every measurement, in order (tracker -1: the GNSS receiver)."""
+    out = [(i, kind) for i, kinds in enumerate(layout.stations) for kind in kinds]
+    return out + ([(-1, "gnss")] if layout.gnss else [])
+
+
+def _sigma_bias(nav: dict, tracker: int, kind: str):
+    """(noise, bias sigma) of a measurement type, scalars in its unit."""
+    if kind == "gnss":
+        return nav["gnss_sigma_m"], nav["gnss_bias_sigma_m"]
+    name = {"range": ("range_sigma_m", "range_bias_sigma_m"),
+            "range_rate": ("range_rate_sigma_mps", "range_rate_bias_sigma_mps"),
+            "angles": ("angles_sigma_rad", "angles_bias_sigma_rad")}[kind]
+    return nav[name[0]][tracker], nav[name[1]][tracker]
+
+
+def bias_sigmas(nav: dict, layout: Layout):
+    """[n_components] the 1-sigma of each measurement component's per-sample bias."""
+    parts = [jnp.broadcast_to(_sigma_bias(nav, t, kind)[1], (MODELS[kind].size,)) for t, kind in components(layout)]
+    return jnp.concatenate(parts) if parts else jnp.zeros(0)
+
+
+# --- the protocol ------------------------------------------------------------------------------------------------
+
+def init(layout: Layout, params, r_eci_m, v_eci_mps, env, fm) -> Navigation:
+    """The filter at the run's start: the true elements (``cycle`` adds the initial error at cycle 0) and the
+    initial covariance diag(sigma_r^2 I, sigma_v^2 I); no burn."""
+    nav, mu = params.navigation, fm.mu_m3_s2
+    p = jnp.zeros((N_STATE, N_STATE)).at[:6, :6].set(_initial_cartesian(nav))
+    zero = jnp.zeros_like(r_eci_m[0])
+    return Navigation(cartesian_to_mee(r_eci_m, v_eci_mps, mu), jnp.zeros(4), p, jax.random.key(0), jnp.asarray(0),
+                      jnp.zeros(bias_sigmas(nav, layout).shape[0]), jnp.zeros(4), jnp.asarray(False), jnp.zeros(3),
+                      zero, zero, zero, jnp.zeros(6), jnp.zeros(6), zero, zero, zero, zero)
+
+
+def _initial_cartesian(nav: dict):
+    return jnp.diag(jnp.concatenate([jnp.full(3, nav["initial_sigma_r_m"] ** 2),
+                                     jnp.full(3, nav["initial_sigma_v_mps"] ** 2)]))
+
+
+def cycle(layout: Layout, params, state: Navigation, start) -> Navigation:
+    """At a cycle start: the cycle's key; at cycle 0 the initial estimate error (Gaussian, the initial
+    covariance) and the sample's biases; the estimation error, 1-sigma and NEES at this decision time; the
+    cycle's sums reset."""
+    nav, mu = params.navigation, params.forces.mu_m3_s2
+    first = start.index == 0
+    truth = jnp.concatenate([start.r_eci_m, start.v_eci_mps])
+    drawn = truth + jnp.sqrt(jnp.diag(_initial_cartesian(nav))) * jax.random.normal(
+        jax.random.fold_in(start.key, INITIAL_KEY), (6,))
+    x = jnp.where(first, elements_of(drawn, state.x, mu), state.x)
+    bias = jnp.where(first, bias_sigmas(nav, layout) * jax.random.normal(
+        jax.random.fold_in(start.key, BIAS_KEY), state.bias.shape), state.bias)
+    cov = state.p[:6, :6]
+    basis = rsw_basis(start.r_eci_m, start.v_eci_mps)  # rows R, S, W
+    rot = jnp.zeros((6, 6)).at[:3, :3].set(basis).at[3:, 3:].set(basis)
+    error = rv_of(x, mu) - truth
+    zero = jnp.zeros_like(state.nees)
+    return state._replace(x=x, key=start.key, step_index=jnp.zeros_like(state.step_index), bias=bias,
+                          error_rsw=rot @ error, sigma_rsw=jnp.sqrt(jnp.diag(rot @ cov @ rot.T)),
+                          nees=ekf.nees(error, cov), nis_sum=zero, nis_dof=zero, measurements=zero)
+
+
+def thrust(layout: Layout, params, state: Navigation, planned: Thrust, ctx):
+    """The thrust flown: the planned one with the current burn's true execution errors, a new draw at each burn's
+    start (where the filter resets its own (eps, phi) to the errors' prior); the plan noted for ``step``."""
+    nav = params.navigation
+    firing = (planned.on_fraction > 0) & (planned.thrust_n > 0)
+    new_burn = firing & ~state.firing
+    sigma = jnp.concatenate([nav["burn_magnitude_sigma"][None], jnp.full(3, nav["burn_pointing_sigma_rad"])])
+    key = jax.random.fold_in(jax.random.fold_in(state.key, BURN_KEY), state.step_index)
+    truth = jnp.where(new_burn, sigma * jax.random.normal(key, (4,)), state.truth_execution)
+    prior = jnp.zeros((N_STATE, N_STATE)).at[:6, :6].set(state.p[:6, :6]).at[6:, 6:].set(jnp.diag(sigma**2))
+    direction, thrust_n = executed(planned.direction_rsw, planned.thrust_n, truth[0], truth[1:])
+    state = state._replace(p=jnp.where(new_burn, prior, state.p),
+                           execution=jnp.where(new_burn, 0.0, state.execution), truth_execution=truth, firing=firing,
+                           planned_direction_rsw=planned.direction_rsw, planned_thrust_n=planned.thrust_n,
+                           planned_on_fraction=planned.on_fraction, isp_s=planned.isp_s)
+    flown = planned._replace(direction_rsw=jnp.where(firing, direction, planned.direction_rsw),
+                             thrust_n=jnp.where(firing, thrust_n, planned.thrust_n))
+    return state, flown
+
+
+def step(layout: Layout, params, state: Navigation, ctx):
+    """One integration step: the time update (planned thrust, SNC) and the measurement updates at the step's end
+    (skipped for a whole batch where no sample tracks: most steps of a pass schedule)."""
+    nav, fm = params.navigation, ctx.force_model
+    mu = fm.mu_m3_s2
+    f = transition(rv_of(state.x, mu), ctx.mass_kg, state, ctx.step_s, mu)
+    x = predict(state.x, state.execution, ctx.mass_kg, state, ctx.env, _filter_forces(fm, layout), ctx.step_s)
+    p = f @ state.p @ f.T
+    p = (0.5 * (p + p.T)).at[:6, :6].add(ekf.process_noise(ctx.step_s, nav["snc_mps2_per_rthz"]))  # symmetric
+    truth = jnp.concatenate([ctx.r_end_eci_m, ctx.v_end_eci_mps])
+    angle = ctx.env.earth_angle_rad[2]
+    weights = tracking_weights(layout, nav, ctx.t_s + ctx.step_s, truth[:3], angle)
+    key = jax.random.fold_in(jax.random.fold_in(state.key, MEASUREMENT_KEY), state.step_index)
+    # the filter as one flat vector: the gate's vmap rule handles one array out
+    packed = jnp.concatenate([x, state.execution, p.ravel(), jnp.stack([state.nis_sum, state.nis_dof,
+                                                                       state.measurements])])
+    args = (packed, weights, nav, truth, angle, state.bias, jax.random.key_data(key), mu)
+    leaves, tree = jax.tree_util.tree_flatten(args)  # every array an argument: the gate closes over none
+
+    def updates(*leaves):
+        packed, weights, nav, truth, angle, bias, key, mu = jax.tree_util.tree_unflatten(tree, leaves)
+        out = _updates(layout, mu, _unpacked(packed), weights, nav, truth, angle, bias, jax.random.wrap_key_data(key))
+        return jnp.concatenate([out[0], out[1], out[2].ravel(), jnp.stack(out[3:])])
+
+    packed = skipped_where_idle(updates, lambda *a: jnp.any(jax.tree_util.tree_unflatten(tree, a)[1] > 0),
+                                lambda *a: a[0], *leaves)
+    x, execution, p, nis_sum, nis_dof, used = _unpacked(packed)
+    return state._replace(x=x, execution=execution, p=p, step_index=state.step_index + 1, nis_sum=nis_sum,
+                          nis_dof=nis_dof, measurements=used), ()
+
+
+def _unpacked(packed):
+    """(x [6], execution [4], P [10, 10], NIS sum, its dof, measurements) of the flat vector ``step`` packs."""
+    n = N_STATE * N_STATE
+    return (packed[:6], packed[6:10], packed[10:10 + n].reshape(N_STATE, N_STATE), packed[10 + n],
+            packed[11 + n], packed[12 + n])
+
+
+def _trackers(layout: Layout):
+    """(tracker, its measurement types): the stations in order, then the receiver (-1)."""
+    return [(i, kinds) for i, kinds in enumerate(layout.stations)] + ([(-1, ("gnss",))] if layout.gnss else [])
+
+
+def tracking_weights(layout: Layout, nav: dict, t_s, r_eci_m, earth_angle_rad):
+    """[n_trackers] 1.0 where a tracker measures at ``t_s``: in its schedule and, for a station, the true satellite
+    at or above its elevation mask (geometric elevation: the down leg's light time turns it by 2 arc seconds)."""
+    out = []
+    if layout.stations:
+        stations = stations_of(nav)
+        los = r_eci_m - station_eci_m(stations, earth_angle_rad)  # [n, 3]
+        up = ecef_to_eci(stations.enu_ecef[:, 2], earth_angle_rad)
+        visible = jnp.sum(up * los, axis=-1) >= jnp.sin(nav["station_mask_rad"]) * jnp.linalg.norm(los, axis=-1)
+        plans = Schedule(nav["station_cadence_s"], nav["station_pass_s"], nav["station_phase_s"],
+                         nav["station_outages_s"])
+        out.append(jax.vmap(tracking_weight, in_axes=(None, 0))(t_s, plans) * visible)
+    if layout.gnss:
+        plan = Schedule(nav["gnss_cadence_s"], nav["gnss_pass_s"], nav["gnss_phase_s"], nav["gnss_outages_s"])
+        out.append(tracking_weight(t_s, plan)[None])
+    return jnp.concatenate(out)
+
+
+def _updates(layout: Layout, mu, filtered, weights, nav, truth, angle, bias, key):
+    """The measurement updates of one step end, one tracker at a time (Joseph form, weighted by ``weights``):
+    ``filtered`` = (x, execution, P, NIS sum, its dof, measurements used) after them."""
+    x, execution, p, nis_sum, nis_dof, used = filtered
+    all_stations = stations_of(nav) if layout.stations else None
+    rv = rv_of(x, mu)  # updated in Cartesian, the elements formed once at the end
+    offset = 0
+    for place, (i, kinds) in enumerate(_trackers(layout)):
+        station = (jax.tree_util.tree_map(lambda leaf, i=i: leaf[i], all_stations) if i >= 0
+                   else Station(jnp.zeros(3), jnp.eye(3)))
+        weight = weights[place]
+
+        def h(y, station=station, kinds=kinds):
+            return jnp.concatenate([MODELS[kind].h(y, station, angle) for kind in kinds])
+
+        size = sum(MODELS[kind].size for kind in kinds)
+        sigma = jnp.concatenate([jnp.broadcast_to(_sigma_bias(nav, i, kind)[0], (MODELS[kind].size,))
+                                 for kind in kinds])
+        z = h(truth) + bias[offset:offset + size] + sigma * jax.random.normal(jax.random.fold_in(key, offset), (size,))
+        jac, predicted = jax.jacfwd(lambda y, h=h: (h(y), h(y)), has_aux=True)(rv)
+        innovation = z - predicted
+        at = 0
+        for kind in kinds:  # the azimuth's residual wrapped to (-pi, pi]
+            if kind == "angles":
+                innovation = innovation.at[at].set(wrap_angle(innovation[at]))
+            at += MODELS[kind].size
+        h_x = jnp.zeros((size, N_STATE)).at[:, :6].set(jac)
+        delta, p, s = ekf.measurement_update(jnp.zeros(N_STATE), p, innovation, h_x, jnp.diag(sigma**2), weight)
+        rv = rv + delta[:6]
+        execution = execution + delta[6:]
+        nis_sum = nis_sum + weight * ekf.nis(innovation, s)
+        nis_dof = nis_dof + weight * size
+        used = used + weight * size
+        offset += size
+    x = jnp.where(jnp.any(weights > 0), elements_of(rv, x, mu), x)
+    return x, execution, p, nis_sum, nis_dof, used
+
+
+def estimate(params, state: Navigation, told):
+    """What the controller is told at a cycle start: the filter's elements as the fix (L continuous with the
+    truth's, as the Gaussian fix's is) and the covariance [6, 6] of its ECI (r, v) in ``states["navigation"]``."""
+    x = state.x
+    fix = x.at[5].set(told.fix_mee[5] + wrap_angle(x[5] - told.fix_mee[5]))
+    return told._replace(fix_mee=fix, states={**told.states, NAME: state.p[:6, :6]})
+
+def summary(params, start: Navigation, end: Navigation, steps) -> NavigationCycle:
+    """The cycle's record: the decision time's error, 1-sigma and NEES; the cycle's NIS sums and measurements."""
+    return NavigationCycle(start.error_rsw, start.sigma_rsw, start.nees, end.nis_sum, end.nis_dof, end.measurements)
+
+
+AXES = ("radial", "along", "cross")
+
+
+def metrics(params, cycles: NavigationCycle, n_steps_total: int, run_s: float):
+    """({name: []}, False): the estimation error at the decision times (RMS and 95th percentile of |error| per RSW
+    axis, position and velocity), NEES averaged over them, NIS averaged per degree of freedom over every update,
+    the measurement components used.  The filter never fails a sample."""
+    out = {}
+    for k, axis in enumerate(AXES):
+        for offset, unit in ((0, "m"), (3, "mps")):
+            e = cycles.error_rsw[:, offset + k]
+            out[f"nav_{axis}_rms_{unit}"] = jnp.sqrt(jnp.mean(e**2))
+            out[f"nav_{axis}_p95_{unit}"] = jnp.percentile(jnp.abs(e), 95.0)
+    out["nav_position_rms_m"] = jnp.sqrt(jnp.mean(jnp.sum(cycles.error_rsw[:, :3] ** 2, axis=-1)))
+    out["nees_mean"] = jnp.mean(cycles.nees)
+    dof = jnp.sum(cycles.nis_dof)
+    out["nis_mean_per_dof"] = jnp.sum(cycles.nis_sum) / jnp.where(dof > 0, dof, 1.0)
+    out["measurements_used"] = jnp.sum(cycles.measurements)
+    return out, jnp.asarray(False)
+
+
+def columns(cycles: NavigationCycle) -> dict:
+    """The per-cycle series in edge units: error and 1-sigma at each decision time per RSW axis, NEES, NIS per
+    degree of freedom, measurements."""
+    error, sigma = np.asarray(cycles.error_rsw), np.asarray(cycles.sigma_rsw)
+    out = {}
+    for k, axis in enumerate(AXES):
+        out[f"nav_error_{axis}_m"], out[f"nav_sigma_{axis}_m"] = error[:, k], sigma[:, k]
+        out[f"nav_error_{axis}_mps"], out[f"nav_sigma_{axis}_mps"] = error[:, 3 + k], sigma[:, 3 + k]
+    out["nees"] = np.asarray(cycles.nees)
+    dof = np.asarray(cycles.nis_dof)
+    out["nis_per_dof"] = np.asarray(cycles.nis_sum) / np.where(dof > 0, dof, 1.0)
+    out["measurements"] = np.asarray(cycles.measurements)
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def model(layout: Layout) -> StateModel:
+    """The filter for a layout: one object per layout (a static argument of the compiled loop)."""
+    return StateModel(NAME, functools.partial(init, layout), functools.partial(step, layout), summary, metrics,
+                      cycle=functools.partial(cycle, layout), columns=columns,
+                      thrust=functools.partial(thrust, layout), estimate=estimate)
+
+
+# The registry's entry (metrics and columns, which do not depend on the layout).
+MODEL = model(Layout((), False, "loop"))
