@@ -137,10 +137,16 @@ def started_at(name_or_path: str | Path, utc: str, overrides: dict | None = None
 def with_overrides(raw: dict, overrides: dict | None) -> dict:
     """``raw`` with dotted keys set (``{"thrusters.thrust_n": 0.3}``); a key must name a table and a field.  One
     element of a list key is set as ``TABLE.KEY[i]`` (``{"attitude.srp_offset_array_m[0]": 0.2}``: the others are
-    the file's, or the key's defaults), so that a sweep can vary it as an axis."""
+    the file's, or the key's defaults), so that a sweep can vary it as an axis; a key of a sub-table as
+    ``TABLE.LIST[i].KEY`` (``{"navigation.stations[0].range_sigma_m": 20.0}``) or ``TABLE.SUB.KEY``
+    (``{"navigation.gnss.sigma_m": 5.0}``)."""
     raw = {k: dict(v) if isinstance(v, dict) else v for k, v in raw.items()}
     for dotted, value in (overrides or {}).items():
         table, _, key = str(dotted).rpartition(".")
+        sub = _SUB_TABLE.fullmatch(table)
+        if sub:
+            _set_in_sub_table(raw, dotted, sub, key, value)
+            continue
         if not table or table not in SCHEMA:
             raise ValueError(f"{dotted}: not a scenario key; write it as TABLE.KEY with a table of "
                              f"{', '.join(t for t in SCHEMA if t)} (e.g. \"duration.days\")")
@@ -165,6 +171,31 @@ def with_overrides(raw: dict, overrides: dict | None) -> dict:
 
 
 _ELEMENT = re.compile(r"(\w+)\[(\d+)\]")
+_SUB_TABLE = re.compile(r"(\w+)\.(\w+)(?:\[(\d+)\])?")
+
+
+def _set_in_sub_table(raw: dict, dotted: str, sub: re.Match, key: str, value) -> None:
+    """``raw`` with ``TABLE.SUB[i].KEY`` or ``TABLE.SUB.KEY`` set (the sub-table must exist in the file)."""
+    table, name, index = sub.group(1), sub.group(2), sub.group(3)
+    if table not in SCHEMA or name not in SCHEMA[table]:
+        raise ValueError(f"{dotted}: not a scenario key; {table}.{name} is not a key of a scenario table")
+    if not isinstance(raw.setdefault(table, {}), dict):
+        raise ValueError(f"{table}: must be a table")
+    current = raw[table].get(name)
+    if index is None:
+        if not isinstance(current, dict):
+            raise ValueError(f"{dotted}: the scenario has no [{table}.{name}] table to set {key} in")
+        raw[table][name] = {**current, key: value}
+        return
+    i = int(index)
+    if not isinstance(current, list) or i >= len(current) or not isinstance(current[i], dict):
+        count = len(current) if isinstance(current, list) else 0
+        raise ValueError(f"{dotted}: the scenario has {count} [[{table}.{name}]] table{'s' * (count != 1)}"
+                         f" (indices 0 to {count - 1})" if count else
+                         f"{dotted}: the scenario has no [[{table}.{name}]] table")
+    items = [dict(item) for item in current]
+    items[i][key] = value
+    raw[table][name] = items
 
 
 def read_toml_file(path: str | Path, kind: str) -> tuple[dict, str]:

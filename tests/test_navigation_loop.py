@@ -1,0 +1,171 @@
+"""The orbit-determination filter in the closed loop (``geojax.states.navigation``, issue 42).
+
+Each test names its independent check: the state transition matrix written out against ``jax.jacfwd`` of the
+filter's own MEE step (a second method), the filter's covariance in the loop against a batch least-squares
+information matrix over the same measurements on a Kepler propagator (the Cramer-Rao bound), the burns'
+execution errors against their drawn statistics, and the command line's contract for bad input.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from geojax import cli, scenario
+from geojax.loop import rollout
+from geojax.loop.setup import prepare
+from geojax.loop.simulate import position_velocity
+from geojax.navigation.measurements import MODELS
+from geojax.physics.constants import OMEGA_EARTH_RAD_S
+from geojax.physics.frames import rsw_basis
+from geojax.states import navigation as nav
+
+from test_navigation import _kepler
+
+UNPERTURBED = {"forces.j2": False, "forces.sun": False, "forces.moon": False, "forces.srp": False}
+NO_EXECUTION = {"navigation.burn_magnitude_sigma_pct": 0.0, "navigation.burn_pointing_sigma_deg": 0.0}
+
+
+def test_transition_matrix_against_jacfwd_of_the_filter_step():
+    """Second method: the written-out transition of (r, v, eps, phi) over a 900 s step while a burn fires,
+    against jax.jacfwd of the filter's own step taken through the elements (r, v -> MEE -> RK4 with the loop's
+    full force model -> r, v).  The terms the written-out one leaves out (J2's, the Sun's and the Moon's
+    gradients, the thrust frame's turning) are below 1e-3 of each block's largest entry."""
+    sc = scenario.load("li2022-qffc-ranging", {"duration.days": 1})
+    setup = prepare([sc])
+    params = jax.tree_util.tree_map(lambda x: x[0], setup.params)
+    fm, mu = params.forces, params.forces.mu_m3_s2
+    model = setup.states[-1]
+    env3 = jax.tree_util.tree_map(lambda x: x[0, 5], setup.shared.env)
+    r0, v0 = position_velocity(setup.dynamics, params.initial.orbit, mu)
+    state = model.init(params, r0, v0, jax.tree_util.tree_map(lambda x: x[0], env3), fm)
+    direction = jnp.array([0.3, 0.9, -0.3]) / jnp.linalg.norm(jnp.array([0.3, 0.9, -0.3]))
+    state = state._replace(planned_direction_rsw=direction, planned_thrust_n=jnp.asarray(0.5),
+                           planned_on_fraction=jnp.asarray(0.7), isp_s=jnp.asarray(2250.0))
+    rv = jnp.concatenate([r0, v0])
+
+    def step(y):
+        x = nav.elements_of(y[:6], state.x, mu)
+        return jnp.concatenate([nav.rv_of(nav.predict(x, y[6:], 5000.0, state, env3, fm, setup.step_s), mu), y[6:]])
+
+    expected = jax.jacfwd(step)(jnp.concatenate([rv, jnp.zeros(4)]))
+    got = nav.transition(rv, 5000.0, state, setup.step_s, mu)
+    for rows, cols in ((slice(0, 3), slice(0, 3)), (slice(0, 3), slice(3, 6)), (slice(3, 6), slice(0, 3)),
+                       (slice(3, 6), slice(3, 6)), (slice(0, 6), slice(6, 10))):
+        block, want = np.asarray(got[rows, cols]), np.asarray(expected[rows, cols])
+        assert np.max(np.abs(block - want)) < 1e-3 * np.max(np.abs(want)), (rows, cols)
+    assert np.array_equal(np.asarray(got[6:]), np.eye(10)[6:])
+
+
+def test_filter_in_the_loop_reaches_the_cramer_rao_bound():
+    """Issue 42's check (independent method): an uncontrolled satellite under point-mass gravity, ranged by
+    li2022-qffc-ranging's two stations at every step end for three days (continuous passes, 5 m), no execution
+    errors or process noise.  The filter's 1-sigma in R, S, W at the fourth cycle start (recorded by the loop)
+    against the batch least-squares bound of the same measurements: the information P0^-1 + sum (H_k Phi_k)^T
+    R^-1 (H_k Phi_k) at the truth, Phi_k by jax.jacfwd of a Kepler (f and g) propagator, H_k of the range with
+    light time, mapped to that epoch; every sigma within 10 %."""
+    days = 4
+    overrides = {"controller.kind": "none", "duration.days": days, "navigation.snc_mps2_per_rthz": 0.0,
+                 **UNPERTURBED, **NO_EXECUTION}
+    for i in range(2):
+        overrides[f"navigation.stations[{i}].pass_s"] = 43200.0  # continuous
+    sc = scenario.load("li2022-qffc-ranging", overrides)
+    result = rollout.simulate(sc, 3)
+    record = result.records.cycles.states["navigation"]
+    assert float(np.asarray(record.measurements)[:3].sum()) == 3 * 2 * 96  # every step end, both stations
+
+    setup = prepare([sc])
+    params = jax.tree_util.tree_map(lambda x: x[0], setup.params)
+    mu = params.forces.mu_m3_s2
+    r0, v0 = position_velocity(setup.dynamics, params.initial.orbit, mu)
+    x0 = jnp.concatenate([r0, v0])
+    angle0 = float(setup.shared.env.earth_angle_rad[0, 0, 0])
+    step_s = setup.step_s
+    times = step_s * jnp.arange(1, 3 * 96 + 1)
+    stations = nav.stations_of(params.navigation)
+
+    def ranges(x, t):
+        angle = angle0 + OMEGA_EARTH_RAD_S * t
+        return jax.vmap(lambda st: MODELS["range"].h(x, st, angle)[0])(stations)
+
+    def observed_from_start(x_start, t):
+        return ranges(_kepler(x_start, t), t)
+
+    rows = jax.vmap(lambda t: jax.jacfwd(observed_from_start)(x0, t))(times).reshape(-1, 6)
+    p0 = np.diag([100.0**2] * 3 + [0.01**2] * 3)
+    info = np.linalg.inv(p0) + np.asarray(rows).T @ np.asarray(rows) / 5.0**2
+    t_end = times[-1]
+    phi = np.asarray(jax.jacfwd(_kepler)(x0, t_end))
+    p_end = phi @ np.linalg.solve(info, phi.T)
+    x_end = _kepler(x0, t_end)
+    basis = np.asarray(rsw_basis(x_end[:3], x_end[3:]))
+    rot = np.zeros((6, 6))
+    rot[:3, :3], rot[3:, 3:] = basis, basis
+    bound = np.sqrt(np.diag(rot @ p_end @ rot.T))
+    sigma = np.asarray(record.sigma_rsw)[3]
+    assert np.all(np.abs(sigma / bound - 1.0) < 0.10), (sigma, bound)
+    # the prior no longer matters: the bound is far below it along every axis
+    assert np.all(bound[:3] < 30.0)
+
+
+@pytest.mark.slow
+def test_execution_errors_and_the_filter_over_a_week():
+    """li2022-qffc-ranging for 8 days: the burns are flown off the plan by drawn errors (the Delta-V delivered
+    differs from the same run without them), the filter holds the box and its decision-time errors stay within
+    4 of its own sigmas; the NIS per degree of freedom over the run is near 1 (chi^2 mean: 1 +- 0.25 for the
+    ~500 range residuals)."""
+    sc = scenario.load("li2022-qffc-ranging", {"duration.days": 8})
+    plain = scenario.load("li2022-qffc-ranging", {"duration.days": 8, **NO_EXECUTION})
+    result = rollout.simulate_batch([sc, plain], seeds=[5, 5])
+    assert np.asarray(result.status).tolist() == [0, 0]
+    dv = np.asarray(result.metrics["dv_per_year_mps"])
+    assert dv[0] != dv[1]
+    record = jax.tree_util.tree_map(lambda x: np.asarray(x)[0], result.records.cycles.states["navigation"])
+    assert np.all(np.abs(record.error_rsw[:8]) < 4 * record.sigma_rsw[:8])
+    metrics = {k: float(np.asarray(v)[0]) for k, v in result.metrics.items()}
+    assert metrics["measurements_used"] == 8 * 2 * 2 * 8  # 8 days, 2 stations, 2 passes of 8 step ends
+    assert abs(metrics["nis_mean_per_dof"] - 1.0) < 0.25
+
+
+@pytest.mark.parametrize("edit, message", [
+    ("lat_deg = 28.25", "navigation.stations[0].lat_deg: must be >= -90 and < 90, got -95.0"),
+    ("range_sigma_m = 5.0", "navigation.stations[0].range_sigma_m: must be >= 0"),
+    ("pass_s = 7200.0", "navigation.stations[0].pass_s: must be <= cadence_s (43200), got 50000.0"),
+    ("mask_deg = 5.0", "navigation.stations[0].mask_deg: must be >= -90 and < 90, got 95.0"),
+    ('measurements = ["range"]', "navigation.stations[0].measurements[0]: must be one of 'range', 'range_rate', "
+                                 "'angles', got 'lidar'"),
+])
+def test_bad_navigation_input_exits_2_with_one_line_and_writes_nothing(edit, message, tmp_path, capsys):
+    """The command line's contract for issue 42's bad input: the shipped scenario with one key of its first
+    station broken; exit 2, one line naming the key, nothing written."""
+    assert cli.main(["scenarios", "--show", "li2022-qffc-ranging"]) == 0
+    text = capsys.readouterr().out
+    bad = {"lat_deg = 28.25": "lat_deg = -95.0", "range_sigma_m = 5.0": "range_sigma_m = -1.0",
+           "pass_s = 7200.0": "pass_s = 50000.0", "mask_deg = 5.0": "mask_deg = 95.0",
+           'measurements = ["range"]': 'measurements = ["lidar"]'}[edit]
+    assert edit in text
+    (tmp_path / "bad.toml").write_text(text.replace(edit, bad, 1))
+    out = tmp_path / "out"
+    assert cli.main(["simulate", str(tmp_path / "bad.toml"), "--days", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1 and "Traceback" not in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("overrides, message", [
+    ({"navigation.snc_mps2_per_rthz": 1e-9},
+     'navigation.snc_mps2_per_rthz: read only where navigation.model = "ekf", got 1e-09'),
+    ({"navigation.model": "ekf"}, "navigation.stations: the filter needs a station or [navigation.gnss]"),
+])
+def test_keys_without_the_filter_are_refused(overrides, message):
+    with pytest.raises(ValueError) as caught:
+        scenario.load("li2022-qffc", overrides)
+    assert str(caught.value).startswith(message)
+
+
+@pytest.mark.parametrize("key, value", [("errors.h_rv", 1.0), ("errors.h_att", 1.0), ("errors.sigma3_dv_pct", 3.0)])
+def test_the_gaussian_fix_and_its_execution_errors_are_refused_with_the_filter(key, value):
+    with pytest.raises(ValueError, match=rf'^{key}: must be 0 with navigation.model = "ekf"'):
+        scenario.load("li2022-qffc-ranging", {key: value})
