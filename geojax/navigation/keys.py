@@ -33,8 +33,8 @@ FIELDS = {
                                      si="burn_pointing_sigma_rad", to_si=degrees,
                                      doc="every burn's pointing error per perpendicular axis, 1 sigma (the "
                                          "truth's, and the filter's prior of it)"),
-    "initial_sigma_r_m": Field(NUMBER, 100.0, **SIGMA, doc="the filter's initial position sigma per axis"),
-    "initial_sigma_v_mps": Field(NUMBER, 0.01, **SIGMA, doc="the filter's initial velocity sigma per axis"),
+    "initial_sigma_r_m": Field(NUMBER, 100.0, lower=0.0, upper=MAX_SIGMA, si="initial_sigma_r_m", doc="the filter's initial position sigma per axis"),
+    "initial_sigma_v_mps": Field(NUMBER, 0.01, lower=0.0, upper=MAX_SIGMA, si="initial_sigma_v_mps", doc="the filter's initial velocity sigma per axis"),
     "stations": Field(list, [], doc="the ground stations, a list of tables ([[navigation.stations]])"),
     "gnss": Field(dict, None, doc="a GNSS-in-GEO receiver ([navigation.gnss]); absent: none"),
 }
