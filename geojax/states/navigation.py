@@ -21,6 +21,11 @@ with the planned thrust executed with its estimated (eps, phi), so the state tra
 uncertainty into the orbit as it is flown, correlated over the burn's steps (a burn's error is one draw, not
 white noise per step).
 
+Burns and passes.  With ``navigation.burns_during_passes = false`` no step that starts inside any station's pass
+fires (Gazzino 2016 keeps manoeuvres out of its orbit-determination periods): the hook zeroes the thrust planned
+there before anything else, so the filter knows it; the controllers do not plan around the windows, the next
+cycle's plan makes up what was not flown, and the Delta-V against the same draws with burns allowed is the cost.
+
 Time update (``step``): x through one RK4 step of the loop's MEE equations with the filter's force model
 (``filter_forces``: the loop's, or point-mass gravity alone, to study model error) and the true mass; the state
 transition matrix by ``jax.jacfwd`` of that step (``navigation.ekf.time_update``); plus state-noise compensation
@@ -136,6 +141,7 @@ def leaves_of(table: dict) -> dict:
         "burn_pointing_sigma_rad": table["burn_pointing_sigma_deg"] * deg,
         "initial_sigma_r_m": table["initial_sigma_r_m"],
         "initial_sigma_v_mps": table["initial_sigma_v_mps"],
+        "burns_during_passes": float(table["burns_during_passes"]),
         "station_lat_rad": [s["lat_deg"] * deg for s in stations],
         "station_lon_rad": [s["lon_deg"] * deg for s in stations],
         "station_alt_m": [s["alt_m"] for s in stations],
@@ -314,6 +320,10 @@ def thrust(layout: Layout, params, state: Navigation, planned: Thrust, ctx):
     """The thrust flown: the planned one with the current burn's true execution errors, a new draw at each burn's
     start (where the filter resets its own (eps, phi) to the errors' prior); the plan noted for ``step``."""
     nav = params.navigation
+    if layout.stations:  # burns forbidden while a station's schedule is on (where ``burns_during_passes`` is 0)
+        in_pass = jnp.any(jax.vmap(tracking_weight, in_axes=(None, 0))(ctx.t_s, _station_schedules(nav)) > 0)
+        allowed = jnp.where(in_pass, nav["burns_during_passes"], 1.0)
+        planned = planned._replace(on_fraction=planned.on_fraction * allowed)
     firing = (planned.on_fraction > 0) & (planned.thrust_n > 0)
     new_burn = firing & ~state.firing
     sigma = jnp.concatenate([nav["burn_magnitude_sigma"][None], jnp.full(3, nav["burn_pointing_sigma_rad"])])
@@ -361,6 +371,11 @@ def step(layout: Layout, params, state: Navigation, ctx):
                           nis_dof=nis_dof, measurements=used), ()
 
 
+def _station_schedules(nav: dict) -> Schedule:
+    """The stations' schedules, leaves [n_stations, ...]."""
+    return Schedule(nav["station_cadence_s"], nav["station_pass_s"], nav["station_phase_s"], nav["station_outages_s"])
+
+
 def _unpacked(packed):
     """(x [6], execution [4], P [10, 10], NIS sum, its dof, measurements) of the flat vector ``step`` packs."""
     n = N_STATE * N_STATE
@@ -382,9 +397,7 @@ def tracking_weights(layout: Layout, nav: dict, t_s, r_eci_m, earth_angle_rad):
         los = r_eci_m - station_eci_m(stations, earth_angle_rad)  # [n, 3]
         up = ecef_to_eci(stations.enu_ecef[:, 2], earth_angle_rad)
         visible = jnp.sum(up * los, axis=-1) >= jnp.sin(nav["station_mask_rad"]) * jnp.linalg.norm(los, axis=-1)
-        plans = Schedule(nav["station_cadence_s"], nav["station_pass_s"], nav["station_phase_s"],
-                         nav["station_outages_s"])
-        out.append(jax.vmap(tracking_weight, in_axes=(None, 0))(t_s, plans) * visible)
+        out.append(jax.vmap(tracking_weight, in_axes=(None, 0))(t_s, _station_schedules(nav)) * visible)
     if layout.gnss:
         plan = Schedule(nav["gnss_cadence_s"], nav["gnss_pass_s"], nav["gnss_phase_s"], nav["gnss_outages_s"])
         out.append(tracking_weight(t_s, plan)[None])
