@@ -91,6 +91,26 @@ DESCRIPTIONS = {
     "dump_cross_dv_mps": "Delta-V the dumping tilts put across the planned thrust directions over the run",
     **{f"wheel_{axis}_nms": f"the {axis} wheel's momentum at the cycle end, body axes" for axis in "xyz"},
     **{f"wheel_max_abs_{axis}_nms": f"largest |momentum| of the {axis} wheel within the cycle" for axis in "xyz"},
+    # Orbit determination (geojax.states.navigation, where navigation.model = "ekf")
+    **{f"nav_{axis}_rms_{unit}": f"RMS of the filter's {name} {what} error at the decision times (cycle starts)"
+       for axis, name in (("radial", "radial"), ("along", "along-track"), ("cross", "cross-track"))
+       for unit, what in (("m", "position"), ("mps", "velocity"))},
+    **{f"nav_{axis}_p95_{unit}": f"95th percentile of |{name} {what} error| of the filter at the decision times"
+       for axis, name in (("radial", "radial"), ("along", "along-track"), ("cross", "cross-track"))
+       for unit, what in (("m", "position"), ("mps", "velocity"))},
+    "nav_position_rms_m": "RMS of the filter's position error (3-D) at the decision times",
+    "nees_mean": "the filter's NEES (6 dof: position and velocity) averaged over the decision times; 6 if consistent",
+    "nis_mean_per_dof": "the filter's NIS per degree of freedom over every measurement update; 1 if consistent",
+    "measurements_used": "measurement components the filter processed over the run",
+    **{f"nav_error_{axis}_{unit}": f"the filter's {name} {what} error (estimate - truth) at the cycle start"
+       for axis, name in (("radial", "radial"), ("along", "along-track"), ("cross", "cross-track"))
+       for unit, what in (("m", "position"), ("mps", "velocity"))},
+    **{f"nav_sigma_{axis}_{unit}": f"the filter's 1-sigma {name} {what} at the cycle start"
+       for axis, name in (("radial", "radial"), ("along", "along-track"), ("cross", "cross-track"))
+       for unit, what in (("m", "position"), ("mps", "velocity"))},
+    "nees": "the filter's NEES at the cycle start (6 dof)",
+    "nis_per_dof": "the filter's NIS per degree of freedom over the cycle's updates",
+    "measurements": "measurement components the filter processed in the cycle",
 }
 
 
