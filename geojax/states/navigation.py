@@ -64,7 +64,7 @@ from geojax.navigation import ekf
 from geojax.navigation.measurements import MODELS
 from geojax.navigation.schedule import Schedule, tracking_weight
 from geojax.navigation.stations import Station, station_eci_m, station_from_geodetic
-from geojax.physics.dynamics import SpacecraftState, Thrust, mee_rhs
+from geojax.physics.dynamics import SpacecraftState, Thrust, cartesian_rhs, mee_rhs
 from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, wrap_angle
 from geojax.physics.frames import ecef_to_eci, rsw_basis
 from geojax.physics.fusion import skipped_where_idle
@@ -91,7 +91,7 @@ class Layout(NamedTuple):
 class Navigation(NamedTuple):
     """The carried state."""
 
-    x: jnp.ndarray  # [6] the estimate's elements: MEE (p m, f, g, h, k, L rad), L continuous
+    x: jnp.ndarray  # [6] the estimate: ECI position (m) and velocity (m/s)
     execution: jnp.ndarray  # [4] the estimate of the current burn's (eps, phi rad)
     p: jnp.ndarray  # [10, 10] the covariance of (r m, v m/s, eps, phi), r and v ECI
     key: jnp.ndarray  # the cycle's key (``cycle``), its draws folded from it
@@ -202,40 +202,59 @@ def predict(x, execution, mass_kg, state: Navigation, env3, fm, step_s):
 def transition(rv, mass_kg, state: Navigation, step_s, mu):
     """The state transition matrix [10, 10] of (r, v, eps, phi) over one step: [[Phi, Gamma], [0, I]].
 
-    Phi [6, 6] and Gamma [6, 4] integrate the variational equations d Phi / dt = A Phi, d Gamma / dt = A Gamma + B
-    by RK4 along the point-mass trajectory from ``rv`` with the planned thrust, A = [[0, I], [G, 0]], G = mu / r^3
-    (3 r_hat r_hat^T - I) the point-mass gravity gradient, B = [[0], [d a_thrust / d (eps, phi)]] = [[0], [a R (d,
-    -[d x])]] (a the planned acceleration, R the RSW -> ECI rotation, d the planned direction).  The terms left
-    out of A, relative to G at GEO: J2's gradient 3 J2 (R_E / r)^2 = 9e-5, the Moon's and the Sun's 3e-5 and 1e-5,
-    the thrust frame's turning with the orbit a / (r G) = 5e-4; the RK4 error of Phi over a 900 s step (n h)^5 / 120
-    = 1e-8.  Written out rather than ``jax.jacfwd`` of the MEE step: 50 times cheaper on XLA's CPU, which copies
-    the step's producers into each of the ten tangents' kernels (140 against 2.7 us per sample-step, measured).
+    Phi: the variational equations d Phi / dt = A(t) Phi, A = [[0, I], [G, 0]], G = mu / r^3 (3 r_hat r_hat^T - I)
+    the point-mass gravity gradient, by the fourth-order Magnus expansion (Iserles & Norsett 1999): with A_1, A_2
+    at the Gauss points t = h (1/2 -+ sqrt(3)/6), Omega = h (A_1 + A_2) / 2 + (sqrt(3) h^2 / 12) [A_2, A_1] and
+    Phi = exp(Omega) by its series to the fifth power; the positions at the Gauss points from the estimate's
+    Taylor series to the jerk.  Gamma = int_0^h Phi(h - t) [0; B(t)] dt, B = d a_thrust / d (eps, phi) = a R (d,
+    -[d x]) (a the planned acceleration, R the RSW -> ECI rotation, d the planned direction), with G and R at the
+    midpoint and R's turning over the step to first order.  The point of expansion is the truth's (its state and
+    execution errors, ``error_state_prediction``): the extended Kalman filter takes its Jacobians at its
+    estimate, which differs by the estimation error's relative size (1e-6 in the orbit; in the partials by phi,
+    the magnitude error's 1 + eps: 2 % at the scenario's sigma).  Relative to G at GEO, left out: J2's gradient
+    3 J2 (R_E / r)^2 = 9e-5, the Moon's and the Sun's 3e-5 and 1e-5, the thrust frame's turning a / (r G) = 5e-4;
+    the expansion's remainder (n h)^5 is 1e-6 at 900 s.  ``tests/test_navigation_loop.py`` checks the matrix
+    against ``jax.jacfwd`` of the filter's full MEE step, and the filter's covariance against the Cramer-Rao
+    bound.  A frozen G at the midpoint (second order) put the along-track sigma 24 % below the bound after three
+    days: the error accumulates in the along-track drift.  Written out rather than ``jax.jacfwd`` of the MEE
+    step: XLA's CPU compiler copies the step's producers into each of the ten tangents' kernels (140 us per
+    sample-step against a few, measured).
     """
+    h = step_s
+    r, v = rv[:3], rv[3:]
+    r_norm = jnp.linalg.norm(r)
+    a0 = -mu * r / r_norm**3
+    jerk = -mu * (v / r_norm**3 - 3.0 * r * jnp.dot(r, v) / r_norm**5)
+    eye = jnp.eye(3)
+
+    def gradient(t):
+        at = r + v * t + a0 * (t * t / 2) + jerk * (t**3 / 6)
+        norm = jnp.linalg.norm(at)
+        unit = at / norm
+        return mu / norm**3 * (3.0 * jnp.outer(unit, unit) - eye)
+
+    offset = h * np.sqrt(3.0) / 6
+    g1, g2 = gradient(h / 2 - offset), gradient(h / 2 + offset)
+    c = np.sqrt(3.0) * h * h / 12
+    diff = c * (g1 - g2)  # [A_2, A_1] = diag(G_1 - G_2, G_2 - G_1)
+    omega = jnp.block([[diff, h * eye], [(h / 2) * (g1 + g2), -diff]])
+    phi = jnp.eye(6)
+    for k in (5, 4, 3, 2, 1):  # exp(Omega), Horner
+        phi = jnp.eye(6) + (omega @ phi) / k
+    r_mid, v_mid = r + v * (h / 2) + a0 * (h * h / 8), v + a0 * (h / 2)
+    g = 0.5 * (g1 + g2)
     accel = state.planned_on_fraction * state.planned_thrust_n / mass_kg
-    d = state.planned_direction_rsw
+    e = state.truth_execution  # the expansion's point (``error_state_prediction``)
+    d, _ = executed(state.planned_direction_rsw, 1.0, 0.0, e[1:])
     d_cross = jnp.array([[0.0, -d[2], d[1]], [d[2], 0.0, -d[0]], [-d[1], d[0], 0.0]])
-    b_rsw = jnp.concatenate([d[:, None], -d_cross], axis=1)  # [3, 4]: d (direction) / d (eps, phi), RSW
-
-    def rates(y, phi, gamma):
-        r, v = y[:3], y[3:]
-        basis = rsw_basis(r, v).T  # columns R, S, W: RSW -> ECI
-        norm = jnp.linalg.norm(r)
-        r_hat = r / norm
-        g = mu / norm**3 * (3.0 * jnp.outer(r_hat, r_hat) - jnp.eye(3))
-        dy = jnp.concatenate([v, -mu * r / norm**3 + accel * basis @ d])
-        dphi = jnp.concatenate([phi[3:], g @ phi[:3]])
-        dgamma = jnp.concatenate([gamma[3:], g @ gamma[:3] + accel * basis @ b_rsw])
-        return dy, dphi, dgamma
-
-    def axpy(h, k, y):
-        return tuple(yi + h * ki for yi, ki in zip(y, k))
-
-    y0 = (rv, jnp.eye(6), jnp.zeros((6, 4)))
-    k1 = rates(*y0)
-    k2 = rates(*axpy(step_s / 2, k1, y0))
-    k3 = rates(*axpy(step_s / 2, k2, y0))
-    k4 = rates(*axpy(step_s, k3, y0))
-    _, phi, gamma = tuple(y + step_s / 6 * (a + 2 * b + 2 * c + e) for y, a, b, c, e in zip(y0, k1, k2, k3, k4))
+    b_rsw = accel * jnp.concatenate([d[:, None], -(1.0 + e[0]) * d_cross], axis=1)  # d a / d (eps, phi), RSW
+    basis = rsw_basis(r_mid, v_mid)  # rows R, S, W at the midpoint
+    rate = jnp.linalg.norm(jnp.cross(r_mid, v_mid)) / jnp.dot(r_mid, r_mid)  # the RSW frame turns at it about W
+    turning = rate * jnp.stack([basis[1], -basis[0], jnp.zeros(3)], axis=1)  # d (RSW -> ECI) / dt
+    b = basis.T @ b_rsw  # [3, 4] ECI, at the midpoint
+    # int_0^h (h - t) R(t) dt B = (h^2 / 2) R_mid B - (h^3 / 12) R' B: the frame's turning weighs the early thrust
+    gamma = jnp.concatenate([(eye * (h**2 / 2) + g * (h**4 / 24)) @ b - (h**3 / 12) * turning @ b_rsw,
+                             (eye * h + g * (h**3 / 6)) @ b])
     return jnp.eye(N_STATE).at[:6, :6].set(phi).at[:6, 6:].set(gamma)
 
 
@@ -284,7 +303,7 @@ def init(layout: Layout, params, r_eci_m, v_eci_mps, env, fm) -> Navigation:
     nav, mu = params.navigation, fm.mu_m3_s2
     p = jnp.zeros((N_STATE, N_STATE)).at[:6, :6].set(_initial_cartesian(nav))
     zero = jnp.zeros_like(r_eci_m[0])
-    return Navigation(cartesian_to_mee(r_eci_m, v_eci_mps, mu), jnp.zeros(4), p, jax.random.key(0), jnp.asarray(0),
+    return Navigation(jnp.concatenate([r_eci_m, v_eci_mps]), jnp.zeros(4), p, jax.random.key(0), jnp.asarray(0),
                       jnp.zeros(bias_sigmas(nav, layout).shape[0]), jnp.zeros(4), jnp.asarray(False), jnp.zeros(3),
                       zero, zero, zero, jnp.zeros(6), jnp.zeros(6), zero, zero, zero, zero)
 
@@ -303,13 +322,13 @@ def cycle(layout: Layout, params, state: Navigation, start) -> Navigation:
     truth = jnp.concatenate([start.r_eci_m, start.v_eci_mps])
     drawn = truth + jnp.sqrt(jnp.diag(_initial_cartesian(nav))) * jax.random.normal(
         jax.random.fold_in(start.key, INITIAL_KEY), (6,))
-    x = jnp.where(first, elements_of(drawn, state.x, mu), state.x)
+    x = jnp.where(first, drawn, state.x)
     bias = jnp.where(first, bias_sigmas(nav, layout) * jax.random.normal(
         jax.random.fold_in(start.key, BIAS_KEY), state.bias.shape), state.bias)
     cov = state.p[:6, :6]
     basis = rsw_basis(start.r_eci_m, start.v_eci_mps)  # rows R, S, W
     rot = jnp.zeros((6, 6)).at[:3, :3].set(basis).at[3:, 3:].set(basis)
-    error = rv_of(x, mu) - truth
+    error = x - truth
     zero = jnp.zeros_like(state.nees)
     return state._replace(x=x, key=start.key, step_index=jnp.zeros_like(state.step_index), bias=bias,
                           error_rsw=rot @ error, sigma_rsw=jnp.sqrt(jnp.diag(rot @ cov @ rot.T)),
@@ -345,8 +364,9 @@ def step(layout: Layout, params, state: Navigation, ctx):
     (skipped for a whole batch where no sample tracks: most steps of a pass schedule)."""
     nav, fm = params.navigation, ctx.force_model
     mu = fm.mu_m3_s2
-    f = transition(rv_of(state.x, mu), ctx.mass_kg, state, ctx.step_s, mu)
-    x = predict(state.x, state.execution, ctx.mass_kg, state, ctx.env, _filter_forces(fm, layout), ctx.step_s)
+    start = jnp.concatenate([ctx.r_eci_m, ctx.v_eci_mps])
+    f = transition(start, ctx.mass_kg, state, ctx.step_s, mu)
+    x = error_state_prediction(layout, f, state, ctx, start)
     p = f @ state.p @ f.T
     p = (0.5 * (p + p.T)).at[:6, :6].add(ekf.process_noise(ctx.step_s, nav["snc_mps2_per_rthz"]))  # symmetric
     truth = jnp.concatenate([ctx.r_end_eci_m, ctx.v_end_eci_mps])
@@ -369,6 +389,26 @@ def step(layout: Layout, params, state: Navigation, ctx):
     x, execution, p, nis_sum, nis_dof, used = _unpacked(packed)
     return state._replace(x=x, execution=execution, p=p, step_index=state.step_index + 1, nis_sum=nis_sum,
                           nis_dof=nis_dof, measurements=used), ()
+
+
+def error_state_prediction(layout: Layout, f, state: Navigation, ctx, start):
+    """The estimate [6] at the step's end: the filter's model f(x, e) (the planned thrust executed with the
+    estimated e = (eps, phi)) expanded about the true step, f(x_true, e_true) + Phi (x - x_true) + Gamma (e -
+    e_true), ``f`` = [[Phi, Gamma], [0, I]].  f(x_true, e_true) is the truth's own step end where the filter's
+    model is the loop's (``filter_forces = "loop"``), else point-mass gravity's RK4 step from the true start with
+    the thrust flown.  The expansion's remainder is second order in the deviation: at GEO the flow's second
+    derivative is 3 mu / r^4 per m^2 of position over h^2 / 2, 2e-21 m per m^2 over 900 s (a 1 km error: 2e-15 m),
+    so this is the extended Kalman filter's prediction from its own estimate to rounding (``predict`` computes it
+    directly; ``tests/test_navigation_loop.py`` compares them), without a second integration of the force model
+    (which would cost as much as the truth's own step)."""
+    if layout.filter_forces == "loop":
+        anchor = jnp.concatenate([ctx.r_end_eci_m, ctx.v_end_eci_mps])
+    else:
+        fm = _filter_forces(ctx.force_model, layout)
+        anchor = rk4_step(cartesian_rhs, SpacecraftState(start, ctx.mass_kg, jnp.zeros_like(ctx.mass_kg)),
+                          ctx.env, fm, ctx.thrust, ctx.step_s).orbit
+    deviation = jnp.concatenate([state.x - start, state.execution - state.truth_execution])
+    return anchor + f[:6] @ deviation
 
 
 def _station_schedules(nav: dict) -> Schedule:
@@ -409,7 +449,7 @@ def _updates(layout: Layout, mu, filtered, weights, nav, truth, angle, bias, key
     ``filtered`` = (x, execution, P, NIS sum, its dof, measurements used) after them."""
     x, execution, p, nis_sum, nis_dof, used = filtered
     all_stations = stations_of(nav) if layout.stations else None
-    rv = rv_of(x, mu)  # updated in Cartesian, the elements formed once at the end
+    rv = x
     offset = 0
     for place, (i, kinds) in enumerate(_trackers(layout)):
         station = (jax.tree_util.tree_map(lambda leaf, i=i: leaf[i], all_stations) if i >= 0
@@ -438,15 +478,14 @@ def _updates(layout: Layout, mu, filtered, weights, nav, truth, angle, bias, key
         nis_dof = nis_dof + weight * size
         used = used + weight * size
         offset += size
-    x = jnp.where(jnp.any(weights > 0), elements_of(rv, x, mu), x)
-    return x, execution, p, nis_sum, nis_dof, used
+    return rv, execution, p, nis_sum, nis_dof, used
 
 
 def estimate(params, state: Navigation, told):
-    """What the controller is told at a cycle start: the filter's elements as the fix (L continuous with the
-    truth's, as the Gaussian fix's is) and the covariance [6, 6] of its ECI (r, v) in ``states["navigation"]``."""
-    x = state.x
-    fix = x.at[5].set(told.fix_mee[5] + wrap_angle(x[5] - told.fix_mee[5]))
+    """What the controller is told at a cycle start: the filter's estimate as the fix (its elements, L continuous
+    with the truth's, as the Gaussian fix's is) and the covariance [6, 6] of its ECI (r, v) in
+    ``states["navigation"]``."""
+    fix = elements_of(state.x, told.fix_mee, params.forces.mu_m3_s2)
     return told._replace(fix_mee=fix, states={**told.states, NAME: state.p[:6, :6]})
 
 def summary(params, start: Navigation, end: Navigation, steps) -> NavigationCycle:
