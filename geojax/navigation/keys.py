@@ -33,8 +33,10 @@ FIELDS = {
                                      si="burn_pointing_sigma_rad", to_si=degrees,
                                      doc="every burn's pointing error per perpendicular axis, 1 sigma (the "
                                          "truth's, and the filter's prior of it)"),
-    "initial_sigma_r_m": Field(NUMBER, 100.0, lower=0.0, upper=MAX_SIGMA, si="initial_sigma_r_m", doc="the filter's initial position sigma per axis"),
-    "initial_sigma_v_mps": Field(NUMBER, 0.01, lower=0.0, upper=MAX_SIGMA, si="initial_sigma_v_mps", doc="the filter's initial velocity sigma per axis"),
+    "initial_sigma_r_m": Field(NUMBER, 100.0, lower=0.0, upper=MAX_SIGMA, si="initial_sigma_r_m",
+                               doc="the filter's initial position sigma per axis (and the initial error's)"),
+    "initial_sigma_v_mps": Field(NUMBER, 0.01, lower=0.0, upper=MAX_SIGMA, si="initial_sigma_v_mps",
+                                 doc="the filter's initial velocity sigma per axis (and the initial error's)"),
     "burns_during_passes": Field(bool, True, si="burns_during_passes",
                                  doc="whether the thrusters may fire while a station tracks; false: a burn's steps "
                                      "inside any station's pass are not fired (the plan does not move them: the "

@@ -1,13 +1,11 @@
 """Orbit determination in the loop: an extended Kalman filter on ground-station tracking (or a GNSS-in-GEO receiver)
 and the burns' execution errors, a state of the loop (``states.base``), selected by ``navigation.model = "ekf"``.
 
-What the model carries.  The filter's state is x = (p, f, g, h, k, L, eps, phi_R, phi_S, phi_W) [10]: the
-osculating modified equinoctial elements of the estimate (L continuous, the loop's own representation: its RK4 in
-MEE is the loop's integrator, so with ``filter_forces = "loop"`` the filter predicts exactly as the truth moves),
-and the current burn's execution error, a magnitude error eps (a fraction) and a pointing error phi [3] (a small
-rotation vector in RSW, rad), with its covariance P [10, 10].  It also carries the truth's execution error of the
-current burn, the measurement biases drawn for the sample, the thrust planned over the current step, and the
-cycle's consistency sums.
+What the model carries.  The filter's state is the estimate's ECI position and velocity [6] and the current
+burn's estimated execution error, a magnitude error eps (a fraction) and a pointing error phi [3] (a small
+rotation vector in RSW, rad), with the covariance P [10, 10] of (r, v, eps, phi).  It also carries the truth's
+execution error of the current burn, the measurement biases drawn for the sample, the thrust planned over the
+current step, and the cycle's consistency sums.
 
 The truth's execution errors (``thrust``, the model's hook on the thrust flown).  Every burn of every controller
 (a burn: a run of consecutive firing steps) is flown with its own drawn errors: thrust level (1 + eps) F and
@@ -26,11 +24,13 @@ fires (Gazzino 2016 keeps manoeuvres out of its orbit-determination periods): th
 there before anything else, so the filter knows it; the controllers do not plan around the windows, the next
 cycle's plan makes up what was not flown, and the Delta-V against the same draws with burns allowed is the cost.
 
-Time update (``step``): x through one RK4 step of the loop's MEE equations with the filter's force model
-(``filter_forces``: the loop's, or point-mass gravity alone, to study model error) and the true mass; the state
-transition matrix by ``jax.jacfwd`` of that step (``navigation.ekf.time_update``); plus state-noise compensation
-(``navigation.ekf.process_noise``, white acceleration of density ``snc_mps2_per_rthz`` per axis, Cartesian, taken
-into MEE by the Jacobian of the conversion at the predicted state).
+Time update (``step``): the filter's model (the planned thrust executed with its estimated (eps, phi), the force
+model ``filter_forces``: the loop's, or point-mass gravity alone, to study model error) taken one step from the
+estimate, computed as an error-state expansion about the true step (``error_state_prediction``: the model's step
+from the true state plus the transition matrix times the estimate's deviation, exact to second order in it);
+the covariance through the transition matrix of (r, v, eps, phi) (``transition``: point-mass variational
+equations by the fourth-order Magnus expansion, and the thrust's partials) plus state-noise compensation
+(``navigation.ekf.process_noise``, white acceleration of density ``snc_mps2_per_rthz`` per axis).
 
 Measurement updates (``step``): at every step end (the step's length is the tracking interval, 900 s by
 default), each station's measurements of the types it makes (``navigation.measurements``: two-way range with
@@ -40,15 +40,15 @@ the true elevation against its mask (``navigation.schedule``), processed one sta
 (``navigation.ekf.measurement_update``; the azimuth's residual wrapped).  Biases are drawn once per sample and not
 estimated: with a bias the filter is knowingly inconsistent (NEES shows by how much).
 
-Decision (``estimate``): at each cycle start the controller is told the filter's elements as its fix (its L made
-continuous with the truth's, as the Gaussian fix is), and its covariance of the elements, ``states["navigation"]``
-[6, 6], for a controller that wants it.
+Decision (``estimate``): at each cycle start the controller is told the estimate's elements as its fix (L made
+continuous with the truth's, as the Gaussian fix's is), and the covariance of its ECI position and velocity,
+``states["navigation"]`` [6, 6], for a controller that wants it.
 
 Records and metrics.  At each cycle start (``cycle``) the estimation error (estimate - truth) and the filter's
-1-sigma in radial, along-track and cross-track axes (position m, velocity m/s; the Cartesian covariance is J P J^T,
-J the Jacobian of MEE -> (r, v)) and the NEES of the six Cartesian components; over the cycle the NIS sum, its
-degrees of freedom, and the measurements used.  Metrics: the error's RMS and 95th percentile of |error| per axis
-over the cycle starts, the NEES averaged over them, the NIS averaged per degree of freedom, the measurements used.
+1-sigma in radial, along-track and cross-track axes (position m, velocity m/s) and the NEES of the six Cartesian
+components; over the cycle the NIS sum, its degrees of freedom, and the measurements used.  Metrics: the error's
+RMS and 95th percentile of |error| per axis over the cycle starts, the NEES averaged over them, the NIS averaged
+per degree of freedom, the measurements used.
 """
 
 from __future__ import annotations
@@ -192,8 +192,9 @@ def _filter_forces(fm, layout: Layout):
 
 
 def predict(x, execution, mass_kg, state: Navigation, env3, fm, step_s):
-    """The estimate's elements [6] one RK4 step later: the loop's MEE equations, the planned thrust executed with
-    the estimated (eps, phi) ``execution`` [4]."""
+    """Elements ``x`` [6] one RK4 step later: the loop's MEE equations, the planned thrust executed with the
+    errors (eps, phi) ``execution`` [4].  The filter's prediction computed directly (the loop computes it as
+    ``error_state_prediction``; the tests compare the two)."""
     direction, thrust_n = executed(state.planned_direction_rsw, state.planned_thrust_n, execution[0], execution[1:])
     thrust = Thrust(direction, thrust_n, state.isp_s, state.planned_on_fraction)
     return rk4_step(mee_rhs, SpacecraftState(x, mass_kg, jnp.zeros_like(mass_kg)), env3, fm, thrust, step_s).orbit

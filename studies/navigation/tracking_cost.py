@@ -59,7 +59,8 @@ def summary(result, rows: slice, samples: int) -> dict:
     status = [STATUS_MEANINGS[int(s)] for s in np.asarray(result.status)[rows]]
     out = {"dv_per_year_mps_mean": float(m["dv_per_year_mps"].mean()),
            "dv_per_year_mps_std": float(m["dv_per_year_mps"].std()),
-           "max_abs_dlon_deg": float(m["max_abs_dlon_deg"].max()), "max_abs_dlat_deg": float(m["max_abs_dlat_deg"].max()),
+           "max_abs_dlon_deg": float(m["max_abs_dlon_deg"].max()),
+           "max_abs_dlat_deg": float(m["max_abs_dlat_deg"].max()),
            "ok": sum(s == "ok" for s in status), "samples": samples}
     if "nav_position_rms_m" in m:
         out["nav_position_rms_m"] = float(np.sqrt(np.mean(m["nav_position_rms_m"] ** 2)))
@@ -117,7 +118,8 @@ def main() -> None:
     for r in rows:
         h = "—" if r["h_rv_equivalent"] is None else f"{r['h_rv_equivalent']:.0f}"
         lines.append(f"| {r['label']} | {r['dv_per_year_mps_mean']:.3f} | {r['dv_per_year_mps_std']:.3f} | "
-                     f"{r['max_abs_dlon_deg']:.4f} | {r['max_abs_dlat_deg']:.4f} | {r['nav_position_rms_m']:.1f} | "
+                     f"{r['max_abs_dlon_deg']:.4f} | {r['max_abs_dlat_deg']:.4f} | "
+                     f"{r['nav_position_rms_m']:.1f} | "
                      f"{r['nav_along_rms_m']:.1f} | {h} | {r['ok']}/{r['samples']} |")
     lines += ["", "| Gaussian fix H_rv | ΔV (m/s/yr) | ± std | max abs Δλ (deg) | max abs Δφ (deg) | in the box |",
               "|---:|---:|---:|---:|---:|---|"]
