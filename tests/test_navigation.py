@@ -227,6 +227,7 @@ def _rk4_two_body(x, dt_s, substeps):
     return jax.lax.scan(step, x, None, length=substeps)[0]
 
 
+@pytest.mark.slow  # the loop's filter meets the same bound in the default tier (test_navigation_loop.py)
 def test_filter_covariance_matches_the_batch_least_squares_bound():
     """Independent method (the Cramer-Rao check): two stations (30 deg N and 30 deg S of the sub-satellite
     point, 15 deg apart in longitude) range an unperturbed, slightly eccentric and inclined GEO orbit every
