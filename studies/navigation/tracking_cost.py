@@ -1,7 +1,8 @@
 """What a tracking set-up costs in Delta-V and box margin, and the Gaussian fix that costs the same (Li 2022's
 Fig. 16 in physical terms).
 
-    python studies/navigation/tracking_cost.py [--samples 16] [--days 365.25] [--out studies/navigation/results]
+    python studies/navigation/tracking_cost.py [--controller qffc] [--samples 16] [--days 365.25]
+                                               [--out studies/navigation/results]
 
 Li 2022 (Fig. 16) sweeps its determination error as a multiple H_rv of a nominal Gaussian fix.  Here the estimate
 comes from the extended Kalman filter on a tracking set-up (``li2022-qffc-ranging``: two stations' 5 m ranging, a
@@ -11,7 +12,8 @@ without pointing error) and one station instead of two; QFFC, ``--samples`` draw
 set-up.  Beside them, li2022-qffc with Li's Gaussian fix at H_rv from 0 to 800 and the same execution errors as
 Li draws them (3-sigma 6 % and 0.3 deg: 1 sigma 2 % and 0.1 deg), and, for each set-up with those execution
 errors, the H_rv whose mean Delta-V equals the set-up's (linear interpolation in the H_rv grid; "below" where the
-set-up spends less than H_rv = 0).  Writes ``tracking_cost.md`` and ``tracking_cost.json`` into ``--out``.
+set-up spends less than H_rv = 0).  Writes ``tracking_cost.md`` and ``.json`` into ``--out`` (the FOMPC's and the
+MPC's: ``tracking_cost_fompc``, ``tracking_cost_mpc``).
 """
 
 from __future__ import annotations
@@ -82,17 +84,27 @@ def equivalent_h_rv(dv: float, grid: list[float], dv_grid: list[float]) -> float
     return float(np.interp(dv, dv_grid, grid))
 
 
+def navigation_overrides() -> dict:
+    """The ``[navigation]`` table of li2022-qffc-ranging as overrides (for another controller's scenario)."""
+    table = scenario.load("li2022-qffc-ranging").config["navigation"]
+    return {f"navigation.{key}": value for key, value in table.items() if value is not None}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--controller", choices=("qffc", "fompc", "mpc"), default="qffc")
     parser.add_argument("--samples", type=int, default=16)
     parser.add_argument("--days", type=float, default=365.25)
     parser.add_argument("--out", type=Path, default=HERE / "results")
     args = parser.parse_args()
     days = {"duration.days": args.days}
-    filtered = batch([scenario.load("li2022-qffc-ranging", {**days, **o}) for _, o, _ in SETUPS], args.samples)
-    filtered += batch([scenario.load("li2022-qffc-ranging", {**days, **ONE_STATION[1]})], args.samples)
-    fixes = batch([scenario.load("li2022-qffc", {**days, **LI_EXECUTION, "errors.h_rv": h}) for h in H_RV],
-                  args.samples)
+    base, ranging = f"li2022-{args.controller}", {}
+    if args.controller != "qffc":
+        ranging = navigation_overrides()
+    name = "li2022-qffc-ranging" if args.controller == "qffc" else base
+    filtered = batch([scenario.load(name, {**days, **ranging, **o}) for _, o, _ in SETUPS], args.samples)
+    filtered += batch([scenario.load(name, {**days, **ranging, **ONE_STATION[1]})], args.samples)
+    fixes = batch([scenario.load(base, {**days, **LI_EXECUTION, "errors.h_rv": h}) for h in H_RV], args.samples)
     dv_grid = [f["dv_per_year_mps_mean"] for f in fixes]
     monotone = bool(np.all(np.diff(dv_grid) > 0))
     rows = []
@@ -104,13 +116,15 @@ def main() -> None:
         rows.append(row)
         print(row, flush=True)
     args.out.mkdir(parents=True, exist_ok=True)
-    payload = {"samples": args.samples, "days": args.days, "geojax": geojax.__version__, "setups": rows,
+    stem = "tracking_cost" if args.controller == "qffc" else f"tracking_cost_{args.controller}"
+    payload = {"controller": args.controller, "samples": args.samples, "days": args.days, "geojax": geojax.__version__, "setups": rows,
                "gaussian_fix": [{"h_rv": h, **f} for h, f in zip(H_RV, fixes)], "dv_grid_increasing": monotone}
-    (args.out / "tracking_cost.json").write_text(json.dumps(payload, indent=1))
-    lines = [f"# What a tracking set-up costs: QFFC, {args.samples} draws, {args.days:g} days", "",
-             f"`python studies/navigation/tracking_cost.py --samples {args.samples} --days {args.days:g}`; geojax "
-             f"{geojax.__version__}. The extended Kalman filter on li2022-qffc-ranging, one property varied at a "
-             "time; beside it Li's Gaussian fix (li2022-qffc, execution errors 3σ 6 % and 0.3°) at H_rv from 0 to "
+    (args.out / f"{stem}.json").write_text(json.dumps(payload, indent=1))
+    lines = [f"# What a tracking set-up costs: {args.controller.upper()}, {args.samples} draws, {args.days:g} days",
+             "", f"`python studies/navigation/tracking_cost.py --controller {args.controller} --samples "
+             f"{args.samples} --days {args.days:g}`; geojax {geojax.__version__}. The extended Kalman filter on "
+             f"{name} (li2022-qffc-ranging's tracking), one property varied at a time; beside it Li's Gaussian fix "
+             f"({base}, execution errors 3σ 6 % and 0.3°) at H_rv from 0 to "
              "800. ΔV: mean over the draws; |Δλ|, |Δφ|: the largest over the draws (box half-width 0.05°).", "",
              "| tracking set-up | ΔV (m/s/yr) | ± std | max abs Δλ (deg) | max abs Δφ (deg) | position RMS (m) | "
              "along-track RMS (m) | H_rv of the same ΔV | in the box |",
@@ -126,7 +140,7 @@ def main() -> None:
     for h, f in zip(H_RV, fixes):
         lines.append(f"| {h:g} | {f['dv_per_year_mps_mean']:.3f} | {f['dv_per_year_mps_std']:.3f} | "
                      f"{f['max_abs_dlon_deg']:.4f} | {f['max_abs_dlat_deg']:.4f} | {f['ok']}/{f['samples']} |")
-    (args.out / "tracking_cost.md").write_text("\n".join(lines) + "\n")
+    (args.out / f"{stem}.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
 
