@@ -35,6 +35,9 @@ DIMENSIONLESS = {"ex", "ey", "ix", "iy", "max_abs_de", "max_abs_di", "duty_fract
                  "ns_fraction", "burns_per_thruster_per_orbit", "burns_total", "cycles_without_solution", "code",
                  "active", "loss", "step_norm", "theta", "temperature", "trust_radius", "constraint", "constraint_lon",
                  "constraint_lat", "status", "time_above_80pct_capacity_fraction"}
+# The filter's axes and units (geojax.states.navigation's metrics and columns).
+NAV_AXES = (("radial", "radial"), ("along", "along-track"), ("cross", "cross-track"))
+NAV_UNITS = (("m", "position"), ("mps", "velocity"))
 DESCRIPTIONS = {
     "dv_per_year_mps": "delta-V per year of the whole run",
     "dv_steady_per_year_mps": "delta-V per year in steady state: the mean of the years after the first",
@@ -92,22 +95,16 @@ DESCRIPTIONS = {
     **{f"wheel_{axis}_nms": f"the {axis} wheel's momentum at the cycle end, body axes" for axis in "xyz"},
     **{f"wheel_max_abs_{axis}_nms": f"largest |momentum| of the {axis} wheel within the cycle" for axis in "xyz"},
     # Orbit determination (geojax.states.navigation, where navigation.model = "ekf")
-    **{f"nav_{axis}_rms_{unit}": f"RMS of the filter's {name} {what} error at the decision times (cycle starts)"
-       for axis, name in (("radial", "radial"), ("along", "along-track"), ("cross", "cross-track"))
-       for unit, what in (("m", "position"), ("mps", "velocity"))},
-    **{f"nav_{axis}_p95_{unit}": f"95th percentile of |{name} {what} error| of the filter at the decision times"
-       for axis, name in (("radial", "radial"), ("along", "along-track"), ("cross", "cross-track"))
-       for unit, what in (("m", "position"), ("mps", "velocity"))},
+    **{f"nav_{axis}_{stat}_{unit}": f"{what_stat} of the filter's {name} {what} error at the decision times"
+       for axis, name in NAV_AXES for unit, what in NAV_UNITS
+       for stat, what_stat in (("rms", "RMS"), ("p95", "95th percentile of the magnitude"))},
     "nav_position_rms_m": "RMS of the filter's position error (3-D) at the decision times",
     "nees_mean": "the filter's NEES (6 dof: position and velocity) averaged over the decision times; 6 if consistent",
     "nis_mean_per_dof": "the filter's NIS per degree of freedom over every measurement update; 1 if consistent",
     "measurements_used": "measurement components the filter processed over the run",
-    **{f"nav_error_{axis}_{unit}": f"the filter's {name} {what} error (estimate - truth) at the cycle start"
-       for axis, name in (("radial", "radial"), ("along", "along-track"), ("cross", "cross-track"))
-       for unit, what in (("m", "position"), ("mps", "velocity"))},
-    **{f"nav_sigma_{axis}_{unit}": f"the filter's 1-sigma {name} {what} at the cycle start"
-       for axis, name in (("radial", "radial"), ("along", "along-track"), ("cross", "cross-track"))
-       for unit, what in (("m", "position"), ("mps", "velocity"))},
+    **{f"nav_{kind}_{axis}_{unit}": f"the filter's {name} {what} {label} at the cycle start"
+       for axis, name in NAV_AXES for unit, what in NAV_UNITS
+       for kind, label in (("error", "error (estimate - truth)"), ("sigma", "1-sigma"))},
     "nees": "the filter's NEES at the cycle start (6 dof)",
     "nis_per_dof": "the filter's NIS per degree of freedom over the cycle's updates",
     "measurements": "measurement components the filter processed in the cycle",

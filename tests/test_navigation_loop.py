@@ -8,6 +8,9 @@ execution errors against their drawn statistics, and the command line's contract
 
 from __future__ import annotations
 
+import functools
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -28,30 +31,48 @@ UNPERTURBED = {"forces.j2": False, "forces.sun": False, "forces.moon": False, "f
 NO_EXECUTION = {"navigation.burn_magnitude_sigma_pct": 0.0, "navigation.burn_pointing_sigma_deg": 0.0}
 
 
+class Burning(NamedTuple):
+    """The filter of li2022-qffc-ranging (uncontrolled) at the run's start, a burn planned over step 5."""
+
+    sc: object
+    step_s: float
+    params: object
+    env3: object
+    truth: jnp.ndarray  # [6] the true r, v
+    state: object  # ``states.navigation.Navigation``
+
+
+@functools.lru_cache(maxsize=None)
+def _burning() -> Burning:
+    sc = scenario.load("li2022-qffc-ranging", {"duration.days": 1, "controller.kind": "none"})
+    setup = prepare([sc])
+    params = jax.tree_util.tree_map(lambda x: x[0], setup.params)
+    fm, mu = params.forces, params.forces.mu_m3_s2
+    env3 = jax.tree_util.tree_map(lambda x: x[0, 5], setup.shared.env)
+    r0, v0 = position_velocity(setup.dynamics, params.initial.orbit, mu)
+    state = setup.states[-1].init(params, r0, v0, jax.tree_util.tree_map(lambda x: x[0], env3), fm)
+    direction = jnp.array([0.3, 0.9, -0.3]) / jnp.linalg.norm(jnp.array([0.3, 0.9, -0.3]))
+    state = state._replace(planned_direction_rsw=direction, planned_thrust_n=jnp.asarray(0.5),
+                           planned_on_fraction=jnp.asarray(0.7), isp_s=jnp.asarray(2250.0))
+    return Burning(sc, setup.step_s, params, env3, jnp.concatenate([r0, v0]), state)
+
+
+def _predicted(b: Burning, rv, execution, state):
+    """r, v [6] one step on by the filter's direct prediction (RK4 of the MEE equations, the loop's forces)."""
+    mu = b.params.forces.mu_m3_s2
+    x = nav.elements_of(rv, b.params.initial.orbit, mu)
+    return nav.rv_of(nav.predict(x, execution, 5000.0, state, b.env3, b.params.forces, b.step_s), mu)
+
+
 def test_transition_matrix_against_jacfwd_of_the_filter_step():
     """Second method: the written-out transition of (r, v, eps, phi) over a 900 s step while a burn fires,
     against jax.jacfwd of the filter's own step taken through the elements (r, v -> MEE -> RK4 with the loop's
     full force model -> r, v).  The terms the written-out one leaves out (J2's, the Sun's and the Moon's
     gradients, the thrust frame's turning) are below 1e-3 of each block's largest entry."""
-    sc = scenario.load("li2022-qffc-ranging", {"duration.days": 1, "controller.kind": "none"})
-    setup = prepare([sc])
-    params = jax.tree_util.tree_map(lambda x: x[0], setup.params)
-    fm, mu = params.forces, params.forces.mu_m3_s2
-    model = setup.states[-1]
-    env3 = jax.tree_util.tree_map(lambda x: x[0, 5], setup.shared.env)
-    r0, v0 = position_velocity(setup.dynamics, params.initial.orbit, mu)
-    state = model.init(params, r0, v0, jax.tree_util.tree_map(lambda x: x[0], env3), fm)
-    direction = jnp.array([0.3, 0.9, -0.3]) / jnp.linalg.norm(jnp.array([0.3, 0.9, -0.3]))
-    state = state._replace(planned_direction_rsw=direction, planned_thrust_n=jnp.asarray(0.5),
-                           planned_on_fraction=jnp.asarray(0.7), isp_s=jnp.asarray(2250.0))
-    rv = jnp.concatenate([r0, v0])
-
-    def step(y):
-        x = nav.elements_of(y[:6], state.x, mu)
-        return jnp.concatenate([nav.rv_of(nav.predict(x, y[6:], 5000.0, state, env3, fm, setup.step_s), mu), y[6:]])
-
-    expected = jax.jacfwd(step)(jnp.concatenate([rv, jnp.zeros(4)]))
-    got = nav.transition(rv, 5000.0, state, setup.step_s, mu)
+    b = _burning()
+    expected = jax.jacfwd(lambda y: jnp.concatenate([_predicted(b, y[:6], y[6:], b.state), y[6:]]))(
+        jnp.concatenate([b.truth, jnp.zeros(4)]))
+    got = nav.transition(b.truth, 5000.0, b.state, b.step_s, b.params.forces.mu_m3_s2)
     for rows, cols in ((slice(0, 3), slice(0, 3)), (slice(0, 3), slice(3, 6)), (slice(3, 6), slice(0, 3)),
                        (slice(3, 6), slice(3, 6)), (slice(0, 6), slice(6, 10))):
         block, want = np.asarray(got[rows, cols]), np.asarray(expected[rows, cols])
@@ -69,32 +90,19 @@ def test_error_state_prediction_is_the_direct_prediction():
     from geojax.physics.dynamics import Thrust
     from geojax.states.base import StepContext
 
-    sc = scenario.load("li2022-qffc-ranging", {"duration.days": 1, "controller.kind": "none"})
-    setup = prepare([sc])
-    params = jax.tree_util.tree_map(lambda x: x[0], setup.params)
-    fm, mu = params.forces, params.forces.mu_m3_s2
-    model = setup.states[-1]
-    env3 = jax.tree_util.tree_map(lambda x: x[0, 5], setup.shared.env)
-    r0, v0 = position_velocity(setup.dynamics, params.initial.orbit, mu)
-    state = model.init(params, r0, v0, jax.tree_util.tree_map(lambda x: x[0], env3), fm)
-    direction = jnp.array([0.3, 0.9, -0.3]) / jnp.linalg.norm(jnp.array([0.3, 0.9, -0.3]))
+    b = _burning()
     truth_e = jnp.array([0.02, 1e-3, -2e-3, 5e-4])
     estimate_e = truth_e + jnp.array([0.02, np.radians(0.1), -np.radians(0.1), np.radians(0.1)])
-    state = state._replace(planned_direction_rsw=direction, planned_thrust_n=jnp.asarray(0.5),
-                           planned_on_fraction=jnp.asarray(0.7), isp_s=jnp.asarray(2250.0),
-                           truth_execution=truth_e, execution=estimate_e)
-    truth = jnp.concatenate([r0, v0])
-    estimate = truth + jnp.array([600.0, -700.0, 387.3, 0.06, 0.05, -0.058])
-    near = nav.elements_of(truth, params.initial.orbit, mu)
-    truth_end = nav.rv_of(nav.predict(near, truth_e, 5000.0, state, env3, fm, setup.step_s), mu)
-    direct = nav.rv_of(nav.predict(nav.elements_of(estimate, near, mu), estimate_e, 5000.0, state, env3, fm,
-                                   setup.step_s), mu)
-    direction_flown, thrust_flown = nav.executed(direction, 0.5, truth_e[0], truth_e[1:])
-    ctx = StepContext(jnp.asarray(0.0), setup.step_s, env3, r0, v0, truth_end[:3], truth_end[3:], jnp.asarray(5000.0),
-                      Thrust(direction_flown, thrust_flown, 2250.0, 0.7), fm)
-    f = nav.transition(truth, 5000.0, state, setup.step_s, mu)
-    got = nav.error_state_prediction(nav.layout_of(sc.config["navigation"]), f, state._replace(x=estimate), ctx,
-                                     truth)
+    state = b.state._replace(truth_execution=truth_e, execution=estimate_e)
+    estimate = b.truth + jnp.array([600.0, -700.0, 387.3, 0.06, 0.05, -0.058])
+    truth_end = _predicted(b, b.truth, truth_e, state)
+    direct = _predicted(b, estimate, estimate_e, state)
+    direction_flown, thrust_flown = nav.executed(state.planned_direction_rsw, 0.5, truth_e[0], truth_e[1:])
+    ctx = StepContext(jnp.asarray(0.0), b.step_s, b.env3, b.truth[:3], b.truth[3:], truth_end[:3], truth_end[3:],
+                      jnp.asarray(5000.0), Thrust(direction_flown, thrust_flown, 2250.0, 0.7), b.params.forces)
+    f = nav.transition(b.truth, 5000.0, state, b.step_s, b.params.forces.mu_m3_s2)
+    got = nav.error_state_prediction(nav.layout_of(b.sc.config["navigation"]), f, state._replace(x=estimate), ctx,
+                                     b.truth)
     assert np.max(np.abs(np.asarray(got - direct)[:3])) < 5e-3
     assert np.max(np.abs(np.asarray(got - direct)[3:])) < 5e-6
 
