@@ -434,6 +434,7 @@ def test_no_tilt_flies_the_controllers_direction_exactly_and_a_moved_centre_of_m
     np.testing.assert_allclose(np.asarray(state.thrust_torque_body_nm), -np.cross(dc, force), rtol=1e-12)
 
 
+@pytest.mark.slow  # the suite's budget: test_a_year_of_li2022_momentum_keeps_box_and_wheels_... checks it on a year
 def test_dumping_holds_the_wheels_that_saturate_without_it():
     """li2022-momentum over 6 days, dumping on and off in one batch (the tilt limit is a leaf): off, the SRP offset
     fills the 50 N m s wheels at 12 N m s a day and the run ends "wheels saturated" (status 6, kept); on, the wheels

@@ -64,6 +64,7 @@ def _predicted(b: Burning, rv, execution, state):
     return nav.rv_of(nav.predict(x, execution, 5000.0, state, b.env3, b.params.forces, b.step_s), mu)
 
 
+@pytest.mark.slow  # the suite's budget: the error-state test below checks the matrix's effect in the default tier
 def test_transition_matrix_against_jacfwd_of_the_filter_step():
     """Second method: the written-out transition of (r, v, eps, phi) over a 900 s step while a burn fires,
     against jax.jacfwd of the filter's own step taken through the elements (r, v -> MEE -> RK4 with the loop's
