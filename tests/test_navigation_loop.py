@@ -178,6 +178,16 @@ def test_execution_errors_and_the_filter_over_a_week():
     assert abs(metrics["nis_mean_per_dof"] - 1.0) < 0.25
 
 
+def test_the_scenario_written_back_as_toml_loads_as_itself():
+    """What a results file keeps (``config_toml``) and a tuning writes: the stations (a list of tables) and the
+    receiver (a sub-table) as TOML inline tables, read back to the same validated scenario."""
+    from geojax.scenario import from_dict, to_toml, tomllib
+
+    for overrides in ({}, {"navigation.gnss": {"sigma_m": 10.0, "outages_s": [[0.0, 3600.0]]}}):
+        sc = scenario.load("li2022-qffc-ranging", overrides)
+        assert from_dict(tomllib.loads(to_toml(sc.config))).config == sc.config
+
+
 @pytest.mark.parametrize("edit, message", [
     ("lat_deg = 28.25", "navigation.stations[0].lat_deg: must be >= -90 and < 90, got -95.0"),
     ("range_sigma_m = 5.0", "navigation.stations[0].range_sigma_m: must be >= 0"),
