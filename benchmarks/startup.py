@@ -138,10 +138,12 @@ def _run(tree: Path, args: list[str], cache: Path | None, cwd: Path) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def measure(trees: dict[str, Path], names: list[str], work: Path) -> dict:
+def measure(trees: dict[str, Path], names: list[str], work: Path, on_command=lambda: None,
+            results: dict | None = None) -> dict:
     """Every command of ``names``, the baseline's run then this tree's cold and warm ones one after the other (so
-    that all three see the machine as it is then): {label: {name: {"cold": row[, "warm": row]}}}."""
-    results = {label: {} for label in trees}
+    that all three see the machine as it is then): {label: {name: {"cold": row[, "warm": row]}}}; ``on_command()``
+    after each command (the results so far are in the dict returned, filled as it goes)."""
+    results = {label: {} for label in trees} if results is None else results  # filled in place
     cache = work / "cache"
     for name, argv, _ in COMMANDS:
         if name not in names:
@@ -158,6 +160,7 @@ def measure(trees: dict[str, Path], names: list[str], work: Path) -> dict:
                 _remove_outputs(argv, folder)  # a sweep refuses to overwrite its file
                 results[label][name] = {"cold": cold, "warm": _run(tree, ["--child", *argv], cache, folder)}
             _remove_outputs(argv, folder)
+        on_command()
     return results
 
 
@@ -193,6 +196,12 @@ def markdown(base: dict, new: dict, batches: dict) -> list[str]:
              *harness.table(["command", "baseline s", "cold s", "cold / baseline", "warm s", "warm / baseline",
                              "cold: import / trace / compile / rest"], rows, "lrrrrrr"), "",
              "`simulate_batch` in one process, one call after another (the closed loop's compilations per call):", ""]
+    if "this tree" not in batches:
+        return lines[:-2]
+    if "baseline" not in batches:
+        return lines + harness.table(["days", "samples", "loop compiles", "s"],
+                                     [[n["days"], n["samples"], n["loop_compiles"], f"{n['wall_s']:.1f}"]
+                                      for n in batches["this tree"]], "rrrr")
     head = ["days", "samples", "baseline: loop compiles", "baseline s", "this tree: loop compiles", "this tree s"]
     lines += harness.table(head, [[n["days"], n["samples"], o["loop_compiles"], f"{o['wall_s']:.1f}",
                                    n["loop_compiles"], f"{n['wall_s']:.1f}"]
@@ -206,34 +215,50 @@ def main() -> None:
     if sys.argv[1:2] == ["--batch-child"]:
         return batch_child()
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--baseline", default=BASELINE, help=f"revision to compare with (default {BASELINE})")
+    parser.add_argument("--baseline", default=BASELINE,
+                        help=f"revision to compare with (default {BASELINE}; none: this tree alone, e.g. on a "
+                             "machine without the git history)")
     parser.add_argument("--only", nargs="+", default=[name for name, _, _ in COMMANDS],
                         help="the commands to measure, by their names in the table")
+    parser.add_argument("--no-batch", action="store_true", help="leave out the simulate_batch calls")
     harness.add_arguments(parser)
     args = parser.parse_args()
     run = harness.start()
+    import jax
+
+    platform = jax.devices()[0].platform  # a GPU's results go beside the CPU's, not over them
+    stem = args.out / ("startup" if platform == "cpu" else f"startup_{platform}")
     repo = HERE.parent
+    data = {"baseline": args.baseline, "commands": {}, "simulate_batch": {}}
+
+    def save() -> str:  # after every command: a run cut short keeps what it measured
+        return harness.write(stem, run, "Time to first result: the README's commands, cold and warm", data,
+                             markdown(data["commands"].get("baseline", {}), data["commands"]["this tree"],
+                                      data["simulate_batch"]))
+
     with tempfile.TemporaryDirectory(prefix="geojax-startup-") as tmp:
         tmp = Path(tmp)
         old = tmp / "baseline-tree"
-        subprocess.run(["git", "-C", str(repo), "worktree", "add", "--detach", str(old), args.baseline], check=True,
-                       capture_output=True)
+        trees = {"this tree": repo}
+        if args.baseline != "none":
+            subprocess.run(["git", "-C", str(repo), "worktree", "add", "--detach", str(old), args.baseline],
+                           check=True, capture_output=True)
+            trees = {"baseline": old, **trees}
         try:
-            trees = {"baseline": old, "this tree": repo}
             for label in trees:
                 (tmp / label.replace(" ", "-")).mkdir()
                 (tmp / label.replace(" ", "-") / "startup.toml").write_text(SWEEP)
-            results = measure(trees, args.only, tmp)
-            batches = {}
-            for label, tree in trees.items():
+            data["commands"] = {label: {} for label in trees}
+            measure(trees, args.only, tmp, on_command=save, results=data["commands"])
+            for label, tree in ({} if args.no_batch else trees).items():
                 print(f"  {label}: simulate_batch", file=sys.stderr, flush=True)
-                batches[label] = _run(tree, ["--batch-child"], None if label == "baseline" else tmp / "batch-cache",
-                                      tmp / label.replace(" ", "-"))
+                data["simulate_batch"][label] = _run(tree, ["--batch-child"],
+                                                     None if label == "baseline" else tmp / "batch-cache",
+                                                     tmp / label.replace(" ", "-"))
         finally:
-            subprocess.run(["git", "-C", str(repo), "worktree", "remove", "--force", str(old)], check=False)
-    data = {"baseline": args.baseline, "commands": results, "simulate_batch": batches}
-    print(harness.write(args.out / "startup", run, "Time to first result: the README's commands, cold and warm",
-                        data, markdown(results["baseline"], results["this tree"], batches)))
+            if args.baseline != "none":
+                subprocess.run(["git", "-C", str(repo), "worktree", "remove", "--force", str(old)], check=False)
+    print(save())
 
 
 if __name__ == "__main__":
