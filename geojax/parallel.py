@@ -66,7 +66,7 @@ def replicate(tree, mesh: Mesh | None = None):
     return jax.device_put(tree, NamedSharding(mesh, PartitionSpec()))
 
 
-def per_device(fn, example_args, devices=None, shared=()):
+def per_device(fn, example_args, devices=None, shared=(), traced_as=None):
     """``fn`` (every argument and result with a leading batch axis) compiled once for each device as the
     same single-device program, and a function that splits a batch evenly over the devices, runs the shares
     concurrently and joins the results (numpy).  Returns ``(run, compile_s)``.
@@ -81,6 +81,9 @@ def per_device(fn, example_args, devices=None, shared=()):
     ``shared``: arguments every device reads whole (an environment grid, a force model), passed after the
     batched ones, ``fn(*args, *shared)``; they are placed on each device once, and ``run(*args,
     shared=...)`` may replace them by values of the same shapes.
+
+    ``traced_as``: (name, identity) to keep the traced program between runs (``geojax.traced``: a later run
+    compiles, or loads from the cache, without tracing ``fn`` again); None traces it every run.
     """
     import time
 
@@ -100,6 +103,10 @@ def per_device(fn, example_args, devices=None, shared=()):
 
     start = time.perf_counter()
     on_devices = placed(shared)
+    if traced_as is not None:
+        from geojax import traced
+
+        jitted = traced.jitted(jitted, *traced_as, *shares(example_args)[0], *on_devices[0])
     compiled = _concurrently([lambda pair=pair: jitted.lower(*pair[0], *pair[1]).compile()
                               for pair in zip(shares(example_args), on_devices)])
     compile_s = time.perf_counter() - start

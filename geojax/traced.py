@@ -44,6 +44,14 @@ def compiled(jitted, name: str, identity, *args, **static):
     return (jitted.lower(*args, **static) if program is None else program.lower(*args)).compile()
 
 
+def jitted(jitted, name: str, identity, *args):
+    """A jitted callable with ``jitted``'s results for arguments shaped as ``args`` (no static arguments): the kept
+    traced program's when ``identity`` is not None and the cache is on, else ``jitted`` itself.  Either has
+    ``.lower(...)`` (``geojax.parallel.per_device`` compiles it once per device)."""
+    program = _program(jitted, name, identity, args, {})
+    return jitted if program is None else program
+
+
 _IN_PROCESS: dict[str, object] = {}  # key -> jitted call of the loaded program (one lowering per process)
 
 

@@ -176,3 +176,66 @@ def test_compilations_are_recorded_with_their_cache_hits(tmp_path):
                                      check=True).stdout.splitlines() for _ in range(2))
     assert first[0] == "1 False" and "compiled" in first[1]
     assert second[0] == "1 True" and "loaded" in second[1]
+
+
+SWEEP_TOML = """name = "kept"
+scenario = "li2022-qffc"
+controllers = ["qffc"]
+repetitions = 2
+seed = {seed}
+lanes = 8
+[set]
+"duration.days" = 2
+"errors.h_rv" = 1.0
+[grid]
+"thrusters.beta_max_deg" = [70.0, 90.0]
+"""
+
+
+def test_a_sweeps_kept_program_is_found_only_by_what_fixes_it(tmp_path):
+    """The identity of a sweep's kept traced program (``sweep.batch._identity``) changes with everything the
+    program bakes in beside its arguments' shapes (seed, dispersion, cycle records), and not with what reaches it
+    as an argument (the grid's values), so a kept program is never served to a sweep it does not compute."""
+    from geojax import sweep
+    from geojax.sweep.batch import _identity
+    from geojax.sweep.spec import _points, _scenario
+
+    def identity(seed=1, **changes):
+        path = tmp_path / f"s{seed}.toml"
+        path.write_text(SWEEP_TOML.format(seed=seed))
+        spec = sweep.load(path)
+        spec = spec.__class__(**{**spec.__dict__, **changes})
+        sc = _scenario(spec, "qffc", next(iter(_points(spec))))
+        return _identity(spec, "qffc", sc, prepare([sc]))
+
+    base = identity()
+    assert base is not None and base == identity()
+    assert identity(seed=2) != base
+    assert identity(cycles=True) != base
+    assert identity(dispersion={"mee_1sigma": [1.0, 0, 0, 0, 0, 0], "offset_ecef_1sigma_km": [0.0, 0, 0]}) != base
+
+
+@pytest.mark.slow
+def test_a_sweep_through_its_kept_program_is_bit_for_bit_the_traced_one(tmp_path):
+    """A sweep cold (its program traced and kept), warm (loaded from the folder), with another seed in the same
+    folder (another program, not the kept one), and with the cache off: each the same bits as with the cache off."""
+    code = ("import sys, numpy as np; from geojax import sweep, store; "
+            "out = sweep.run_sweep(sweep.load(sys.argv[1]), sys.argv[2], progress=False); "
+            "np.save(sys.argv[3], store.read_h5(out)[0]['metrics']['dv_per_year_mps'])")
+    env = {k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"}
+    folder = tmp_path / "cache"
+    for seed in (1, 2):
+        (tmp_path / f"s{seed}.toml").write_text(SWEEP_TOML.format(seed=seed))
+
+    def run(name, seed, cache):
+        extra = {"GEOJAX_CACHE_DIR": str(folder)} if cache else {"GEOJAX_NO_CACHE": "1"}
+        subprocess.run([sys.executable, "-c", code, str(tmp_path / f"s{seed}.toml"), str(tmp_path / f"{name}.h5"),
+                        str(tmp_path / f"{name}.npy")], env={**env, **extra}, check=True, capture_output=True)
+        return np.load(tmp_path / f"{name}.npy")
+
+    cold, warm, other = run("cold", 1, True), run("warm", 1, True), run("other", 2, True)
+    assert len(list(folder.glob(f"*{traced.SUFFIX}"))) >= 2  # the sweep's program of each seed kept
+    np.testing.assert_array_equal(cold, run("off", 1, False))
+    np.testing.assert_array_equal(warm, cold)
+    np.testing.assert_array_equal(other, run("other-off", 2, False))
+    assert not np.array_equal(other, cold)  # the seed reaches the numbers: a wrong hit would show

@@ -14,7 +14,10 @@ from geojax.sweep import epochs as epoch_axis
 from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.loop.metrics import CYCLE_NAMES, cycle_series
 from geojax.loop.rollout import rollout_fn
-from geojax.loop.setup import Batch, controller_of, cycle_count, disperse, prepare, reference_per_sample
+from geojax.control import REGISTRY
+from geojax.loop.setup import (Batch, controller_of, cycle_count, disperse, prepare, program_identity,
+                               reference_per_sample)
+from geojax.params import static_settings
 from geojax.parallel import per_device
 from geojax.sweep.spec import DISPERSION_STREAM, Sweep, _points, _scenario
 
@@ -123,7 +126,7 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int, on_phase):
     on_phase(f"{controller}: compiling")
     lanes = np.zeros(width, dtype=int)
     run, _ = per_device(jax.vmap(one, in_axes=(0, 0, None, None, None)), (_lanes(batch.params, lanes), lanes),
-                        shared=shared[0])
+                        shared=shared[0], traced_as=("sweep", _identity(sweep, controller, scenarios[0], batch)))
     # Every grid point's params, in point order (each group's batch stacks its own points).
     order = np.concatenate(groups)
     params = jax.tree_util.tree_map(lambda *xs: jnp.concatenate(xs)[np.argsort(order)], *[b.params for b in batches])
@@ -132,6 +135,18 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int, on_phase):
         group_of_point[group] = g
     return (lambda p, idx, g: run(p, np.asarray(idx), shared=shared[g]), params, group_of_point,
             time.perf_counter() - begun)
+
+
+def _identity(sweep: Sweep, controller: str, sc, batch: Batch):
+    """What, beside its arguments' shapes, fixes the program ``_compiled_batch`` compiles (``geojax.traced``): the
+    closed loop's settings as ``simulate`` keeps them, and what ``one`` reads of the sweep (seed, dispersion, cycle
+    records, the metrics' cycle count); None for a user's controller (its code is not in traced's digest)."""
+    if sweep.custom.get(controller) is not None or controller not in REGISTRY:
+        return None
+    settings = repr(sorted(static_settings(sc.config["controller"], batch.controller.fields).items()))
+    return program_identity(sc, controller, settings, batch.controller.lanes_cpu, batch.step_s, batch.n_cycles,
+                            batch.reference_per_sample, sweep.seed, sweep.dispersed, repr(sweep.dispersion),
+                            sweep.cycles)
 
 
 def _lanes(params, point_index):
