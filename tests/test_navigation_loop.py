@@ -270,3 +270,26 @@ def test_gradients_flow_through_the_filter():
     grad = float(jax.grad(dv)(thrust))
     central = float((dv(thrust + 1e-4) - dv(thrust - 1e-4)) / 2e-4)
     assert np.isfinite(grad) and grad == pytest.approx(central, rel=1e-5)
+
+
+@pytest.mark.slow
+def test_a_sweep_keeps_the_filters_per_cycle_columns(tmp_path):
+    """``cycles = true`` on a scenario with the filter keeps its columns beside the orbit's (second method: the
+    same samples through ``simulate_batch`` with the sweep's keys, ``fold_in(key(seed), j)``, and their
+    ``/cycles`` table), for every controller of the sweep."""
+    from geojax import store, sweep
+    from geojax.loop.metrics import cycle_table
+
+    (tmp_path / "nav.toml").write_text('name = "nav-cycles"\nscenario = "li2022-qffc-ranging"\n'
+                                       'controllers = ["qffc"]\nrepetitions = 2\nseed = 3\ncycles = true\nlanes = 8\n'
+                                       '[set]\n"duration.days" = 2\n[grid]\n"thrusters.beta_max_deg" = [70.0]\n')
+    groups, _ = store.read_h5(sweep.run_sweep(sweep.load(tmp_path / "nav.toml"), tmp_path / "nav.h5",
+                                              progress=False))
+    cycles = groups["cycles"]
+    sc = scenario.load("li2022-qffc-ranging", {"duration.days": 2})
+    keys = jnp.stack([jax.random.fold_in(jax.random.key(3), j) for j in range(2)])
+    result = rollout.simulate_batch([sc, sc], keys=keys)
+    for j in range(2):
+        table = cycle_table(jax.tree_util.tree_map(lambda x: x[j], result.records))
+        for name in ("nav_error_along_m", "nav_sigma_radial_m", "nees", "nis_per_dof", "measurements", "lon_deg"):
+            np.testing.assert_allclose(cycles[name][0, 0, j], table[name], rtol=1e-9, atol=1e-9, err_msg=name)

@@ -187,12 +187,24 @@ def ns_delta_v_mps(rec: dict):
 
 
 def cycle_series(records) -> dict:
-    """The per-cycle series of ``CYCLE_NAMES`` (JAX): mean longitude (deg), e and i vectors (MEE f, g, h, k),
-    the Delta-V delivered in the cycle (m/s) and the north-south fraction flown (1 without a planner)."""
+    """The per-cycle series a sweep keeps (JAX): ``CYCLE_NAMES`` (mean longitude (deg), e and i vectors (MEE f, g,
+    h, k), the Delta-V delivered in the cycle (m/s) and the north-south fraction flown, 1 without a planner), then
+    the columns of every extra state the loop carries (``state_columns``: the wheels', the filter's), the same for
+    every controller of a sweep (the states come from the scenario, not the controller)."""
     c = records.cycles
     m = c.means
     return {"lon_deg": jnp.degrees(m.lon_rad), "ex": m.ex, "ey": m.ey, "ix": m.ix, "iy": m.iy, "dv_mps": c.dv_mps,
-            "ns_fraction": c.controller.get("ns_fraction", jnp.ones_like(c.dv_mps))}
+            "ns_fraction": c.controller.get("ns_fraction", jnp.ones_like(c.dv_mps)), **state_columns(c.states)}
+
+
+def state_columns(states: dict) -> dict:
+    """The per-cycle columns of the extra states' records (``StateModel.columns``), in the registry's order."""
+    table = {}
+    for name, record in states.items():
+        columns = STATE_MODELS[name].columns
+        if columns is not None:
+            table.update(columns(record))
+    return table
 
 
 def cycle_table(records) -> dict[str, np.ndarray]:
@@ -230,10 +242,7 @@ def cycle_table(records) -> dict[str, np.ndarray]:
         table["status"] = np.where(rec["solved"], 0, 1).astype(np.int8)
     if "recovering" in rec:
         table["recovering"] = np.asarray(rec["recovering"]).astype(np.int8)
-    for name, record in c.states.items():
-        columns = STATE_MODELS[name].columns
-        if columns is not None:
-            table.update(columns(record))
+    table.update(state_columns(c.states))
     return {k: np.asarray(v) for k, v in table.items()}
 
 

@@ -303,9 +303,9 @@ def metrics(params, cycles: WheelCycle, n_steps_total: int, run_s: float):
 def columns(cycles: WheelCycle) -> dict:
     """The per-cycle series in edge units: h_w at each cycle end and the largest |h_w| per wheel (N m s)."""
     out = {}
-    for k, axis in enumerate("xyz"):
-        out[f"wheel_{axis}_nms"] = np.asarray(cycles.end_nms)[:, k]
-        out[f"wheel_max_abs_{axis}_nms"] = np.asarray(cycles.max_abs_nms)[:, k]
+    for k, axis in enumerate("xyz"):  # [..., k]: one sample's records or a batch's (a sweep's, traced)
+        out[f"wheel_{axis}_nms"] = cycles.end_nms[..., k]
+        out[f"wheel_max_abs_{axis}_nms"] = cycles.max_abs_nms[..., k]
     return out
 
 

@@ -522,15 +522,15 @@ def metrics(params, cycles: NavigationCycle, n_steps_total: int, run_s: float):
 def columns(cycles: NavigationCycle) -> dict:
     """The per-cycle series in edge units: error and 1-sigma at each decision time per RSW axis, NEES, NIS per
     degree of freedom, measurements."""
-    error, sigma = np.asarray(cycles.error_rsw), np.asarray(cycles.sigma_rsw)
+    error, sigma = cycles.error_rsw, cycles.sigma_rsw
     out = {}
-    for k, axis in enumerate(AXES):
-        out[f"nav_error_{axis}_m"], out[f"nav_sigma_{axis}_m"] = error[:, k], sigma[:, k]
-        out[f"nav_error_{axis}_mps"], out[f"nav_sigma_{axis}_mps"] = error[:, 3 + k], sigma[:, 3 + k]
-    out["nees"] = np.asarray(cycles.nees)
-    dof = np.asarray(cycles.nis_dof)
-    out["nis_per_dof"] = np.asarray(cycles.nis_sum) / np.where(dof > 0, dof, 1.0)
-    out["measurements"] = np.asarray(cycles.measurements)
+    for k, axis in enumerate(AXES):  # [..., k]: one sample's records or a batch's (a sweep's, traced)
+        out[f"nav_error_{axis}_m"], out[f"nav_sigma_{axis}_m"] = error[..., k], sigma[..., k]
+        out[f"nav_error_{axis}_mps"], out[f"nav_sigma_{axis}_mps"] = error[..., 3 + k], sigma[..., 3 + k]
+    out["nees"] = cycles.nees
+    dof = cycles.nis_dof
+    out["nis_per_dof"] = cycles.nis_sum / jnp.where(dof > 0, dof, 1.0)
+    out["measurements"] = cycles.measurements
     return out
 
 

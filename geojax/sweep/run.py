@@ -13,7 +13,7 @@ import numpy as np
 
 from geojax import scenario as scenario_mod, store
 from geojax.sweep import epochs as epoch_axis
-from geojax.loop.metrics import CYCLE_NAMES, STATUS_TEXT
+from geojax.loop.metrics import STATUS_TEXT
 from geojax.progress import Progress
 from geojax.results import dims_of_sweep
 from geojax.sweep import cluster, local
@@ -143,8 +143,9 @@ def _write_results(sweep: Sweep, out: Path, parts: Path, wall_s: float, compile_
     metrics = {k: stacked(k).reshape(shape) for k in names if k != "status" and not k.startswith("cycles__")}
     groups = {}
     if sweep.cycles:
+        kept = [k.removeprefix("cycles__") for k in results[sweep.controllers[0]] if k.startswith("cycles__")]
         groups["cycles"] = {k: np.stack([results[c][f"cycles__{k}"] for c in sweep.controllers]).reshape(*shape, -1)
-                            for k in CYCLE_NAMES}
+                            for k in kept}  # CYCLE_NAMES and the extra states' columns (loop.metrics.cycle_series)
     status = stacked("status").reshape(shape).astype(np.int8)
     grid = {k.replace(".", "__"): np.asarray(v, dtype="S" if k == epoch_axis.KEY else float)
             for k, v in sweep.grid.items()}
