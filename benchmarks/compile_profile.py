@@ -71,7 +71,7 @@ def profile(case: str, lanes: int, days: float) -> dict:
             begun = time.perf_counter()
             compiled = lowered.compile()
             compile_s = time.perf_counter() - begun
-        (trace,) = glob.glob(f"{folder}/**/*.json.gz", recursive=True)
+        (trace,) = glob.glob(f"{folder}/**/perfetto_trace.json.gz", recursive=True)
         events = [e for e in json.load(gzip.open(trace))["traceEvents"] if e.get("ph") == "X"]
     seconds = collections.Counter()
     for e in events:
