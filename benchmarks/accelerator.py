@@ -25,6 +25,7 @@ run's).  On a CPU the sizes are small (a few minutes on 2 cores); ``--quick`` sm
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import harness
 
@@ -41,6 +42,8 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="a tenth of the samples (a check that it runs)")
     parser.add_argument("--batches", type=int, nargs="+", help="step batches (default: the platform's)")
     parser.add_argument("--controllers", nargs="+", default=["qffc", "fompc", "mpc"])
+    parser.add_argument("--host-only", action="store_true",
+                        help="the host-work part alone, profiled (results: accelerator_<platform>_host)")
     harness.add_arguments(parser)
     args = parser.parse_args()
     run = harness.start(harness.Devices(platform=args.platform))  # one XLA CPU device per core (no effect on a GPU)
@@ -51,10 +54,16 @@ def main() -> None:
     sizes = {c: (max(16, n // scale), days) for c, (n, days) in SIZES[platform].items() if c in args.controllers}
     batches = args.batches or [max(16, b // scale) for b in STEP_BATCHES[platform]]
     results = {"sweeps": {}}
+    stem = f"accelerator_{platform}" + ("_host" if args.host_only else "")
 
     def save() -> str:  # after every part: a run cut short by a time limit keeps what it measured
-        return harness.write(args.out / f"accelerator_{platform}", run, f"geojax on {harness.facts()['device']}",
-                             results, markdown(results))
+        return harness.write(args.out / stem, run, f"geojax on {harness.facts()['device']}", results,
+                             markdown(results))
+
+    if args.host_only:
+        results["host_keys"] = measure_host_keys(10_000 if args.quick else 100_000, profile=True)
+        print(save())
+        return
 
     # the issue's headline first (the QFFC sweep), then the rest in order of what they tell
     for controller in [c for c in ("qffc", "fompc", "mpc") if c in sizes][:1]:
@@ -157,8 +166,10 @@ def measure_engine(controller: str, samples: int, days: float) -> dict:
     return row
 
 
-def measure_host_keys(n: int) -> dict:
-    """Seconds of ``simulate_batch(seeds=range(n))`` outside its compiled call (one cycle, no controller)."""
+def measure_host_keys(n: int, profile: bool = False) -> dict:
+    """Seconds of ``simulate_batch(seeds=range(n))`` outside its compiled call (one cycle, no controller);
+    ``profile``: and where they go (one more call under ``cProfile``: the functions of geojax with the most
+    cumulative time)."""
     from geojax import scenario
     from geojax.loop.rollout import keys_of, prepare_params, simulate_batch
 
@@ -169,6 +180,18 @@ def measure_host_keys(n: int) -> dict:
     _, alone = harness.measure(compiled, *args, repeats=3, warmup=1)
     row = {"samples": n, "simulate_batch_s": whole.best_s, "compiled_call_s": alone.best_s,
            "outside_s": whole.best_s - alone.best_s}
+    if profile:
+        import cProfile
+        import pstats
+
+        profiler = cProfile.Profile()
+        profiler.runcall(lambda: harness.measure(simulate_batch, sc, params, repeats=1, warmup=0, seeds=range(n)))
+        stats = pstats.Stats(profiler).stats
+        ours = [(f"{Path(f).name}:{line} {name}", cumulative) for (f, line, name), (_, _, _, cumulative, _)
+                in stats.items() if "geojax" in f and "benchmarks" not in f]
+        row["profile"] = dict(sorted(ours, key=lambda item: -item[1])[:15])
+        for name, seconds in row["profile"].items():
+            print(f"  {seconds:8.3f} s  {name}", flush=True)
     print(f"simulate_batch(seeds=range({n})): {whole.best_s:.3f} s, of which {row['outside_s']:.3f} s outside the "
           f"compiled call", flush=True)
     return row
@@ -182,6 +205,8 @@ def markdown(results: dict) -> list[str]:
                                  [[batch, f"{r['geojax_orbit_years_per_s']:.4g}",
                                    f"{r['minimal_orbit_years_per_s']:.4g}", f"{r['ratio_to_minimal']:.2f}x"]
                                   for batch, r in results["step"].items()], align="rrrr"), ""]
+    if not results["sweeps"]:
+        return lines + _host_lines(results)
     lines += ["## `geojax sweep` at the automatic width", "",
              *harness.table(["controller", "samples x days", "lanes per device", "sample-years/s", "after compilation",
                              "compile s", "peak memory GB", "mean ΔV m/s/yr", "ok"],
@@ -194,11 +219,19 @@ def markdown(results: dict) -> list[str]:
         lines += ["", f"The same QFFC samples through `simulate_batch` in one call: {e['run_sample_years_per_s']:.4g} "
                   f"sample-years/s after compilation ({e['compile_s']:.1f} s), mean ΔV {e['mean_dv_per_year_mps']:.3f} "
                   f"m/s/yr; the sweep reaches {s['run_sample_years_per_s'] / e['run_sample_years_per_s']:.2f}x of it."]
+    return lines + _host_lines(results)
+
+
+def _host_lines(results: dict) -> list[str]:
     if "host_keys" not in results:
-        return lines + ["", "(The run stopped before the host-work part.)"]
+        return ["", "(The run stopped before the host-work part.)"]
     h = results["host_keys"]
-    lines += ["", f"`simulate_batch(..., seeds=range({h['samples']}))`, one cycle: {h['simulate_batch_s']:.3f} s, "
+    lines = ["", f"`simulate_batch(..., seeds=range({h['samples']}))`, one cycle: {h['simulate_batch_s']:.3f} s, "
               f"of which {h['outside_s']:.3f} s outside the compiled call ({h['compiled_call_s']:.3f} s)."]
+    if "profile" in h:
+        lines += ["", "Where the call's time goes (one more call under `cProfile`, cumulative seconds, geojax's "
+                  "functions):", "", *harness.table(["function", "s"], [[f"`{k}`", f"{v:.3f}"]
+                                                                      for k, v in h["profile"].items()], "lr")]
     return lines
 
 
