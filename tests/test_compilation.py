@@ -14,6 +14,7 @@ import subprocess
 import sys
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -239,3 +240,14 @@ def test_a_sweep_through_its_kept_program_is_bit_for_bit_the_traced_one(tmp_path
     np.testing.assert_array_equal(warm, cold)
     np.testing.assert_array_equal(other, run("other-off", 2, False))
     assert not np.array_equal(other, cold)  # the seed reaches the numbers: a wrong hit would show
+
+
+def test_results_cut_on_an_accelerator_are_the_views_a_cpu_gives():
+    """``rollout.to_host``: the device-side cut an accelerator takes (``_cut``, run here on the CPU) gives the
+    same arrays as the CPU's NumPy views, lanes and cycles alike."""
+    tree = {"a": jnp.arange(24.0).reshape(4, 6), "b": (jnp.arange(48).reshape(4, 6, 2), jnp.ones((4, 6, 3, 2)))}
+    for cycles in (None, 5):
+        views = rollout.to_host(tree, 3, cycles)
+        cut = jax.tree_util.tree_map(np.asarray, rollout._cut(tree, 3, cycles))
+        _equal(views, cut, f"cycles {cycles}")
+        assert views["a"].shape == ((3, 6) if cycles is None else (3, 5))
