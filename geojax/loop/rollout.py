@@ -204,8 +204,8 @@ def to_host(tree, lanes: int, cycles: int | None = None):
     """``tree``'s leaves as NumPy arrays, their first ``lanes`` samples (and first ``cycles`` cycles): on a CPU
     views of the device's buffers; on an accelerator cut on the device first (one small program), so that only
     what is kept crosses to the host (a one-cycle batch of 100,000 samples compiled for 32 cycle slots and
-    131,072 lanes otherwise copies every slot of every lane: 0.778 of its 0.792 s on an H200,
-    ``benchmarks/results/accelerator_gpu_host.md``)."""
+    131,072 lanes otherwise copies every slot of every lane: 0.678 of its 0.692 s on an H200,
+    ``benchmarks/results/accelerator_gpu_host_before.md``; cut first, 0.119 of 0.133 s, ``accelerator_gpu_host.md``)."""
     leaves = jax.tree_util.tree_leaves(tree)
     index = (slice(0, lanes),) if cycles is None else (slice(0, lanes), slice(0, cycles))
     if any(isinstance(x, jax.Array) and any(d.platform != "cpu" for d in x.devices()) for x in leaves):
