@@ -16,7 +16,7 @@ import functools
 import importlib
 from typing import Any, Callable, Mapping, NamedTuple
 
-from geojax.control import fompc, lyapunov, mpc, none, qffc, zone_nssk
+from geojax.control import fompc, lyapunov, mpc, mpc_momentum, none, qffc, zone_nssk
 from geojax.control.base import Controller
 
 REGISTRY = {
@@ -26,6 +26,7 @@ REGISTRY = {
     "lyapunov": lyapunov,
     "zone_nssk": zone_nssk,
     "mpc": mpc,
+    "mpc_momentum": mpc_momentum,
 }
 
 

@@ -124,13 +124,16 @@ def refit_magnitudes_mps(burns, directions_rsw, l_start_rad):
     return jnp.maximum(jnp.linalg.solve(gram, columns.T @ target), 0.0)
 
 
-def thrust(params, plan: BurnPlan, t, state, environment) -> Thrust:
-    """The thrust of one step: the burns are half a cycle apart, so a step meets at most one of them."""
+def thrust(params, plan: BurnPlan, t, state, environment, tilts_rsw=None) -> Thrust:
+    """The thrust of one step: the burns are half a cycle apart, so a step meets at most one of them.
+    ``tilts_rsw`` [2, 3] (optional): each burn's planned tilt of its line (``Thrust.tilt_rsw``)."""
     j, step_s = environment.index, environment.step_s
     fraction = firing_fraction(plan.clock[j], plan.clock[j + 1], plan.clock_start, plan.burn_s, step_s)
     direction = jnp.where(fraction[0] > 0, plan.directions_rsw[0], plan.directions_rsw[1])
     level = jnp.where(fraction[0] > 0, plan.magnitude_scale[0], plan.magnitude_scale[1])
-    return Thrust(direction, params.thrusters["thrust_n"] * level, params.thrusters["isp_s"], jnp.sum(fraction))
+    tilt = None if tilts_rsw is None else jnp.where(fraction[0] > 0, tilts_rsw[0], tilts_rsw[1])
+    return Thrust(direction, params.thrusters["thrust_n"] * level, params.thrusters["isp_s"], jnp.sum(fraction),
+                  tilt)
 
 
 def record(plan: BurnPlan) -> dict:

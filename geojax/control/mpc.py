@@ -237,7 +237,7 @@ def operator(model: Model, shape: Shape) -> lp.Operator:
         ones = jnp.kron(jnp.eye(2), jnp.ones((g, g)))  # [2G, 2G] the capacity rows' Gram, per unit weight
         theta = jax.vmap(jnp.diag)((sigma + rho_bound).reshape(n_max, 2 * g)) \
             + ones * jnp.repeat(rho_cap.reshape(n_max, 2), g, -1)[:, :, None] / model.cap_scale**2
-        return riccati(phi, effect, theta, q, n_max, g)
+        return riccati(phi, effect, theta, q, n_max)
 
     def norms(d, e):
         d_bound, d_cap, d_rows = split(d)
@@ -255,23 +255,31 @@ def transition(cycle_s):
     return jnp.eye(6).at[0, 1].set(cycle_s)
 
 
-def riccati(phi, effect, theta, q, n_max: int, g: int):
+def riccati(phi, effect, theta, q, n_max: int, stage=None):
     """The solve of (Theta + G'QG) w = b: the minimiser of 1/2 w'Theta w + 1/2 sum_j x_j'Q_j x_j - b'w over
     x_{j+1} = Phi x_j + E_j w_j, x_0 = 0 (``effect`` [n_max, 6, 2G] E_j, ``theta`` [n_max, 2G, 2G], ``q``
-    [n_max, 6, 6] at boundaries 1..n_max).  Backward: with the cost-to-go 1/2 x'Px + p'x after cycle j,
-    H_j = Theta_j + E'PE, and P <- Q + Phi'P Phi - M'H^-1 M, M = E'P Phi (Rao, Wright & Rawlings 1998)."""
+    [n_max, 6, 6] at boundaries 1..n_max; any state size and width: ``mpc_momentum`` adds the wheels' momentum to the
+    state and the tilts to the decisions).  Backward: with the cost-to-go 1/2 x'Px + p'x after cycle j,
+    H_j = Theta_j + E'PE, and P <- Q + Phi'P Phi - M'H^-1 M, M = E'P Phi (Rao, Wright & Rawlings 1998).
+    ``stage`` (optional): (Q0 [n_max, s, s], S [n_max, width, s]) a further cost 1/2 x_j'Q0_j x_j + u_j'S_j x_j of
+    each cycle's start and decisions together (rows on both: ``mpc_momentum``'s between the burns); then
+    M = E'P Phi + S."""
 
     def backward(p_next, xs):
-        e, th, q_here = xs
+        e, th, q_here = xs[:3]
         h = th + e.T @ p_next @ e
         chol = lp.cholesky(h)
         m = e.T @ p_next @ phi  # [2G, 6]
+        if stage is not None:
+            q_here, m = q_here + xs[3], m + xs[4]
         gain = lp.cho_solve(chol, m)
         p_here = q_here + phi.T @ p_next @ phi - m.T @ gain
         return p_here, (chol, gain)
 
-    q_before = jnp.concatenate([jnp.zeros((1, 6, 6)), q[:-1]])  # the state cost at each cycle's start
-    _, (chol, gain) = jax.lax.scan(backward, q[-1], (effect, theta, q_before), reverse=True)
+    size, width = phi.shape[0], effect.shape[-1]  # the state (6 here) and one cycle's decisions (2G here)
+    q_before = jnp.concatenate([jnp.zeros((1, size, size)), q[:-1]])  # the state cost at each cycle's start
+    xs = (effect, theta, q_before) if stage is None else (effect, theta, q_before, *stage)
+    _, (chol, gain) = jax.lax.scan(backward, q[-1], xs, reverse=True)
 
     def solve(b):
         def costate(p_next, xs):  # p of the cost-to-go, backward: p_j = Phi'p_{j+1} - gain_j' g_j
@@ -279,15 +287,15 @@ def riccati(phi, effect, theta, q, n_max: int, g: int):
             g_j = e.T @ p_next - b_j
             return phi.T @ p_next - k.T @ g_j, lp.cho_solve(ch, g_j)
 
-        xs = (effect, chol, gain, b.reshape(n_max, 2 * g))
-        _, h_inv_g = jax.lax.scan(costate, jnp.zeros(6), xs, reverse=True)
+        xs = (effect, chol, gain, b.reshape(n_max, width))
+        _, h_inv_g = jax.lax.scan(costate, jnp.zeros(size), xs, reverse=True)
 
         def forward(x, xs):
             e, k, hg = xs
             u = -k @ x - hg
             return phi @ x + e @ u, u
 
-        return jax.lax.scan(forward, jnp.zeros(6), (effect, gain, h_inv_g))[1].reshape(-1)
+        return jax.lax.scan(forward, jnp.zeros(size), (effect, gain, h_inv_g))[1].reshape(-1)
 
     return solve
 

@@ -40,6 +40,11 @@ class Thrust(NamedTuple):
     thrust_n: jnp.ndarray  # []
     isp_s: jnp.ndarray  # []
     on_fraction: jnp.ndarray  # [] in [0, 1]
+    # [3] (R, S, W) or None: a tilt of the line of action about its nozzle that the controller plans (sine of the
+    # tilt, perpendicular to ``direction_rsw``, the line through the centre of mass; ``control.mpc_momentum``).
+    # Flown by the wheels' model (``states.momentum.thrust``), which turns it into the direction and clears it;
+    # None (every other controller): no leaf.
+    tilt_rsw: jnp.ndarray | None = None
 
 
 def no_thrust() -> Thrust:

@@ -174,15 +174,12 @@ def thrust(params, state: Wheels, flown: Thrust, ctx: ThrustContext):
     # turns more than 90 deg from the last one fired)
     new_burn = firing & (jnp.dot(u_eci, state.line_eci) < 0)
     other_eci = jnp.where(new_burn, state.line_eci, state.other_line_eci)
-    h_m = state.h_body_nms + state.error_nms
-    left = remainder_nms(h_m, u_hat, c @ other_eci, a["dump_transient_fraction"] * a["wheel_capacity_nms"])
-    # the change held over the step's firing time T (zero-order hold): a fraction 1 - exp(-k T) of the way to
-    # what is left, as dh/dt = -k (h - left) would go over T; never more than all of it (stable at any gain)
-    firing_s = flown.on_fraction * ctx.step_s
-    fraction = -jnp.expm1(-a["dump_gain_per_s"] * firing_s)
-    wanted = -fraction * (h_m - left) / jnp.where(firing_s > 0, firing_s, 1.0)  # torque while firing, _|_ u_hat
     lever = a["thrust_arm_m"] * force_n
-    tilt = jnp.cross(u_hat, wanted) / jnp.where(lever > 0, lever, 1.0)
+    if flown.tilt_rsw is None:  # the dumping law
+        tilt = law_tilt(a, state, u_hat, c @ other_eci, flown.on_fraction * ctx.step_s, lever)
+    else:  # the controller's planned tilt (control.mpc_momentum), perpendicular to the line
+        planned = jnp.stack([flown.tilt_rsw[1], -flown.tilt_rsw[2], -flown.tilt_rsw[0]])
+        tilt = planned - jnp.dot(planned, u_hat) * u_hat
     length = jnp.linalg.norm(tilt)
     sin_max = jnp.sin(a["dump_angle_max_rad"])
     tilt = tilt * jnp.where(length > sin_max, sin_max / jnp.where(length > 0, length, 1.0), 1.0)
@@ -196,7 +193,20 @@ def thrust(params, state: Wheels, flown: Thrust, ctx: ThrustContext):
     direction = jnp.stack([-u_new_b[2], u_new_b[0], -u_new_b[1]])
     state = state._replace(thrust_torque_body_nm=torque, thrust_start_eci_nm=c.T @ torque, cross_force_n=cross_n,
                            line_eci=jnp.where(firing, u_eci, state.line_eci), other_line_eci=other_eci)
-    return state, flown._replace(direction_rsw=direction)
+    return state, flown._replace(direction_rsw=direction, tilt_rsw=None)
+
+
+def law_tilt(attitude: dict, state: Wheels, u_hat, u_other_body, firing_s, lever_nm):
+    """[3] the dumping law's tilt s of a line along ``u_hat`` (body axes; the module docstring), before the limit:
+    the torque that takes the measured momentum toward the two-burn remainder over the step's firing time
+    ``firing_s``, divided by the lever L F (``lever_nm``)."""
+    h_m = state.h_body_nms + state.error_nms
+    left = remainder_nms(h_m, u_hat, u_other_body, attitude["dump_transient_fraction"] * attitude["wheel_capacity_nms"])
+    # the change held over the step's firing time T (zero-order hold): a fraction 1 - exp(-k T) of the way to
+    # what is left, as dh/dt = -k (h - left) would go over T; never more than all of it (stable at any gain)
+    fraction = -jnp.expm1(-attitude["dump_gain_per_s"] * firing_s)
+    wanted = -fraction * (h_m - left) / jnp.where(firing_s > 0, firing_s, 1.0)  # torque while firing, _|_ u_hat
+    return jnp.cross(u_hat, wanted) / jnp.where(lever_nm > 0, lever_nm, 1.0)
 
 
 def remainder_nms(h, u_hat, u_other, bound_nms):
