@@ -84,6 +84,7 @@ DESCRIPTIONS = {
     "best_dv_per_year_mps": "best feasible delta-V per year so far",
     # The wheels' momentum (geojax.states.momentum, where attitude.wheels = true)
     "max_wheel_momentum_nms": "largest |momentum| of any reaction wheel at any step start (body axes)",
+    "max_wheel_momentum_last_year_nms": "the same over the run's last 365.25 days (the whole run when shorter)",
     "wheel_momentum_per_day_nms": "secular growth of the wheels' momentum: its net change from the first cycle "
                                   "start to the last cycle end, per day",
     "srp_torque_impulse_nms": "integral of |SRP torque| over the run (centre-of-pressure offset)",

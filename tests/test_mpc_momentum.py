@@ -101,11 +101,14 @@ def test_plan_predicts_the_wheels_the_loop_integrates():
     """Second method: the plan's linearised torque (the tilt's impulse at the burn's centre, the other torques
     as last cycle's) against the wheels' model of the loop (the total momentum integrated step by step from
     the tilted thrust line's r x F and the SRP torque at its offset): the momentum each plan expects at its
-    cycle's end is the one the next cycle measures, within 1.5 N m s (3 % of the capacity), over 12 days."""
+    cycle's end of the burns it flies is the one the next cycle measures, within 1 N m s (2 % of the capacity, 8 %
+    of a day's SRP momentum) once the estimate of the other torques has converged: it starts at 0 and halves its
+    error each cycle (``disturbance_gain`` 0.5), so the first cycles' errors fall from the day's 12 N m s."""
     result = simulate(scenario.load("li2022-momentum-mpc", {"duration.days": 12}))
-    wheels = np.asarray(result.records.cycles.controller["wheels_rsw_nms"])  # [cycles, start / planned end, 3]
+    wheels = np.asarray(result.records.cycles.controller["wheels_rsw_nms"])  # [cycles, start / expected end, 3]
     error = np.linalg.norm(wheels[1:, 0] - wheels[:-1, 1], axis=-1)
-    assert np.all(error[1:] < 1.5), error  # the first cycle's plan does not know the SRP torque yet
+    assert np.all(np.diff(error[:4]) < 0) and error[0] > 10, error
+    assert np.all(error[5:] < 1.0), error
     assert int(result.status) == STATUS_OK
 
 

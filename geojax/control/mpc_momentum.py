@@ -69,13 +69,14 @@ FIELDS = {
     **mpc.FIELDS,
     # The share of each wheel's capacity the plan may fill at a cycle boundary (the rest: what the wheels take up
     # between boundaries, a day's external momentum and the burns' transients).
-    "momentum_fraction": Field(NUMBER, 0.5, lower=0.0, upper=1.0 + 1e-12, si="momentum_fraction"),
+    "momentum_fraction": Field(NUMBER, 0.5, lower=0.0, upper=1.0, si="momentum_fraction"),
     # The price of a tilt, per m/s of Delta-V across the line (|z|_1), against 1 per m/s of burn: at 1 the program
     # never takes a tilt's Delta-V for the orbit (a burn in that direction costs no more), so it tilts for the
     # wheels alone.
     "tilt_cost": Field(NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=100.0, si="tilt_cost"),
-    # The exponential filter's gain per cycle on the measured external momentum per cycle (1: the last cycle's).
-    "disturbance_gain": Field(NUMBER, 0.5, lower=0.0, lower_inclusive=True, upper=1.0 + 1e-12, si="disturbance_gain"),
+    # The exponential filter's gain per cycle on the measured external momentum per cycle (1: the last cycle's; 0:
+    # none estimated; stable below 2).
+    "disturbance_gain": Field(NUMBER, 0.5, lower=0.0, lower_inclusive=True, upper=2.0, si="disturbance_gain"),
 }
 
 
@@ -309,7 +310,7 @@ class Plan(NamedTuple):
     iterations: jnp.ndarray
     certified: jnp.ndarray
     momentum_violation: jnp.ndarray  # [] the largest momentum row's violation, in half-widths
-    wheels_rsw_nms: jnp.ndarray  # [2, 3] g at the cycle's start as measured, and planned at its end (start RSW)
+    wheels_rsw_nms: jnp.ndarray  # [2, 3] g at the cycle's start as measured, and expected at its end (start RSW)
 
 
 def disturbance(state: State, g_eci, gain):
@@ -413,8 +414,10 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         momentum_violation = jnp.maximum(jnp.max(excess[:, r_orbit:]), jnp.max(excess_of(
             between, momentum.mid_lower.reshape(-1), momentum.mid_upper.reshape(-1))))
         solved = (violation <= mpc.SOLVED_VIOLATION) & jnp.all(jnp.isfinite(solution.x))
+        # the end the plan expects of what is flown (a burn shorter than ``thrusters.min_burn_s`` is not, nor its
+        # tilt: no linear program can say so)
         g_start = basis @ g_eci
-        g_end = g_start + basis @ d_eci + momentum.impulse @ z.reshape(-1)
+        g_end = g_start + basis @ (d_eci + impulse_eci)
         plan_ = Plan(flown, tilts, solved, solution.objective, violation, solution.iterations, solution.converged,
                      momentum_violation, jnp.stack([g_start, g_end]))
         return plan_, State(g_eci, impulse_eci, d_eci, state.cycles_seen + 1, lines)

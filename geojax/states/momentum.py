@@ -290,15 +290,20 @@ def summary(params, start: Wheels, end: Wheels, steps: WheelStep) -> WheelCycle:
 
 
 def metrics(params, cycles: WheelCycle, n_steps_total: int, run_s: float):
-    """({name: []}, saturated): the largest wheel momentum, its secular growth per day (the net change of h_w
+    """({name: []}, saturated): the largest wheel momentum over the run and over its last year (365.25 days of
+    cycles, the whole run when shorter: what a mission of several years holds once the first year's transient has
+    passed; the per-cycle records give any year's), its secular growth per day (the net change of h_w
     between the run's first and last cycle boundaries, one orbit apart each, so the orbit-periodic part drops
     out), the torque impulse per source (SRP, gravity gradient, thrust: the dumped momentum and the centre of
     mass's shift), the Delta-V the dumping tilts put across the plan, the fraction of step starts above 80 % of
     capacity; saturated where a wheel exceeded its capacity (``attitude.wheel_capacity_nms``) at any step start
     or cycle end."""
     peak = jnp.max(cycles.max_abs_nms)
+    n_cycles = cycles.max_abs_nms.shape[0]
+    year = min(n_cycles, int(np.ceil(365.25 * SECONDS_PER_DAY * n_cycles / run_s - 1e-9)))  # the last year's cycles
     out = {
         "max_wheel_momentum_nms": peak,
+        "max_wheel_momentum_last_year_nms": jnp.max(cycles.max_abs_nms[n_cycles - year:]),
         "wheel_momentum_per_day_nms": jnp.linalg.norm(cycles.end_nms[-1] - cycles.start_nms[0])
         * SECONDS_PER_DAY / run_s,
         "srp_torque_impulse_nms": cycles.srp_impulse_nms[-1],

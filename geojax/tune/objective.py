@@ -4,7 +4,9 @@
 controller's own law) and the derivatives of its smooth surrogate (``Controller.surrogate``; a controller
 without one is smooth and its own).  The figure minimised is the yearly Delta-V of the horizon
 (``dv_per_year_mps``); the box is Katz 2025's eq. (10), normalised: one constraint per axis,
-g = max(excursion^2) / Delta_s^2 - 1 <= 0.
+g = max(excursion^2) / Delta_s^2 - 1 <= 0; where the scenario carries the wheels (``states.momentum``) a third,
+their capacity in the same form, g = (max |h_w| / capacity)^2 - 1 <= 0, so a dumping gain is tuned with the box and
+the wheels as constraints (``CONSTRAINTS``).
 
 Derivatives are forward-mode by default (``jacfwd``: no tape, so memory does not grow with the horizon; for 2-7
 parameters about twice as fast as reverse mode on a CPU); ``gradient = "reverse"`` takes them through the
@@ -19,12 +21,15 @@ import numpy as np
 
 from geojax import scenario as scenario_mod
 from geojax.control.base import SURROGATE_TEMPERATURE, Controller
-from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_NONFINITE
+from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_NONFINITE, STATUS_WHEELS_SATURATED
 from geojax.loop.rollout import rollout_fn
 from geojax.loop.setup import prepare, unstack
 from geojax.parallel import shard_batch
 from geojax.params import Params
 from geojax.tune.space import from_theta, tuned
+
+# The constraints' names, in the order of ``Problem.evaluate``'s constraint vector (the wheels' only where carried).
+CONSTRAINTS = ("lon", "lat", "wheels")
 
 
 class Problem:
@@ -39,6 +44,7 @@ class Problem:
         self.names = tuple(e.name for e in self.entries)
         self.sizes = [int(np.size(getattr(self.base, e.table)[e.field.si])) for e in self.entries]
         self.box_half_width_rad = float(self.base.station["box_half_width_rad"])
+        self.constraint_names = CONSTRAINTS if sc.config["attitude"]["wheels"] else CONSTRAINTS[:2]
         self._rollouts = {False: rollout_fn(self.batch, lanes=lanes),
                           True: rollout_fn(self.batch, controller=self.batch.controller.surrogate or self.batch.controller,
                                            lanes=lanes)}
@@ -62,7 +68,7 @@ class Problem:
         return from_theta(theta, self.base, self.entries)
 
     def evaluate(self, theta, smooth: bool, temperature=0.05):
-        """(loss, (dv_per_year_mps, constraint [2] lon/lat, box_ok)) of one parameter vector."""
+        """(loss, (dv_per_year_mps, constraint [2 or 3] lon/lat(/wheels), box_ok)) of one parameter vector."""
         params = self.params(theta)
         if SURROGATE_TEMPERATURE in params.controller:
             params = params._replace(controller={**params.controller, SURROGATE_TEMPERATURE: jnp.asarray(temperature)})
@@ -70,12 +76,17 @@ class Problem:
         excursion = jnp.radians(jnp.stack([m["max_abs_dlon_deg"], m["max_abs_dlat_deg"]]))
         # Katz eq. (10): delta^2 - Delta_s^2 <= 0, (lambda - lambda_d)^2 - Delta_s^2 <= 0, normalised.
         constraint = (excursion / self.box_half_width_rad) ** 2 - 1.0
+        failed = [STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE]
+        if len(self.constraint_names) == 3:  # the wheels within their capacity, the same form
+            fill = m["max_wheel_momentum_nms"] / params.attitude["wheel_capacity_nms"]
+            constraint = jnp.append(constraint, fill ** 2 - 1.0)
+            failed.append(STATUS_WHEELS_SATURATED)
         loss = m["dv_per_year_mps"] + self.penalty_mps * jnp.sum(jax.nn.relu(constraint + self.margin))
-        box_ok = ~jnp.isin(m["status"], jnp.array([STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE]))
+        box_ok = ~jnp.isin(m["status"], jnp.array(failed))
         return loss, (m["dv_per_year_mps"], constraint, box_ok.astype(float))
 
     def exact(self, thetas):
-        """Exact-law (dv_per_year_mps [n], constraint [n, 2], box_ok [n]) of a batch of parameter vectors."""
+        """Exact-law (dv_per_year_mps [n], constraint [n, C], box_ok [n]) of a batch of parameter vectors."""
         return self._exact(_spread(thetas))
 
     def exact_one(self, theta):
@@ -86,8 +97,8 @@ class Problem:
         return loss, aux, grad
 
     def linearise(self, thetas, temperature):
-        """Exact (dv [n], constraint [n, 2], box_ok [n]) and the surrogate's Jacobian [n, 3, P] of
-        (dv, constraint_lon, constraint_lat); one pass when the exact law is itself smooth."""
+        """Exact (dv [n], constraint [n, C], box_ok [n]) and the surrogate's Jacobian [n, 1 + C, P] of
+        (dv, the constraints); one pass when the exact law is itself smooth."""
         jac, aux = self._jacobian(_spread(thetas), jnp.asarray(temperature))
         exact = aux if self.exact_is_smooth else self.exact(thetas)
         return (*(np.array(v) for v in exact), np.array(jac))

@@ -33,7 +33,7 @@ def run(run_) -> str:
     norms = norms[np.isfinite(norms) & (norms > 0)]
     scale = (float(np.median(norms)) if norms.size else 1.0) / run_.trust_radius
     hessian = np.tile(population_hessian(theta, jac[:, 0], np.eye(n_par) * scale), (n, 1, 1))
-    margin = np.full((n, 2), run_.margin)  # per start and axis; see the end of the loop
+    margin = np.full(g.shape, run_.margin)  # per start and constraint; see the end of the loop
     refused = np.zeros(n, bool)
     rng = np.random.default_rng(spec.seed + 1)
     active = np.ones(n, bool)
@@ -47,7 +47,7 @@ def run(run_) -> str:
         if not active.any():
             return run_.all_diverged(it)
         steps = np.zeros_like(theta)
-        multipliers = np.zeros((n, 2))
+        multipliers = np.zeros(g.shape)
         for i in np.flatnonzero(active):
             steps[i], multipliers[i] = qp_step(jac[i, 0], hessian[i], g[i] + margin[i], jac[i, 1:], radius[i],
                                                run_.low - theta[i], run_.high - theta[i])
@@ -100,7 +100,7 @@ def qp_step(grad, hessian, g, jac_g, radius, low, high, elastic_weight: float = 
     """min grad.d + d'Hd/2 + w sum(t)  s.t.  g + jac_g d <= t, t >= 0, |d|_inf <= radius, low <= d <= high.
 
     The elastic t keeps the subproblem solvable when the linearised box cannot be reached inside the trust
-    region (it then moves as far toward it as it can).  Returns (d, multipliers of the two constraints),
+    region (it then moves as far toward it as it can).  Returns (d, multipliers of the constraints),
     the multipliers estimated from the stationarity of the step (zero for inactive constraints).
     """
     n_par, n_con = grad.size, g.size

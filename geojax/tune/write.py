@@ -4,8 +4,9 @@ The file (``geojax tune --out FILE.h5``): ``/iterations/<name>`` [iteration, sta
 start, parameter], ``constraint`` [iteration, start, box_axis], ``temperature``, ``best_dv_per_year_mps`` and
 ``wall_s`` [iteration]), ``/starts/theta`` [start, parameter], and, once a feasible point is found, ``/best``
 (the controller's keys in their TOML units, and ``theta``) and ``/metrics`` (``dv_per_year_mps``,
-``constraint_lon``, ``constraint_lat``); attributes ``kind = "tune"``, ``scenario``, ``parameters`` (the tuned
-keys), ``status``, ``tune_toml``, ``controller``.  The tuned scenario, ``FILE-tuned.toml``, is the tuning's
+``constraint_lon``, ``constraint_lat``, and ``constraint_wheels`` where the scenario carries the wheels: the
+capacity's constraint, the third along ``box_axis``); attributes ``kind = "tune"``, ``scenario``, ``parameters``
+(the tuned keys), ``status``, ``tune_toml``, ``controller``, ``constraints`` (the names along ``box_axis``).  The tuned scenario, ``FILE-tuned.toml``, is the tuning's
 scenario with each tuned key at its best value; ``geojax simulate FILE-tuned.toml`` runs it.
 """
 
@@ -46,11 +47,11 @@ def contents(spec, problem, hist, theta_starts, best, message: str) -> tuple[dic
         params = problem.params(jnp.asarray(best["theta"]))
         controller_fields = scenario_mod.controller_fields(spec.scenario.config["controller"], spec.controller)
         groups["best"] = {**reported(params, controller_fields), "theta": best["theta"]}
-        groups["metrics"] = {"dv_per_year_mps": best["dv"], "constraint_lon": best["g"][0],
-                             "constraint_lat": best["g"][1]}
+        groups["metrics"] = {"dv_per_year_mps": best["dv"], **{f"constraint_{name}": value for name, value in
+                                                                zip(problem.constraint_names, best["g"], strict=True)}}
     attrs = {"kind": "tune", "scenario": spec.scenario.name, "parameters": ",".join(spec.parameters),
              "status": message, "tune_toml": spec.text,
-             "controller": spec.scenario.controller}
+             "controller": spec.scenario.controller, "constraints": ",".join(problem.constraint_names)}
     return groups, attrs
 
 
@@ -72,10 +73,15 @@ def summary(result) -> list[str]:
     lines += [f"  {name:24s} {value:.6g}" for name, value in reported(result.best_params, fields).items()]
     box_deg = spec.scenario.config["station"]["box_half_width_deg"]
     g = result.best_constraint
-    lon_deg, lat_deg = excursion_deg(g, box_deg)
-    return lines + [f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept: largest "
-                    f"|δλ| {lon_deg:.4f}°, |δφ| {lat_deg:.4f}° of ±{box_deg:g}° "
-                    f"(constraints (excursion / box)² - 1: lon {g[0]:+.4f}, lat {g[1]:+.4f})"]
+    lon_deg, lat_deg = excursion_deg(g[:2], box_deg)
+    lines += [f"  ΔV (exact law, full horizon)  {result.best_dv_per_year_mps:.3f} m/s/yr, box kept: largest "
+              f"|δλ| {lon_deg:.4f}°, |δφ| {lat_deg:.4f}° of ±{box_deg:g}° "
+              f"(constraints (excursion / box)² - 1: lon {g[0]:+.4f}, lat {g[1]:+.4f})"]
+    if len(g) > 2:
+        capacity = spec.scenario.config["attitude"]["wheel_capacity_nms"]
+        lines.append(f"  wheels kept: largest |h| {capacity * np.sqrt(max(g[2] + 1.0, 0.0)):.2f} of {capacity:g} N m s "
+                     f"(constraint (|h| / capacity)² - 1: {g[2]:+.4f})")
+    return lines
 
 
 def excursion_deg(constraint, box_half_width_deg: float):
