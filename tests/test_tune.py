@@ -190,3 +190,30 @@ def test_printed_constraints_are_read_back_as_excursions_in_degrees():
     excursions_deg, box_deg = np.array([[0.03, 0.045], [0.05, 0.0]]), 0.05
     g = (excursions_deg / box_deg) ** 2 - 1.0
     np.testing.assert_allclose(excursion_deg(g, box_deg).T, excursions_deg, rtol=1e-14, atol=1e-17)
+
+
+@pytest.mark.slow
+def test_the_dump_gain_is_tuned_with_the_wheels_capacity_as_a_constraint(tmp_path):
+    """Issue 41: where the scenario carries the wheels, the tuning has a third constraint, (max |h| / capacity)² - 1,
+    the same as a plain simulation's largest wheel momentum gives (a second path: ``simulate``); the dumping law's
+    gain is tunable (``attitude.dump_gain_per_s``, log scale); the file and the summary name the wheels."""
+    from geojax.loop.rollout import simulate
+    from geojax.tune.write import summary
+
+    spec = tune.from_dict({"scenario": "li2022-momentum", "parameters": ["attitude.dump_gain_per_s"], "days": 3.0,
+                           "starts": 2, "iterations": 1, "spread_decades": 0.5})
+    problem = tune.Problem(spec.scenario, spec.parameters)
+    assert problem.constraint_names == ("lon", "lat", "wheels")
+    theta = np.log(np.array([[0.01], [1e-4]]))
+    dv, g, ok = (np.asarray(v) for v in problem.exact(theta))
+    assert g.shape == (2, 3)
+    for gain, row in zip((0.01, 1e-4), g, strict=True):
+        sc = scenario.load("li2022-momentum", {"duration.days": 3.0, "attitude.dump_gain_per_s": gain})
+        peak = float(simulate(sc).metrics["max_wheel_momentum_nms"])
+        assert row[2] == pytest.approx((peak / 50.0) ** 2 - 1.0, rel=1e-9, abs=1e-12)
+    assert g[1, 2] > g[0, 2]  # a smaller gain dumps less
+    result = tune.tune(spec, out=tmp_path / "t.h5", problem=problem)
+    groups, attrs = store.read_h5(tmp_path / "t.h5")
+    assert attrs["constraints"] == "lon,lat,wheels"
+    assert "constraint_wheels" in groups["metrics"] and groups["iterations"]["constraint"].shape[-1] == 3
+    assert any(line.startswith("  wheels kept: largest |h|") for line in summary(result))
