@@ -68,14 +68,20 @@ def test_lp_solver_matches_highs_on_random_programs():
 @pytest.fixture(scope="module")
 def planning():
     """A planning problem of li2022-mpc: the reference's means from cycle 40 on, a start off the targets."""
-    sc = scenario.load("li2022-mpc", {"duration.days": 45})
+    return planning_of("li2022-mpc")
+
+
+def planning_of(name: str) -> dict:
+    """A planning problem of scenario ``name`` (an MPC's): the reference's means from cycle 40 on, a start off the
+    targets, and the sample's ``params``."""
+    sc = scenario.load(name, {"duration.days": 45})
     batch = prepare([sc])
     params = jax.tree_util.tree_map(lambda x: x[0], batch.params)
     target = station_target(params.station)
     x0 = target + jnp.array([1e-4, 3e-10, 5e-5, -8e-5, 1.5e-4, -1e-4])
     return dict(x0=x0, target=target, ref=batch.shared.reference.window[40], limits=arm_limits(params.thrusters),
                 accel=params.thrusters["thrust_n"] / params.initial.mass_kg, cycle_s=batch.step_s * 96,
-                leaves=params.controller, station=params.station)
+                leaves=params.controller, station=params.station, params=params)
 
 
 def build(planning, shape, **leaves):

@@ -10,25 +10,15 @@ from geojax import scenario
 from geojax.control import lp, mpc, mpc_momentum
 from geojax.loop.metrics import STATUS_OK
 from geojax.loop.rollout import simulate, simulate_batch
-from geojax.loop.setup import prepare
-from geojax.params import station_target
-from geojax.physics.propulsion import arm_limits
-from test_mpc import dense, highs
+from test_mpc import dense, highs, planning_of
 
 
 @pytest.fixture(scope="module")
 def planning():
     """A planning problem of li2022-momentum-mpc: the reference's means from cycle 40 on, a start off the targets,
     wheels holding 30 N m s in the orbit's plane and an external torque of 12 N m s a cycle."""
-    sc = scenario.load("li2022-momentum-mpc", {"duration.days": 45})
-    batch = prepare([sc])
-    params = jax.tree_util.tree_map(lambda x: x[0], batch.params)
-    target = station_target(params.station)
-    x0 = target + jnp.array([1e-4, 3e-10, 5e-5, -8e-5, 1.5e-4, -1e-4])
-    return dict(x0=x0, target=target, ref=batch.shared.reference.window[40], limits=arm_limits(params.thrusters),
-                accel=params.thrusters["thrust_n"] / params.initial.mass_kg, cycle_s=batch.step_s * 96,
-                leaves=params.controller, station=params.station, attitude=params.attitude,
-                mass=params.initial.mass_kg)
+    out = planning_of("li2022-momentum-mpc")
+    return {**out, "attitude": out["params"].attitude, "mass": out["params"].initial.mass_kg}
 
 
 def program(planning, shape, g0=(18.0, -24.0, 6.0), d=(4.0, -11.0, 0.5)):

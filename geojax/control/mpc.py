@@ -352,13 +352,19 @@ def plan(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves:
 def make(tables: list[dict]) -> Controller:
     """The MPC for a batch of ``[controller]`` tables: its horizon padded to their largest N (a sweep over N
     compiles once), the static sizes shared."""
+    return controller(shape_of(tables))
+
+
+def shape_of(tables: list[dict]) -> Shape:
+    """The compiled plan's ``Shape`` for a batch of ``[controller]`` tables: the largest horizon, the static sizes
+    (one value per batch, else ``ValueError`` naming the key)."""
     for key in ("iterations", "yaw_points", "pitch_points", "facets"):
         if len({t[key] for t in tables}) > 1:
             raise ValueError(f"controller.{key}: sets the shape of the compiled plan; one value per sweep, "
                              f"got {sorted({t[key] for t in tables})}")
     first = tables[0]
-    return controller(Shape(max(t["horizon"] for t in tables), first["yaw_points"], first["pitch_points"],
-                            first["facets"], first["iterations"]))
+    return Shape(max(t["horizon"] for t in tables), first["yaw_points"], first["pitch_points"], first["facets"],
+                 first["iterations"])
 
 
 def validate(config: dict) -> None:

@@ -338,14 +338,8 @@ def plan(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves:
 
 
 def make(tables: list[dict]) -> Controller:
-    """The momentum MPC for a batch of ``[controller]`` tables (``mpc.make``'s shapes)."""
-    for key in ("iterations", "yaw_points", "pitch_points", "facets"):
-        if len({t[key] for t in tables}) > 1:
-            raise ValueError(f"controller.{key}: sets the shape of the compiled plan; one value per sweep, "
-                             f"got {sorted({t[key] for t in tables})}")
-    first = tables[0]
-    return controller(mpc.Shape(max(t["horizon"] for t in tables), first["yaw_points"], first["pitch_points"],
-                                first["facets"], first["iterations"]))
+    """The momentum MPC for a batch of ``[controller]`` tables (``mpc.shape_of``'s shapes)."""
+    return controller(mpc.shape_of(tables))
 
 
 def validate(config: dict) -> None:

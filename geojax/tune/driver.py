@@ -167,7 +167,7 @@ class Run:
         if len(self.hist["wall_s"]) == 1:  # the first evaluation compiled the rollout and its derivatives
             self.say(f"  compiled and evaluated the first iterate in {self.elapsed():.1f} s", flush=True)
         self.say(f"  it {it:3d}  T {temperature:.3f}  ΔV exact median {np.nanmedian(dv):7.3f} m/s/yr  max constraint "
-                 f"(excursion/box)²-1 median {np.nanmedian(np.max(g, axis=1)):+.3f}  "
+                 f"{'(box, wheels)' if g.shape[1] > 2 else '(excursion/box)²-1'} median {np.nanmedian(np.max(g, axis=1)):+.3f}  "
                  f"feasible {int(np.sum(ok > 0))}/{len(dv)}  step "
                  f"{np.median(step):.3g}  best feasible {self.best['dv']:.3f}", flush=True)
         if self.out:

@@ -115,6 +115,17 @@ def reported(params: Params, fields: dict[str, Field]) -> dict[str, float]:
     return out
 
 
+def reported_entries(params: Params, entries: list[Tuned]) -> dict[str, float]:
+    """The tuned keys outside ``[controller]`` by their dotted names ("attitude.dump_gain_per_s"), in their TOML
+    units (a list key's first component where it has several)."""
+    out = {}
+    for entry in entries:
+        if entry.table != "controller":
+            value = toml_value(entry.field, getattr(params, entry.table)[entry.field.si])
+            out[entry.name] = value if not isinstance(value, list) else value[0]
+    return out
+
+
 def start_points(spec, center: np.ndarray, entries: list[Tuned], sizes: list[int]) -> np.ndarray:
     """[starts, P]: start 0 at ``center`` (the scenario's values), the rest uniform around it (``spec``'s
     ``spread_decades`` for the keys tuned on a log scale, ``spread_scaled`` for the others)."""

@@ -21,7 +21,7 @@ import numpy as np
 
 from geojax import scenario as scenario_mod, store
 from geojax.params import Params
-from geojax.tune.space import reported, toml_value, tuned
+from geojax.tune.space import reported, reported_entries, toml_value, tuned
 
 # Axis names of a tuning file's datasets (geojax.results).
 TUNE_DIMS = {"iterations": ("iteration", "start"), "iterations/theta": ("iteration", "start", "parameter"),
@@ -46,7 +46,8 @@ def contents(spec, problem, hist, theta_starts, best, message: str) -> tuple[dic
     if best["theta"] is not None:
         params = problem.params(jnp.asarray(best["theta"]))
         controller_fields = scenario_mod.controller_fields(spec.scenario.config["controller"], spec.controller)
-        groups["best"] = {**reported(params, controller_fields), "theta": best["theta"]}
+        groups["best"] = {**reported(params, controller_fields), **reported_entries(params, problem.entries),
+                          "theta": best["theta"]}
         groups["metrics"] = {"dv_per_year_mps": best["dv"], **{f"constraint_{name}": value for name, value in
                                                                 zip(problem.constraint_names, best["g"], strict=True)}}
     attrs = {"kind": "tune", "scenario": spec.scenario.name, "parameters": ",".join(spec.parameters),
@@ -65,12 +66,13 @@ def save(result, path) -> Path:
 
 def summary(result) -> list[str]:
     """What ``geojax tune`` prints after the run: how it ended, and the best point's values and Delta-V."""
-    spec, _ = _made_by_tune(result)
+    spec, problem = _made_by_tune(result)
     lines = [f"{spec.scenario.name}: {result.message}; {result.wall_s:.1f} s wall"]
     if result.best_params is None:
         return lines + ["  no feasible point: every iterate left the box with the exact law"]
     fields = scenario_mod.controller_fields(spec.scenario.config["controller"], spec.controller)
     lines += [f"  {name:24s} {value:.6g}" for name, value in reported(result.best_params, fields).items()]
+    lines += [f"  {name:24s} {value:.6g}" for name, value in reported_entries(result.best_params, problem.entries).items()]
     box_deg = spec.scenario.config["station"]["box_half_width_deg"]
     g = result.best_constraint
     lon_deg, lat_deg = excursion_deg(g[:2], box_deg)
