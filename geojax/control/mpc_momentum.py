@@ -424,5 +424,8 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
                 "violation": plan_.violation, "iterations": plan_.iterations, "certified": plan_.certified,
                 "momentum_violation": plan_.momentum_violation, "wheels_rsw_nms": plan_.wheels_rsw_nms}
 
+    # Widths and memory as the MPC's (``mpc.controller``: 8 lanes per CPU core, its interior point's matrices
+    # dominating); the lane's bytes scaled from the MPC's measured 1.73 MB by the decisions per cycle (20 against
+    # 12), an estimate, not measured: the GPU's batch sizing is its only reader.
     return Controller(init, plan_cycle, thrust, FIELDS, reference_cycles=shape.n_max + 1, record=record,
                       lanes_cpu=8, lane_bytes=2_500_000, lane_bytes_per_cycle=400)
