@@ -97,12 +97,15 @@ def _unread_cases():
     declares it does not read (``control.base``, ``UNREAD``)."""
     from geojax.control import REGISTRY
 
-    shipped = {"lyapunov": "katz2025-continuous", "zone_nssk": "ye2022-ex1"}
+    shipped = {"lyapunov": "katz2025-continuous", "zone_nssk": "ye2022-ex1", "mpc_momentum": "li2022-momentum-mpc"}
     for kind, module in REGISTRY.items():
         for key in getattr(module, "UNREAD", ()):
             table, name = key.split(".")
-            default = scenario.SCHEMA[table][name].default
+            field = scenario.SCHEMA[table][name]
+            default = field.default
             value = 1.0 if default is None else (not default) if isinstance(default, bool) else default + 0.5
+            if field.upper is not None and not isinstance(default, bool) and value >= field.upper:
+                value = default / 2  # within the key's own bounds, so the refusal is the controller's
             yield shipped[kind], kind, key, value
 
 
@@ -123,7 +126,7 @@ def test_every_controller_declares_what_it_flies_and_the_count_must_match():
     from geojax.control import REGISTRY
 
     flown = {kind: getattr(module, "THRUSTERS", (None,))[0] for kind, module in REGISTRY.items()}
-    assert flown == {"none": None, "qffc": 2, "fompc": 2, "mpc": 2, "lyapunov": 1, "zone_nssk": 1}
+    assert flown == {"none": None, "qffc": 2, "fompc": 2, "mpc": 2, "mpc_momentum": 2, "lyapunov": 1, "zone_nssk": 1}
     for name, count in [("li2022-qffc", 1), ("li2022-fompc", 3), ("katz2025-continuous", 2), ("ye2022-ex1", 2)]:
         with pytest.raises(ValueError, match=r"^thrusters\.count: the \w+ controller flies \d thrusters? \(.*\), "
                                              rf"got {count}; leave it out or set \d$"):
