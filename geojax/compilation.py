@@ -31,6 +31,7 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
+import threading
 from pathlib import Path
 from typing import NamedTuple
 
@@ -142,7 +143,8 @@ class Compilations:
         self.programs: list[Program] = []
         self.other_s = 0.0
         self._pending: dict[str, dict[str, float]] = {}
-        self._hit = False
+        self._hit: set[int] = set()  # the threads whose compilation in progress the cache served (programs compile
+        #                              in threads of their own: ``rollout.simulate_batch``, ``parallel.per_device``)
 
     def __enter__(self):
         jax.monitoring.register_event_duration_secs_listener(self._duration)
@@ -156,7 +158,7 @@ class Compilations:
 
     def _event(self, event: str, **kwargs) -> None:
         if event == _HIT:
-            self._hit = True
+            self._hit.add(threading.get_ident())
 
     def _duration(self, event: str, seconds: float, fun_name: str = "", **kwargs) -> None:
         name = fun_name.removeprefix("jit(").removesuffix(")")
@@ -164,8 +166,9 @@ class Compilations:
             self._pending.setdefault(name, {})[event] = seconds
         elif event == _COMPILE:
             parts = self._pending.pop(name, {})
-            program = Program(name, parts.get(_TRACE, 0.0), parts.get(_LOWER, 0.0), seconds, self._hit)
-            self._hit = False
+            hit = threading.get_ident() in self._hit
+            self._hit.discard(threading.get_ident())
+            program = Program(name, parts.get(_TRACE, 0.0), parts.get(_LOWER, 0.0), seconds, hit)
             if program.trace_s + program.lower_s + program.compile_s >= self.min_s:
                 self.programs.append(program)
             else:

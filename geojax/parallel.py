@@ -120,27 +120,35 @@ def per_device(fn, example_args, devices=None, shared=(), traced_as=None):
 
 
 def _concurrently(tasks):
-    """The results of ``tasks`` (functions of nothing) run in threads at once (XLA compiles outside the GIL).
+    """The results of ``tasks`` (functions of nothing) run in threads at once (XLA compiles outside the GIL)."""
+    return [task.result() for task in [Background(task) for task in tasks]]
 
-    Daemon threads, joined a tenth of a second at a time: Ctrl-C reaches this thread at once and the process
-    may end without waiting for a compilation to finish (a thread pool would hold it for the whole compile).
+
+class Background:
+    """``task()`` (a function of nothing) started now in a thread of its own; ``result()`` waits for it and
+    returns its value or raises its error.
+
+    A daemon thread, joined a tenth of a second at a time: Ctrl-C reaches the waiting thread at once and the
+    process may end without waiting for a compilation to finish (a thread pool would hold it for the whole
+    compile; ``cli._interrupted`` ends such a process with ``os._exit``).
     """
-    import threading
 
-    results, errors = [None] * len(tasks), []
+    def __init__(self, task):
+        import threading
 
-    def run(i):
+        self._value, self._error = None, None
+        self._thread = threading.Thread(target=self._run, args=(task,), daemon=True)
+        self._thread.start()
+
+    def _run(self, task):
         try:
-            results[i] = tasks[i]()
+            self._value = task()
         except BaseException as err:  # noqa: BLE001 (raised again in the caller's thread)
-            errors.append(err)
+            self._error = err
 
-    threads = [threading.Thread(target=run, args=(i,), daemon=True) for i in range(len(tasks))]
-    for thread in threads:
-        thread.start()
-    for thread in threads:
-        while thread.is_alive():
-            thread.join(0.1)
-    if errors:
-        raise errors[0]
-    return results
+    def result(self):
+        while self._thread.is_alive():
+            self._thread.join(0.1)
+        if self._error is not None:
+            raise self._error
+        return self._value

@@ -40,8 +40,14 @@ def call(jitted, name: str, identity, *args, **static):
 
 def compiled(jitted, name: str, identity, *args, **static):
     """``jitted`` compiled for ``args`` ahead of its call (to time the compilation apart): a callable of ``args``."""
+    return lowered(jitted, name, identity, *args, **static).compile()
+
+
+def lowered(jitted, name: str, identity, *args, **static):
+    """``jitted`` lowered for ``args`` (arrays or their ``jax.ShapeDtypeStruct``): ``.compile()`` and ``.out_info``
+    (the results' shapes)."""
     program = _program(jitted, name, identity, args, static)
-    return (jitted.lower(*args, **static) if program is None else program.lower(*args)).compile()
+    return jitted.lower(*args, **static) if program is None else program.lower(*args)
 
 
 def jitted(jitted, name: str, identity, *args):

@@ -23,6 +23,7 @@ from geojax.loop.metrics import cycle_table, summarize
 from geojax.export import trajectory
 from geojax.loop import report
 from geojax import traced
+from geojax.parallel import Background
 from geojax.loop.setup import Batch, controller_of, padded, prepare, program_identity, reference, unstack
 from geojax.params import static_settings
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
@@ -48,8 +49,8 @@ class Result(NamedTuple):
     params: Params
     step_s: float
     wall_s: float  # compilation included
-    compile_s: float = float("nan")  # measured where ``on_compiled`` was given
-    run_s: float = float("nan")  # the compiled closed loop's and metrics' run alone, where ``on_compiled`` was given
+    compile_s: float = float("nan")  # from the closed loop's compilation's start to its and its metrics' readiness
+    run_s: float = float("nan")  # the compiled closed loop's and metrics' run alone
     scenario: Scenario | None = None  # a single rollout's
     seed: int | None = None  # a single rollout's, None where it was given a key
 
@@ -148,16 +149,50 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     Either a list of scenarios (one sample each), or one scenario with ``params`` whose leaves carry a
     leading batch axis (e.g. 100 initial states: start from ``prepare_params(scenario, n)`` and replace
     ``params.initial``).  ``seeds`` [n] (default 0, 1, ...) or ``keys`` [n] draw each sample's errors.
-    ``on_compiled(seconds)``: compile first (timed, reported to this callback, e.g. the command line's
-    "compiled in X s"), then run; the result's ``compile_s`` is then set.
+    ``on_compiled(seconds)``: called when the closed loop and its metrics are compiled (or loaded from the
+    cache), before they run, with the seconds since their compilation began (e.g. the command line's "closed
+    loop ready in X s"); the result's ``compile_s`` is the same.
+
+    The closed loop compiles in a thread of its own while the environment grid and the predictor's reference
+    are computed (their programs compile meanwhile): XLA compiles a program on one core, so on two cores a
+    cold one-year QFFC run waits for the longest of them rather than their sum.
     """
     start = time.perf_counter()
     scenarios = [scenarios] if isinstance(scenarios, Scenario) else list(scenarios)
-    batch = prepare(scenarios, controller, pad=True)
-    if params is None:
-        params = batch.params
-    elif len(scenarios) != 1:
+    if params is not None and len(scenarios) != 1:
         raise ValueError("params: give one scenario with a batch of params, or a list of scenarios")
+    call = functools.partial(_loop_call, scenarios, params, seeds, keys, controller, keep_steps)
+    compiling = {}
+
+    def compile_meanwhile(layout: Batch):
+        compiling["begun"] = time.perf_counter()
+        compiling["programs"] = Background(functools.partial(_compiled_programs, *call(layout)))
+
+    batch = prepare(scenarios, controller, pad=True, on_shapes=compile_meanwhile)
+    args, _, _, _, summarized, n = call(batch)
+    loop_program, metrics_program = compiling["programs"].result()
+    compile_s = time.perf_counter() - compiling["begun"]
+    if on_compiled is not None:
+        on_compiled(compile_s)
+    begun = time.perf_counter()
+    final, records = jax.block_until_ready(loop_program(*args))
+    metrics = jax.block_until_ready(metrics_program(args[0], final, records))
+    run_s = time.perf_counter() - begun
+    to_numpy = lambda tree: to_host(tree, n)  # noqa: E731
+    metrics = to_numpy(metrics)
+    status = metrics.pop("status")
+    records = Records(to_host(records.cycles, n, batch.n_cycles),
+                      None if records.steps is None else to_host(records.steps, n, batch.n_cycles))
+    params = batch.params if params is None else params
+    return Result(metrics, status, records, to_numpy(final), jax.tree_util.tree_map(np.asarray, params),
+                  batch.step_s, time.perf_counter() - start, compile_s, run_s)
+
+
+def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, batch: Batch):
+    """What ``simulate_batch`` compiles and calls for ``batch`` (its ``shared`` arrays or their shapes):
+    (the loop's arguments, its static ones, the traced programs' identities of the loop and of the metrics, the
+    metrics' static ones, the sample count)."""
+    params = batch.params if params is None else params
     n = jax.tree_util.tree_leaves(params)[0].shape[0]
     if keys is None:
         keys = keys_of(np.arange(n) if seeds is None else seeds)
@@ -165,7 +200,6 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     args = (pad_lanes(params, lanes), pad_lanes(keys, lanes), batch.shared, _reference_env(batch))
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, lanes),
                   keep_steps=keep_steps, states=batch.states)
-    compile_s = run_s = float("nan")
     summarized = dict(n_cycles=batch.n_cycles, step_s=batch.step_s,
                       steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1])
     # A registered controller's programs are kept traced between runs (``geojax.traced``); a user's are not.
@@ -175,29 +209,17 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
                                                                         batch.controller.fields).items())),
         lanes, keep_steps, batch.step_s)
     per_duration = None if identity is None else (*identity, batch.n_cycles)  # the metrics' static cycle count
-    if on_compiled is None:
-        final, records = traced.call(closed_loop_batch, "closed_loop", identity, *args, **static)
-        metrics = traced.call(metrics_batch, "metrics", per_duration, args[0], final, records, **summarized)
-    else:
-        begun = time.perf_counter()
-        loop_program = traced.compiled(closed_loop_batch, "closed_loop", identity, *args, **static)
-        compile_s = time.perf_counter() - begun
-        on_compiled(compile_s)
-        begun = time.perf_counter()
-        final, records = jax.block_until_ready(loop_program(*args))
-        run_s = time.perf_counter() - begun
-        metrics_program = traced.compiled(metrics_batch, "metrics", per_duration, args[0], final, records,
-                                          **summarized)
-        begun = time.perf_counter()
-        metrics = jax.block_until_ready(metrics_program(args[0], final, records))
-        run_s += time.perf_counter() - begun
-    to_numpy = lambda tree: to_host(tree, n)  # noqa: E731
-    metrics = to_numpy(metrics)
-    status = metrics.pop("status")
-    records = Records(to_host(records.cycles, n, batch.n_cycles),
-                      None if records.steps is None else to_host(records.steps, n, batch.n_cycles))
-    return Result(metrics, status, records, to_numpy(final), jax.tree_util.tree_map(np.asarray, params),
-                  batch.step_s, time.perf_counter() - start, compile_s, run_s)
+    return args, static, identity, per_duration, summarized, n
+
+
+def _compiled_programs(args, static, identity, per_duration, summarized, n):
+    """The closed loop and its metrics compiled (or loaded from the cache) for ``args`` (arrays or shapes), the
+    metrics in a thread of their own once the loop's result shapes are known."""
+    lowered = traced.lowered(closed_loop_batch, "closed_loop", identity, *args, **static)
+    final, records = lowered.out_info
+    metrics = Background(lambda: traced.compiled(metrics_batch, "metrics", per_duration, args[0], final, records,
+                                                 **summarized))
+    return lowered.compile(), metrics.result()
 
 
 def to_host(tree, lanes: int, cycles: int | None = None):

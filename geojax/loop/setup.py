@@ -16,6 +16,7 @@ mass, force model), each sample runs its own reference inside the batch
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import jax
@@ -33,7 +34,7 @@ from geojax.physics.forces import Environment
 from geojax.physics.frames import ecef_to_eci
 from geojax.loop.simulate import Shared, simulate
 from geojax.params import LEAF_TABLES, Params, static_settings, table_leaves
-from geojax.physics.propagate import DYNAMICS, Dynamics, environment_grid, steps_per_cycle
+from geojax.physics.propagate import DYNAMICS, Dynamics, environment_grid, environment_shape, steps_per_cycle
 from geojax.scenario import SCHEMA, Scenario, controller_fields
 from geojax.states import navigation
 from geojax.states import of_config as states_of
@@ -115,7 +116,7 @@ def controller_of(scenarios: list[Scenario]) -> Controller:
 
 
 def prepare(scenarios: list[Scenario], controller: Controller | None = None,
-            segment_cycles: int = REFERENCE_SEGMENT_CYCLES, pad: bool = False) -> Batch:
+            segment_cycles: int = REFERENCE_SEGMENT_CYCLES, pad: bool = False, on_shapes=None) -> Batch:
     """The ``Batch`` of ``scenarios`` (``controller``: a user's, else the registered one of their kind).
 
     ``segment_cycles``: cycles between re-starts of the predictor's reference (``REFERENCE_SEGMENT_CYCLES``).
@@ -123,6 +124,11 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     (``Shared.n_active``), so that other durations reuse the compiled programs; the records then hold the
     slots (zero beyond ``n_cycles``), the numbers of the run's cycles bit-for-bit those of a loop compiled for
     exactly ``n_cycles``.
+
+    ``on_shapes(batch)``: called before the environment grid and the reference are computed (a few seconds of
+    their own compilation) with the ``Batch`` whose ``shared`` and ``reference_env`` leaves are their shapes
+    (``jax.ShapeDtypeStruct``), the rest as returned: enough to compile the closed loop meanwhile
+    (``rollout.simulate_batch`` does, in a thread: XLA compiles one program on one core).
     """
     controller = controller_of(scenarios) if controller is None else controller
     first = scenarios[0]
@@ -138,24 +144,42 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     segment_cycles = min(segment_cycles, n_cycles)
     n_segments = -(-n_cycles // segment_cycles)
     n_env = max(n_cycles, n_segments * segment_cycles + width - 1) if width else n_cycles
-    env = environment_grid(first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s, step_s, n_env, n_steps,
-                           first.config["forces"]["ephemeris"])
-    cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
+    grid = (first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s, step_s, n_env, n_steps)
     per_sample = width > 0 and _references_differ(params)
-    segments = reference_segments(env, n_cycles, width, segment_cycles) if width else None
+    on_segments = functools.partial(reference_segments, n_cycles=n_cycles, width=width, segment_cycles=segment_cycles)
+    sharing = functools.partial(_shared, n_cycles=n_cycles, n_slots=n_slots if pad else None)
+    batch = functools.partial(Batch, controller, stacked, step_s=step_s, dynamics=dynamics, n_cycles=n_cycles,
+                              reference_per_sample=per_sample, states=states_of(first.config))
+    if on_shapes is not None:
+        env = environment_shape(*grid)
+        ref = reference_shape(n_cycles, width, env.earth_angle_rad.dtype) if width and not per_sample else None
+        on_shapes(batch(jax.eval_shape(sharing, env, ref),
+                        reference_env=jax.eval_shape(on_segments, env) if width else None))
+    env = environment_grid(*grid, first.config["forces"]["ephemeris"])
+    segments = on_segments(env) if width else None
     ref = None
     if width and not per_sample:
         identity = program_identity(first, "reference", step_s, width)
         ref = traced.call(_reference_jit, "reference", identity, params[0], segments, step_s=step_s, dynamics=dynamics,
                           width=width)
-    shared = Shared(cycles_env, ref)
-    if pad:
-        # The environment and the reference are computed for the run's cycles as they always were (small
-        # programs; their values at other lengths differ in the last bit, XLA's vector and scalar loops), then
-        # repeated into the slots the loop skips.
-        shared = Shared(*padded((cycles_env, ref), n_slots), jnp.asarray(n_cycles, jnp.int32))
-    return Batch(controller, stacked, shared, step_s, dynamics, n_cycles, segments, per_sample,
-                 states_of(first.config))
+    return batch(sharing(env, ref), reference_env=segments)
+
+
+def _shared(env, ref, n_cycles: int, n_slots: int | None) -> Shared:
+    """What the samples share: the environment of the run's ``n_cycles`` and the reference (with ``n_slots``:
+    repeated into the slots the loop skips, and ``Shared.n_active``)."""
+    cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
+    if n_slots is None:
+        return Shared(cycles_env, ref)
+    # The environment and the reference are computed for the run's cycles as they always were (small programs;
+    # their values at other lengths differ in the last bit, XLA's vector and scalar loops), then repeated into
+    # the slots the loop skips.
+    return Shared(*padded((cycles_env, ref), n_slots), jnp.asarray(n_cycles, jnp.int32))
+
+
+def reference_shape(n_cycles: int, width: int, dtype) -> Reference:
+    """The shapes ``reference`` returns for a run of ``n_cycles`` (known without tracing it, ~2 s on a CPU)."""
+    return Reference(jax.ShapeDtypeStruct((n_cycles, 6), dtype), jax.ShapeDtypeStruct((n_cycles, width, 7), dtype))
 
 
 def padded(tree, n_slots: int):

@@ -120,6 +120,12 @@ def environment_grid(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cyc
                         r_moon_eci_m=_on_stages(jnp.asarray(moon), n_cycles, n_steps))
 
 
+def environment_shape(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cycles: int, n_steps: int) -> Environment:
+    """The shapes (``jax.ShapeDtypeStruct``) of ``environment_grid``'s leaves, from either ephemeris, without
+    computing it."""
+    return jax.eval_shape(_environment_grid, start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cycles, n_steps)
+
+
 @partial(jax.jit, static_argnums=(4, 5))
 def _environment_grid(start_tt_s, frame_epoch_tt_s, tt_minus_ut1_s, step_s, n_cycles: int, n_steps: int):
     half_steps = jnp.arange(2 * n_cycles * n_steps + 1)
