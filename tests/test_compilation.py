@@ -20,7 +20,7 @@ import pytest
 
 from geojax import compilation, scenario, traced
 from geojax.loop import rollout
-from geojax.loop.setup import cycle_slots, prepare
+from geojax.loop.setup import cycle_slots, prepare, reference, reference_shape
 
 DAYS = 4
 
@@ -85,6 +85,35 @@ def test_samples_with_their_own_reference_run_padded_as_in_the_exact_loop():
     assert not np.array_equal(*padded.metrics["dv_per_year_mps"])
     _equal(metrics, padded.metrics, "metrics")
     _equal(records, padded.records, "records")
+
+
+@pytest.mark.parametrize("case", ["shared reference", "reference per sample", "no reference"])
+def test_the_shapes_the_loop_compiles_for_meanwhile_are_those_of_the_arrays_computed(case):
+    """``prepare(on_shapes=...)`` hands ``simulate_batch`` the shapes of the environment grid, the reference and the
+    per-sample segments before computing them (the closed loop compiles meanwhile): the same tree, shapes and
+    dtypes as the arrays then computed (second method: the arrays themselves), and ``reference_shape`` is what
+    ``jax.eval_shape`` of the reference (a trace of it) gives."""
+    kind = {"shared reference": ("li2022-qffc", [{}]), "no reference": ("katz2025-continuous", [{}]),
+            "reference per sample": ("ye2022-ex1", [{"spacecraft.srp_area_m2": 40.0},
+                                                    {"spacecraft.srp_area_m2": 160.0}])}[case]
+    scenarios = [scenario.load(kind[0], {"duration.days": 3, **changes}) for changes in kind[1]]
+    seen = []
+    batch = prepare(scenarios, pad=True, on_shapes=seen.append)
+    (shapes,) = seen
+
+    def described(tree):
+        leaves, structure = jax.tree_util.tree_flatten(tree)
+        return structure, [(tuple(x.shape), str(x.dtype), bool(getattr(x, "weak_type", False))) for x in leaves]
+
+    assert described(shapes.shared) == described(batch.shared)
+    assert described(shapes.reference_env) == described(batch.reference_env)
+    assert (batch.reference_env is not None) == (case != "no reference")
+    if case == "shared reference":
+        traced_shape = jax.eval_shape(functools.partial(reference, step_s=batch.step_s, dynamics=batch.dynamics,
+                                                        width=batch.controller.reference_cycles),
+                                      jax.tree_util.tree_map(lambda x: x[0], batch.params), batch.reference_env)
+        assert described(reference_shape(batch.n_cycles, batch.controller.reference_cycles, jnp.float64)) == \
+            described(traced_shape)
 
 
 def test_a_shorter_run_is_the_first_cycles_of_a_longer_one_in_the_same_program(qffc, padded):

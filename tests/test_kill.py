@@ -37,6 +37,10 @@ seed = 11
 "thrusters.beta_max_deg" = [60.0, 90.0]
 """
 CHUNK = "2"  # 2 chunks per controller
+# One lane per device, every run: a chunk of 2 then runs on both devices where there are 2 (a chunk that fits one
+# device's lanes runs on one, ``sweep.batch.devices_for``); a batch of one lane is its own program (XLA drops the
+# batch axis of size 1), so the straight run uses the same width
+LANES = 1
 
 # Runs `geojax sweep` in this process, killing it with SIGKILL at the moment named by argv[1].
 DYING = r"""
@@ -83,7 +87,7 @@ def straight(tmp_path_factory):
     spec = tmp / "kill.toml"
     spec.write_text(SPEC)
     start = time.perf_counter()
-    out = sweep.run_sweep(sweep.load(spec), tmp / "straight.h5", chunk=int(CHUNK), progress=False)
+    out = sweep.run_sweep(sweep.load(spec), tmp / "straight.h5", chunk=int(CHUNK), progress=False, lanes=LANES)
     return data(out), time.perf_counter() - start
 
 
@@ -93,7 +97,8 @@ def run(tmp_path, moment: str, devices: int, resume: bool, kill_after_s: float |
     spec, out = tmp_path / "kill.toml", tmp_path / "out.h5"
     if not spec.exists():
         spec.write_text(SPEC)
-    args = [str(spec), "--out", str(out), "--chunk", CHUNK, "--quiet", *(["--resume"] if resume else [])]
+    args = [str(spec), "--out", str(out), "--chunk", CHUNK, "--lanes", str(LANES), "--quiet",
+            *(["--resume"] if resume else [])]
     proc = subprocess.Popen([sys.executable, "-c", DYING, moment, *args], env=env_with(devices))
     try:
         proc.wait(timeout=kill_after_s)

@@ -116,3 +116,16 @@ def test_keys_made_on_the_device_are_jax_random_key_of_each_seed():
     np.testing.assert_array_equal(jax.random.key_data(keys_of(seeds)), jax.random.key_data(one_by_one))
     with pytest.raises(ValueError, match="seeds: must be a list of integers"):
         keys_of([0.5, 1.0])
+
+
+def test_a_sweep_runs_on_as_few_devices_as_its_samples_fill():
+    """``sweep.batch.devices_for``: a device left with padding alone would compile its copy of the program for
+    nothing, so a call uses ceil(samples / lanes) devices, at least one and at most the local ones (counted
+    here against ``jax.local_devices()``, whatever this process has)."""
+    from geojax.sweep.batch import devices_for
+
+    local = jax.local_devices()
+    for samples, lanes_per_device in [(1, 64), (4, 64), (64, 64), (65, 64), (10, 4), (10**6, 1)]:
+        used = devices_for(samples, lanes_per_device)
+        assert used == local[:min(len(local), -(-samples // lanes_per_device))]
+        assert len(used) * lanes_per_device >= min(samples, len(local) * lanes_per_device)

@@ -105,8 +105,10 @@ def test_two_host_devices_give_the_same_results(straight, tmp_path):
     spec_path = write_spec(tmp_path)
     env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=2"}
     out = tmp_path / "two.h5"
+    # 4 lanes per device: the 10 samples fill both devices (a sweep that fits one device's lanes runs on one)
     code = ("import jax, sys; from geojax import sweep; assert jax.device_count() == 2; "
-            f"sweep.run_sweep(sweep.load({str(spec_path)!r}), {str(out)!r}, chunk=64, progress=False)")
+            "from geojax.sweep.batch import devices_for; assert len(devices_for(10, 4)) == 2; "
+            f"sweep.run_sweep(sweep.load({str(spec_path)!r}), {str(out)!r}, chunk=64, progress=False, lanes=4)")
     subprocess.run([sys.executable, "-c", code], check=True, env=env)
     two = data(out)
     for name in d:
@@ -186,8 +188,8 @@ def test_fompc_results_do_not_depend_on_the_device_count_or_the_width(tmp_path):
     if ON_CPU:  # two XLA host devices
         env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=2"}
         others.append(tmp_path / "two.h5")
-        code = ("import jax; from geojax import sweep; assert jax.device_count() == 2; "
-                f"sweep.run_sweep(sweep.load({str(spec_path)!r}), {str(others[-1])!r}, progress=False)")
+        code = ("import jax; from geojax import sweep; assert jax.device_count() == 2; "  # 2 lanes each: both used
+                f"sweep.run_sweep(sweep.load({str(spec_path)!r}), {str(others[-1])!r}, progress=False, lanes=2)")
         subprocess.run([sys.executable, "-c", code], check=True, env=env)
     a = store.read_h5(one)[0]
     assert a["status"]["code"][0, 1].tolist() == [3, 3]  # the wide Delta-i limit leaves the latitude box

@@ -33,7 +33,8 @@ epoch, the FOMPC's annealing size, a thrust law) cannot, and say so.  Each
 controller compiles once (the FOMPC's horizon padded to the largest N of the
 sweep); a sweep that varies the initial state or the forces runs each sample's
 own predictor reference inside the batch.  The batch is
-vmapped and spread over the local devices, each running one compiled call of
+vmapped and spread over as many local devices as it fills (a device left only
+padding would compile its copy for nothing), each running one compiled call of
 the platform's width (``geojax.lanes``: the controller's measured width on a
 CPU, the widest batch that fits an accelerator's memory; ``lanes = N`` in the
 file or ``--lanes N`` fixes it), so memory does not grow with the sweep and a
@@ -48,8 +49,9 @@ Each finished chunk is saved at once to ``OUT.parts/`` (written to a temporary
 name and renamed, so a kill leaves either the whole chunk or nothing); when
 every chunk is in, the HDF5 file is written atomically and the parts removed.
 ``resume=True`` picks up the saved chunks (with the cut they were made with).
-The file's ``wall_s`` and ``compile_s`` count the last run only; ``compile_s`` is the set-up of every
-controller's batch: its shared arrays and the predictor's reference run, and the compilation.
+The file's ``wall_s`` and ``compile_s`` count the last run only; ``compile_s`` is the time spent waiting for
+the controllers' set-up (their shared arrays and the predictor's reference run) and compilation, which run
+at once, each controller in a thread of its own (a Ray cluster's: the longest of its workers').
 """
 
 from geojax.sweep.spec import DISPERSION_FIELDS, DISPERSION_STREAM, MAX_SAMPLES, Sweep, load, prepare_check, _scenario  # noqa: F401

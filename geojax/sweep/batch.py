@@ -35,9 +35,10 @@ class ChunkRunner:
         self.n_samples = sweep.n_points * sweep.repetitions
         self.repetitions = sweep.repetitions
         self.plan = lane_plan(sweep, controller, chunk)
-        self.width = self.plan.lanes * jax.local_device_count()
+        self.devices = devices_for(min(chunk or self.n_samples, self.n_samples), self.plan.lanes)
+        self.width = self.plan.lanes * len(self.devices)
         self._batch_fn, self._params, self._group_of_point, self.compile_s = _compiled_batch(
-            sweep, controller, self.width, on_phase or (lambda name: None))
+            sweep, controller, self.width, on_phase or (lambda name: None), self.devices)
 
     def run(self, first: int, length: int, on_samples=None) -> dict:
         samples = np.arange(first, first + length)
@@ -63,6 +64,16 @@ class ChunkRunner:
         return out
 
 
+def devices_for(samples: int, lanes_per_device: int) -> list:
+    """The local devices a call of ``samples`` samples at ``lanes_per_device`` runs on: as few as hold them.
+
+    Each device runs its own compiled copy of the program (``parallel.per_device``), so a device whose lanes
+    would all be padding costs a whole compilation for nothing: on a CPU 15-30 s of a core per controller,
+    the bulk of a small sweep's wall time (a 4-point sweep at the QFFC's 64 lanes per device fits one)."""
+    devices = jax.local_devices()
+    return devices[:max(1, min(len(devices), math.ceil(samples / lanes_per_device)))]
+
+
 def default_chunk(n_samples: int, lanes_per_device: int) -> int:
     """Samples per saved chunk: one compiled batch of the widest controller on every local device (on 2 CPU
     cores about a minute of FOMPC years; on a GPU one call of tens of thousands of lanes), so a kill loses
@@ -85,7 +96,7 @@ def lane_plan(sweep: Sweep, controller: str, chunk: int | None = None) -> lanes_
                           requested=sweep.lanes)
 
 
-def _compiled_batch(sweep: Sweep, controller: str, width: int, on_phase):
+def _compiled_batch(sweep: Sweep, controller: str, width: int, on_phase, devices=None):
     """(function of (params [width], sample indices [width], epoch group) -> metrics, params of every grid point
     [n_points], the epoch group of every grid point [n_points], set-up seconds: each epoch's shared arrays and
     reference run, and the one compilation).  ``on_phase(name)`` is told when the compilation starts.
@@ -126,7 +137,7 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int, on_phase):
     on_phase(f"{controller}: compiling")
     lanes = np.zeros(width, dtype=int)
     run, _ = per_device(jax.vmap(one, in_axes=(0, 0, None, None, None)), (_lanes(batch.params, lanes), lanes),
-                        shared=shared[0], traced_as=("sweep", _identity(sweep, controller, scenarios[0], batch)))
+                        devices=devices, shared=shared[0], traced_as=("sweep", _identity(sweep, controller, scenarios[0], batch)))
     # Every grid point's params, in point order (each group's batch stacks its own points).
     order = np.concatenate(groups)
     params = jax.tree_util.tree_map(lambda *xs: jnp.concatenate(xs)[np.argsort(order)], *[b.params for b in batches])
