@@ -191,8 +191,9 @@ def markdown(base: dict, new: dict, batches: dict) -> list[str]:
     lines = ["Wall seconds per command (programs XLA compiled, + those the cache served); the ratios are this tree's "
              "over the baseline's, in this run. Cold: an empty cache folder; warm: the same command again, its "
              "folder kept. The split of the cold run: import / tracing and lowering / XLA compiling (or loading) / "
-             "the rest (set-up and run arithmetic, printing, writing); a sweep compiles its program for both devices at "
-             "once, so its compile seconds may exceed its wall time.", "",
+             "the rest (set-up and run arithmetic, printing, writing); programs compile in threads at once (simulate's "
+             "closed loop beside its set-up, a sweep's controllers and devices), so the compile seconds may exceed "
+             "the wall time and the rest come out negative.", "",
              *harness.table(["command", "baseline s", "cold s", "cold / baseline", "warm s", "warm / baseline",
                              "cold: import / trace / compile / rest"], rows, "lrrrrrr"), "",
              "`simulate_batch` in one process, one call after another (the closed loop's compilations per call):", ""]
