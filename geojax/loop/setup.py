@@ -228,6 +228,7 @@ STATIC_KEYS = {"integration.step_s": lambda sc: steps_per_cycle(sc.step_s), "dur
                "forces.moon_shadow": lambda sc: sc.config["forces"]["moon_shadow"],
                "forces.ephemeris": lambda sc: sc.config["forces"]["ephemeris"],
                "attitude.wheels": lambda sc: sc.config["attitude"]["wheels"],
+               "navigation.estimate_biases": lambda sc: sc.config["navigation"]["estimate_biases"],
                "navigation.model": lambda sc: (sc.config["navigation"]["model"],
                                                navigation.layout_of(sc.config["navigation"]))}
 

@@ -37,6 +37,9 @@ FIELDS = {
                                doc="the filter's initial position sigma per axis (and the initial error's)"),
     "initial_sigma_v_mps": Field(NUMBER, 0.01, lower=0.0, upper=MAX_SIGMA, si="initial_sigma_v_mps",
                                  doc="the filter's initial velocity sigma per axis (and the initial error's)"),
+    "estimate_biases": Field(bool, False, static=True,
+                             doc="the filter estimates each measurement component's bias as a constant state, "
+                                 "its prior the bias sigma; false: the biases are drawn and not estimated"),
     "burns_during_passes": Field(bool, True, si="burns_during_passes",
                                  doc="whether the thrusters may fire while a station tracks; false: a burn's steps "
                                      "inside any station's pass are not fired (the plan does not move them: the "

@@ -37,8 +37,11 @@ default), each station's measurements of the types it makes (``navigation.measur
 light time, range rate, azimuth and elevation) and the receiver's position fix, simulated from the true state
 with the sample's bias and white noise (keys from the cycle's), weighted 0/1 by the station's schedule and by
 the true elevation against its mask (``navigation.schedule``), processed one station at a time in Joseph form
-(``navigation.ekf.measurement_update``; the azimuth's residual wrapped).  Biases are drawn once per sample and not
-estimated: with a bias the filter is knowingly inconsistent (NEES shows by how much).
+(``navigation.ekf.measurement_update``; the azimuth's residual wrapped).  Biases are drawn once per sample.  By
+default they are not estimated: with a bias the filter is knowingly inconsistent (NEES shows by how much).  With
+``navigation.estimate_biases`` (``Layout.biases``) every measurement component's bias is a state appended to
+(r, v, eps, phi): constant (identity transition, no process noise), prior N(0, sigma_b^2), z = h(x) + b (a 1 in
+its column of H); a burn's start resets the execution errors' rows only (``_reset_execution``).
 
 Decision (``estimate``): at each cycle start the controller is told the estimate's elements as its fix (L made
 continuous with the truth's, as the Gaussian fix's is), and the covariance of its ECI position and velocity,
@@ -73,7 +76,7 @@ from geojax.states.base import StateModel
 
 NAME = "navigation"
 N_ORBIT = 6
-N_STATE = 10  # the elements, eps, phi [3]
+N_STATE = 10  # the elements, eps, phi [3]; then the measurement biases where they are estimated (``n_state``)
 # ``fold_in`` constants of the model's draws from its cycle key (the step's draws fold the step index into
 # MEASUREMENT_KEY first).
 INITIAL_KEY, BIAS_KEY, MEASUREMENT_KEY, BURN_KEY = 0, 1, 2, 3
@@ -86,6 +89,7 @@ class Layout(NamedTuple):
     stations: tuple[tuple[str, ...], ...]
     gnss: bool
     filter_forces: str
+    biases: bool = False  # the measurement biases estimated (``navigation.estimate_biases``)
 
 
 class Navigation(NamedTuple):
@@ -109,6 +113,10 @@ class Navigation(NamedTuple):
     nis_sum: jnp.ndarray  # [] over the cycle so far
     nis_dof: jnp.ndarray  # [] degrees of freedom of those NIS
     measurements: jnp.ndarray  # [] measurement components used over the cycle so far
+    # where the biases are estimated (``Layout.biases``), else None (no leaves: the filter is today's, bit for bit)
+    bias_estimate: jnp.ndarray | None = None  # [n_components]
+    bias_error: jnp.ndarray | None = None  # [n_components] bias_estimate - bias at the cycle start
+    bias_sigma: jnp.ndarray | None = None  # [n_components] the filter's 1-sigma of it there
 
 
 class NavigationCycle(NamedTuple):
@@ -120,6 +128,8 @@ class NavigationCycle(NamedTuple):
     nis_sum: jnp.ndarray  # [] over the cycle
     nis_dof: jnp.ndarray  # []
     measurements: jnp.ndarray  # []
+    bias_error: jnp.ndarray | None = None  # [n_components] the biases' estimation error at the cycle start, where
+    bias_sigma: jnp.ndarray | None = None  # [n_components] estimated (else None), and the filter's 1-sigma of it
 
 
 # --- the scenario's leaves -------------------------------------------------------------------------------------
@@ -127,7 +137,7 @@ class NavigationCycle(NamedTuple):
 def layout_of(table: dict) -> Layout:
     """The static layout of a validated ``[navigation]`` table."""
     return Layout(tuple(tuple(s["measurements"]) for s in table["stations"]), table["gnss"] is not None,
-                  table["filter_forces"])
+                  table["filter_forces"], table["estimate_biases"])
 
 
 def leaves_of(table: dict) -> dict:
@@ -201,7 +211,8 @@ def predict(x, execution, mass_kg, state: Navigation, env3, fm, step_s):
 
 
 def transition(rv, mass_kg, state: Navigation, step_s, mu):
-    """The state transition matrix [10, 10] of (r, v, eps, phi) over one step: [[Phi, Gamma], [0, I]].
+    """The state transition matrix [n, n] of (r, v, eps, phi, the estimated biases) over one step:
+    [[Phi, Gamma, 0], [0, I, 0], [0, 0, I]] (the biases are constants).
 
     Phi: the variational equations d Phi / dt = A(t) Phi, A = [[0, I], [G, 0]], G = mu / r^3 (3 r_hat r_hat^T - I)
     the point-mass gravity gradient, by the fourth-order Magnus expansion (Iserles & Norsett 1999): with A_1, A_2
@@ -260,7 +271,7 @@ def transition(rv, mass_kg, state: Navigation, step_s, mu):
     # int_0^h (h - t) R(t) dt B = (h^2 / 2) R_mid B - (h^3 / 12) R' B: the frame's turning weighs the early thrust
     gamma = jnp.concatenate([(eye * (h**2 / 2) + g * (h**4 / 24)) @ b - (h**3 / 12) * turning @ b_rsw,
                              (eye * h + g * (h**3 / 6)) @ b])
-    return jnp.eye(N_STATE).at[:6, :6].set(phi).at[:6, 6:].set(gamma)
+    return jnp.eye(N_STATE + _n_estimated(state)).at[:6, :6].set(phi).at[:6, 6:N_STATE].set(gamma)
 
 
 def rv_of(x, mu):
@@ -300,17 +311,32 @@ def bias_sigmas(nav: dict, layout: Layout):
     return jnp.concatenate(parts) if parts else jnp.zeros(0)
 
 
+def _n_estimated(state: Navigation) -> int:
+    """The biases ``state`` estimates (static: its shape)."""
+    return 0 if state.bias_estimate is None else state.bias_estimate.shape[0]
+
+
+def n_biases(layout: Layout) -> int:
+    """The biases the filter estimates: every measurement component's where ``layout.biases``, else none."""
+    return sum(MODELS[kind].size for _, kind in components(layout)) if layout.biases else 0
+
+
 # --- the protocol ------------------------------------------------------------------------------------------------
 
 def init(layout: Layout, params, r_eci_m, v_eci_mps, env, fm) -> Navigation:
     """The filter at the run's start: the true elements (``cycle`` adds the initial error at cycle 0) and the
     initial covariance diag(sigma_r^2 I, sigma_v^2 I); no burn."""
     nav, mu = params.navigation, fm.mu_m3_s2
-    p = jnp.zeros((N_STATE, N_STATE)).at[:6, :6].set(_initial_cartesian(nav))
+    n_b = n_biases(layout)
+    p = jnp.zeros((N_STATE + n_b, N_STATE + n_b)).at[:6, :6].set(_initial_cartesian(nav))
+    if n_b:  # the estimated biases' prior: the sigmas they are drawn with, uncorrelated
+        p = p.at[N_STATE:, N_STATE:].set(jnp.diag(bias_sigmas(nav, layout) ** 2))
     zero = jnp.zeros_like(r_eci_m[0])
     return Navigation(jnp.concatenate([r_eci_m, v_eci_mps]), jnp.zeros(4), p, jax.random.key(0), jnp.asarray(0),
                       jnp.zeros(bias_sigmas(nav, layout).shape[0]), jnp.zeros(4), jnp.asarray(False), jnp.zeros(3),
-                      zero, zero, zero, jnp.zeros(6), jnp.zeros(6), zero, zero, zero, zero)
+                      zero, zero, zero, jnp.zeros(6), jnp.zeros(6), zero, zero, zero, zero,
+                      **({"bias_estimate": jnp.zeros(n_b), "bias_error": jnp.zeros(n_b), "bias_sigma": jnp.zeros(n_b)}
+                         if n_b else {}))
 
 
 def _initial_cartesian(nav: dict):
@@ -335,9 +361,13 @@ def cycle(layout: Layout, params, state: Navigation, start) -> Navigation:
     rot = jnp.zeros((6, 6)).at[:3, :3].set(basis).at[3:, 3:].set(basis)
     error = x - truth
     zero = jnp.zeros_like(state.nees)
-    return state._replace(x=x, key=start.key, step_index=jnp.zeros_like(state.step_index), bias=bias,
-                          error_rsw=rot @ error, sigma_rsw=jnp.sqrt(jnp.diag(rot @ cov @ rot.T)),
-                          nees=ekf.nees(error, cov), nis_sum=zero, nis_dof=zero, measurements=zero)
+    state = state._replace(x=x, key=start.key, step_index=jnp.zeros_like(state.step_index), bias=bias,
+                           error_rsw=rot @ error, sigma_rsw=jnp.sqrt(jnp.diag(rot @ cov @ rot.T)),
+                           nees=ekf.nees(error, cov), nis_sum=zero, nis_dof=zero, measurements=zero)
+    if _n_estimated(state):
+        state = state._replace(bias_error=state.bias_estimate - bias,
+                               bias_sigma=jnp.sqrt(jnp.diag(state.p)[N_STATE:]))
+    return state
 
 
 def thrust(layout: Layout, params, state: Navigation, planned: Thrust, ctx):
@@ -353,7 +383,7 @@ def thrust(layout: Layout, params, state: Navigation, planned: Thrust, ctx):
     sigma = jnp.concatenate([nav["burn_magnitude_sigma"][None], jnp.full(3, nav["burn_pointing_sigma_rad"])])
     key = jax.random.fold_in(jax.random.fold_in(state.key, BURN_KEY), state.step_index)
     truth = jnp.where(new_burn, sigma * jax.random.normal(key, (4,)), state.truth_execution)
-    prior = jnp.zeros((N_STATE, N_STATE)).at[:6, :6].set(state.p[:6, :6]).at[6:, 6:].set(jnp.diag(sigma**2))
+    prior = _reset_execution(state.p, sigma)
     direction, thrust_n = executed(planned.direction_rsw, planned.thrust_n, truth[0], truth[1:])
     state = state._replace(p=jnp.where(new_burn, prior, state.p),
                            execution=jnp.where(new_burn, 0.0, state.execution), truth_execution=truth, firing=firing,
@@ -364,11 +394,23 @@ def thrust(layout: Layout, params, state: Navigation, planned: Thrust, ctx):
     return state, flown
 
 
+def _reset_execution(p, sigma):
+    """P at a burn's start: the execution errors' rows and columns replaced by their prior diag(``sigma``^2),
+    uncorrelated with the orbit and the biases (the last burn's errors marginalised out), the rest kept."""
+    n_b = p.shape[0] - N_STATE
+    kept = jnp.zeros_like(p).at[:6, :6].set(p[:6, :6]).at[6:N_STATE, 6:N_STATE].set(jnp.diag(sigma**2))
+    if n_b:
+        kept = kept.at[:6, N_STATE:].set(p[:6, N_STATE:]).at[N_STATE:, :6].set(p[N_STATE:, :6])
+        kept = kept.at[N_STATE:, N_STATE:].set(p[N_STATE:, N_STATE:])
+    return kept
+
+
 def step(layout: Layout, params, state: Navigation, ctx):
     """One integration step: the time update (planned thrust, SNC) and the measurement updates at the step's end
     (skipped for a whole batch where no sample tracks: most steps of a pass schedule)."""
     nav, fm = params.navigation, ctx.force_model
     mu = fm.mu_m3_s2
+    n_b = _n_estimated(state)
     start = jnp.concatenate([ctx.r_eci_m, ctx.v_eci_mps])
     f = transition(start, ctx.mass_kg, state, ctx.step_s, mu)
     x = error_state_prediction(layout, f, state, ctx, start)
@@ -380,20 +422,22 @@ def step(layout: Layout, params, state: Navigation, ctx):
     key = jax.random.fold_in(jax.random.fold_in(state.key, MEASUREMENT_KEY), state.step_index)
     # the filter as one flat vector: the gate's vmap rule handles one array out
     packed = jnp.concatenate([x, state.execution, p.ravel(), jnp.stack([state.nis_sum, state.nis_dof,
-                                                                       state.measurements])])
+                                                                       state.measurements]),
+                              *([state.bias_estimate] if n_b else [])])
     args = (packed, weights, nav, truth, angle, state.bias, jax.random.key_data(key), mu)
     leaves, tree = jax.tree_util.tree_flatten(args)  # every array an argument: the gate closes over none
 
     def updates(*leaves):
         packed, weights, nav, truth, angle, bias, key, mu = jax.tree_util.tree_unflatten(tree, leaves)
-        out = _updates(layout, mu, _unpacked(packed), weights, nav, truth, angle, bias, jax.random.wrap_key_data(key))
-        return jnp.concatenate([out[0], out[1], out[2].ravel(), jnp.stack(out[3:])])
+        out = _updates(layout, mu, _unpacked(packed, n_b), weights, nav, truth, angle, bias,
+                       jax.random.wrap_key_data(key))
+        return jnp.concatenate([out[0], out[1], out[2].ravel(), jnp.stack(out[3:6]), *([out[6]] if n_b else [])])
 
     packed = skipped_where_idle(updates, lambda *a: jnp.any(jax.tree_util.tree_unflatten(tree, a)[1] > 0),
                                 lambda *a: a[0], *leaves)
-    x, execution, p, nis_sum, nis_dof, used = _unpacked(packed)
+    x, execution, p, nis_sum, nis_dof, used, bias_estimate = _unpacked(packed, n_b)
     return state._replace(x=x, execution=execution, p=p, step_index=state.step_index + 1, nis_sum=nis_sum,
-                          nis_dof=nis_dof, measurements=used), ()
+                          nis_dof=nis_dof, measurements=used, bias_estimate=bias_estimate), ()
 
 
 def error_state_prediction(layout: Layout, f, state: Navigation, ctx, start):
@@ -413,7 +457,7 @@ def error_state_prediction(layout: Layout, f, state: Navigation, ctx, start):
         anchor = rk4_step(cartesian_rhs, SpacecraftState(start, ctx.mass_kg, jnp.zeros_like(ctx.mass_kg)),
                           ctx.env, fm, ctx.thrust, ctx.step_s).orbit
     deviation = jnp.concatenate([state.x - start, state.execution - state.truth_execution])
-    return anchor + f[:6] @ deviation
+    return anchor + f[:6, :N_STATE] @ deviation
 
 
 def _station_schedules(nav: dict) -> Schedule:
@@ -421,11 +465,13 @@ def _station_schedules(nav: dict) -> Schedule:
     return Schedule(nav["station_cadence_s"], nav["station_pass_s"], nav["station_phase_s"], nav["station_outages_s"])
 
 
-def _unpacked(packed):
-    """(x [6], execution [4], P [10, 10], NIS sum, its dof, measurements) of the flat vector ``step`` packs."""
-    n = N_STATE * N_STATE
-    return (packed[:6], packed[6:10], packed[10:10 + n].reshape(N_STATE, N_STATE), packed[10 + n],
-            packed[11 + n], packed[12 + n])
+def _unpacked(packed, n_b: int = 0):
+    """(x [6], execution [4], P [n, n], NIS sum, its dof, measurements, bias estimate [n_b]) of the flat vector
+    ``step`` packs (n = 10 + n_b)."""
+    size = N_STATE + n_b
+    n = size * size
+    return (packed[:6], packed[6:10], packed[10:10 + n].reshape(size, size), packed[10 + n],
+            packed[11 + n], packed[12 + n], packed[13 + n:13 + n + n_b] if n_b else None)
 
 
 def _trackers(layout: Layout):
@@ -452,7 +498,9 @@ def tracking_weights(layout: Layout, nav: dict, t_s, r_eci_m, earth_angle_rad):
 def _updates(layout: Layout, mu, filtered, weights, nav, truth, angle, bias, key):
     """The measurement updates of one step end, one tracker at a time (Joseph form, weighted by ``weights``):
     ``filtered`` = (x, execution, P, NIS sum, its dof, measurements used) after them."""
-    x, execution, p, nis_sum, nis_dof, used = filtered
+    x, execution, p, nis_sum, nis_dof, used, bias_estimate = filtered
+    n = p.shape[0]
+    n_b = n - N_STATE
     all_stations = stations_of(nav) if layout.stations else None
     rv = x
     offset = 0
@@ -469,21 +517,27 @@ def _updates(layout: Layout, mu, filtered, weights, nav, truth, angle, bias, key
                                  for kind in kinds])
         z = h(truth) + bias[offset:offset + size] + sigma * jax.random.normal(jax.random.fold_in(key, offset), (size,))
         jac, predicted = jax.jacfwd(lambda y, h=h: (h(y), h(y)), has_aux=True)(rv)
+        if n_b:  # the estimated biases' part of the prediction: z = h(x) + b
+            predicted = predicted + bias_estimate[offset:offset + size]
         innovation = z - predicted
         at = 0
         for kind in kinds:  # the azimuth's residual wrapped to (-pi, pi]
             if kind == "angles":
                 innovation = innovation.at[at].set(wrap_angle(innovation[at]))
             at += MODELS[kind].size
-        h_x = jnp.zeros((size, N_STATE)).at[:, :6].set(jac)
-        delta, p, s = ekf.measurement_update(jnp.zeros(N_STATE), p, innovation, h_x, jnp.diag(sigma**2), weight)
+        h_x = jnp.zeros((size, n)).at[:, :6].set(jac)
+        if n_b:
+            h_x = h_x.at[:, N_STATE + offset:N_STATE + offset + size].set(jnp.eye(size))
+        delta, p, s = ekf.measurement_update(jnp.zeros(n), p, innovation, h_x, jnp.diag(sigma**2), weight)
         rv = rv + delta[:6]
-        execution = execution + delta[6:]
+        execution = execution + delta[6:N_STATE]
+        if n_b:
+            bias_estimate = bias_estimate + delta[N_STATE:]
         nis_sum = nis_sum + weight * ekf.nis(innovation, s)
         nis_dof = nis_dof + weight * size
         used = used + weight * size
         offset += size
-    return rv, execution, p, nis_sum, nis_dof, used
+    return rv, execution, p, nis_sum, nis_dof, used, bias_estimate
 
 
 def estimate(params, state: Navigation, told):
@@ -495,7 +549,8 @@ def estimate(params, state: Navigation, told):
 
 def summary(params, start: Navigation, end: Navigation, steps) -> NavigationCycle:
     """The cycle's record: the decision time's error, 1-sigma and NEES; the cycle's NIS sums and measurements."""
-    return NavigationCycle(start.error_rsw, start.sigma_rsw, start.nees, end.nis_sum, end.nis_dof, end.measurements)
+    return NavigationCycle(start.error_rsw, start.sigma_rsw, start.nees, end.nis_sum, end.nis_dof, end.measurements,
+                           start.bias_error, start.bias_sigma)
 
 
 AXES = ("radial", "along", "cross")
@@ -531,6 +586,8 @@ def columns(cycles: NavigationCycle) -> dict:
     dof = cycles.nis_dof
     out["nis_per_dof"] = cycles.nis_sum / jnp.where(dof > 0, dof, 1.0)
     out["measurements"] = cycles.measurements
+    for i in range(0 if cycles.bias_error is None else cycles.bias_error.shape[-1]):  # each estimated bias's
+        out[f"nav_bias_error_{i}"], out[f"nav_bias_sigma_{i}"] = cycles.bias_error[..., i], cycles.bias_sigma[..., i]
     return out
 
 
