@@ -64,6 +64,14 @@ def save(result, path) -> Path:
     return Path(path)
 
 
+def report_md(path, lines: list[str], result) -> str:
+    """Write a study's Markdown report of a tuning to ``path``: ``lines`` (its title, command and table), then what
+    ``geojax tune`` printed (``summary``) in a code block; returns the text."""
+    text = "\n".join([*lines, "", "What `geojax tune` printed:", "", "```", *summary(result), "```", ""])
+    Path(path).write_text(text)
+    return text
+
+
 def summary(result) -> list[str]:
     """What ``geojax tune`` prints after the run: how it ended, and the best point's values and Delta-V."""
     spec, problem = _made_by_tune(result)

@@ -16,7 +16,7 @@ import numpy as np
 
 import geojax
 from geojax import tune
-from geojax.tune.write import summary
+from geojax.tune.write import report_md
 
 HERE = Path(__file__).resolve().parent
 
@@ -49,16 +49,8 @@ def main(argv=None) -> int:
         "| wheels' constraint (|h|/capacity)² − 1 | box and wheels kept |",
         "|---|---|---|---|---|---|",
         *rows,
-        "",
-        "What `geojax tune` printed:",
-        "",
-        "```",
-        *summary(result),
-        "```",
-        "",
     ]
-    (args.out / "tune_dump_gain.md").write_text("\n".join(lines))
-    print((args.out / "tune_dump_gain.md").read_text())
+    print(report_md(args.out / "tune_dump_gain.md", lines, result))
     return 0
 
 

@@ -18,7 +18,7 @@ import numpy as np
 
 import geojax
 from geojax import tune
-from geojax.tune.write import summary
+from geojax.tune.write import report_md
 
 HERE = Path(__file__).resolve().parent
 
@@ -52,16 +52,8 @@ def main(argv=None) -> int:
         "| lat constraint | box kept |",
         "|---|---|---|---|---|---|",
         *rows,
-        "",
-        "What `geojax tune` printed:",
-        "",
-        "```",
-        *summary(result),
-        "```",
-        "",
     ]
-    (args.out / "tune_thrust_ranging.md").write_text("\n".join(lines))
-    print((args.out / "tune_thrust_ranging.md").read_text())
+    print(report_md(args.out / "tune_thrust_ranging.md", lines, result))
     return 0
 
 
