@@ -54,7 +54,7 @@ def save(result, path: str | Path) -> Path:
 
 def metrics(result) -> dict[str, float]:
     """The loop's metrics as floats, and ``cpu_s_per_orbit``: wall seconds per cycle after compilation (with it,
-    where the compilation was not timed apart: ``simulate(..., on_compiled=...)``)."""
+    where a result carries no run time of its own, ``Result.run_s``)."""
     n_cycles = len(result.records.cycles.dv_mps)
     return {**{k: float(v) for k, v in result.metrics.items()}, "cpu_s_per_orbit": run_s(result) / n_cycles}
 
