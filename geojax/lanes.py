@@ -11,12 +11,15 @@ The memory model, per lane, is stated so it can be checked (``benchmarks/acceler
 XLA's own ``memory_analysis`` of the compiled batch, and ``tests/test_lanes.py`` checks it covers the CPU's):
 
     bytes per lane = MEMORY_MARGIN x (Controller.lane_bytes + n_cycles x (Controller.lane_bytes_per_cycle
+                                                                          + StateModel.bytes_per_cycle
                                                                           + kept cycle records)
                                       + reference cycles x REFERENCE_BYTES_PER_CYCLE)
 
 ``lane_bytes`` is the controller's working set (the loop's state, a step's temporaries, the plan),
 ``lane_bytes_per_cycle`` the per-cycle records the loop stacks (``loop.simulate.CycleRecord``) and the
-controller's own records; the kept records (a sweep with ``cycles = true``) are an output on top, and a
+controller's own records, ``StateModel.bytes_per_cycle`` those of the further states the scenario carries (the
+wheels', the filter's: ``geojax.states``); the kept records (a sweep with ``cycles = true``: the orbit's series
+and the states' ``columns_per_cycle``) are an output on top, and a
 batch whose samples differ in what the predictor's reference depends on (a sweep over the station, the
 initial state or the forces) runs one uncontrolled reference per lane, whose cycle records count too.  The width
 is then the largest power of two whose lanes fit ``FREE_FRACTION`` of the device's free memory.
@@ -58,10 +61,12 @@ class LanePlan(NamedTuple):
                 f"{self.bytes_per_lane / 1e3:.0f} kB per lane, {_gb(self.free_bytes)} free)")
 
 
-def bytes_per_lane(controller, n_cycles: int, kept_records: int = 0, reference_cycles: int = 0) -> int:
+def bytes_per_lane(controller, n_cycles: int, kept_records: int = 0, reference_cycles: int = 0,
+                   state_bytes_per_cycle: int = 0) -> int:
     """The model's bytes of one lane over ``n_cycles`` cycles, margin included (``kept_records``: per-cycle
-    values per sample the call returns; ``reference_cycles``: cycles of a reference run per lane)."""
-    per_cycle = controller.lane_bytes_per_cycle + kept_records * BYTES_PER_RECORD_VALUE
+    values per sample the call returns; ``reference_cycles``: cycles of a reference run per lane;
+    ``state_bytes_per_cycle``: the further states' cycle records, ``StateModel.bytes_per_cycle`` summed)."""
+    per_cycle = controller.lane_bytes_per_cycle + state_bytes_per_cycle + kept_records * BYTES_PER_RECORD_VALUE
     return math.ceil(MEMORY_MARGIN * (controller.lane_bytes + n_cycles * per_cycle
                                       + reference_cycles * REFERENCE_BYTES_PER_CYCLE))
 
@@ -77,7 +82,8 @@ def free_bytes(device=None) -> int:
 
 
 def plan(controller, n_cycles: int, samples_per_device: int, *, kept_records: int = 0, reference_cycles: int = 0,
-         requested: int | None = None, platform: str | None = None, available: int | None = None) -> LanePlan:
+         requested: int | None = None, platform: str | None = None, available: int | None = None,
+         state_bytes_per_cycle: int = 0) -> LanePlan:
     """The width for ``controller`` over ``n_cycles`` cycles when each device has ``samples_per_device`` to
     run; ``requested`` fixes it (``ValueError`` naming ``lanes`` if it cannot fit or is out of range).
 
@@ -85,7 +91,7 @@ def plan(controller, n_cycles: int, samples_per_device: int, *, kept_records: in
     """
     platform = platform or jax.local_devices()[0].platform
     available = free_bytes() if available is None else available
-    per_lane = bytes_per_lane(controller, n_cycles, kept_records, reference_cycles)
+    per_lane = bytes_per_lane(controller, n_cycles, kept_records, reference_cycles, state_bytes_per_cycle)
     fit = int(FREE_FRACTION * available) // per_lane
     if checked(requested) is not None:
         if requested > fit:

@@ -129,3 +129,29 @@ def test_a_sweep_runs_on_as_few_devices_as_its_samples_fill():
         used = devices_for(samples, lanes_per_device)
         assert used == local[:min(len(local), -(-samples // lanes_per_device))]
         assert len(used) * lanes_per_device >= min(samples, len(local) * lanes_per_device)
+
+
+@pytest.mark.parametrize("name, changes", [("li2022-momentum", {}), ("li2022-qffc-ranging", {}),
+                                           ("li2022-qffc-ranging", {"navigation.estimate_biases": True})])
+def test_the_states_stated_bytes_and_columns_are_their_records(name, changes):
+    """Second method: the bytes per cycle and the kept columns per cycle that each further state states for the
+    memory model (``StateModel.bytes_per_cycle``, ``columns_per_cycle``) against the shapes of the records the
+    closed loop returns (``jax.eval_shape`` of one sample's loop: traced, not compiled) and of the columns a
+    sweep keeps of them (``loop.metrics.state_columns``)."""
+    from geojax import scenario
+    from geojax.loop.metrics import state_columns
+    from geojax.loop.rollout import loop
+    from geojax.loop.setup import prepare
+
+    batch = prepare([scenario.load(name, {"duration.days": 2, **changes})])
+    params = jax.tree_util.tree_map(lambda x: x[0], batch.params)
+    _, records = jax.eval_shape(lambda p, k: loop(p, k, batch.shared, controller=batch.controller,
+                                                  step_s=batch.step_s, dynamics=batch.dynamics,
+                                                  states=batch.states), params, jax.random.key(0))
+    assert batch.states
+    for model in batch.states:
+        record = records.cycles.states[model.name]
+        stated = sum(int(np.prod(x.shape[1:])) * x.dtype.itemsize for x in jax.tree_util.tree_leaves(record))
+        assert model.bytes_per_cycle == stated, (model.name, model.bytes_per_cycle, stated)
+        columns = jax.eval_shape(lambda r: state_columns({model.name: r}), record)
+        assert model.columns_per_cycle == len(columns), (model.name, model.columns_per_cycle, len(columns))

@@ -100,3 +100,7 @@ class StateModel(NamedTuple):
     columns: Callable | None = None
     thrust: Callable | None = None
     estimate: Callable | None = None
+    # For the lanes' memory model (``geojax.lanes``): the bytes its cycle record adds per cycle, and the values per
+    # cycle its ``columns`` add to a sweep's kept records (``tests/test_lanes.py`` checks both against the records)
+    bytes_per_cycle: int = 0
+    columns_per_cycle: int = 0

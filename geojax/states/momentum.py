@@ -325,7 +325,7 @@ def columns(cycles: WheelCycle) -> dict:
 
 
 MODEL = StateModel(NAME, init, step, summary, metrics, cycle=cycle, status=SATURATED, columns=columns,
-                   thrust=thrust, estimate=estimate)
+                   thrust=thrust, estimate=estimate, bytes_per_cycle=14 * 8, columns_per_cycle=6)  # WheelCycle's
 
 
 def validate(config: dict) -> None:

@@ -594,9 +594,11 @@ def columns(cycles: NavigationCycle) -> dict:
 @functools.lru_cache(maxsize=None)
 def model(layout: Layout) -> StateModel:
     """The filter for a layout: one object per layout (a static argument of the compiled loop)."""
+    n_b = n_biases(layout)  # NavigationCycle: 16 values, and each estimated bias's error and sigma
     return StateModel(NAME, functools.partial(init, layout), functools.partial(step, layout), summary, metrics,
                       cycle=functools.partial(cycle, layout), columns=columns,
-                      thrust=functools.partial(thrust, layout), estimate=estimate)
+                      thrust=functools.partial(thrust, layout), estimate=estimate,
+                      bytes_per_cycle=(16 + 2 * n_b) * 8, columns_per_cycle=15 + 2 * n_b)
 
 
 # The registry's entry (metrics and columns, which do not depend on the layout).

@@ -18,6 +18,7 @@ from geojax.control import REGISTRY
 from geojax.loop.setup import (Batch, controller_of, cycle_count, disperse, prepare, program_identity,
                                reference_per_sample)
 from geojax.params import static_settings
+from geojax.states import of_config as states_of
 from geojax.parallel import per_device
 from geojax.sweep.spec import DISPERSION_STREAM, Sweep, _points, _scenario
 
@@ -91,7 +92,10 @@ def lane_plan(sweep: Sweep, controller: str, chunk: int | None = None) -> lanes_
     samples = math.ceil(min(chunk or math.inf, sweep.n_points * sweep.repetitions) / jax.local_device_count())
     n_cycles = cycle_count(scenarios[0].days)
     own_reference = reference_per_sample(scenarios, ctrl)
-    return lanes_mod.plan(ctrl, n_cycles, samples, kept_records=len(CYCLE_NAMES) if sweep.cycles else 0,
+    states = states_of(scenarios[0].config)  # the wheels', the filter's records, and their kept columns
+    kept = len(CYCLE_NAMES) + sum(m.columns_per_cycle for m in states) if sweep.cycles else 0
+    return lanes_mod.plan(ctrl, n_cycles, samples, kept_records=kept,
+                          state_bytes_per_cycle=sum(m.bytes_per_cycle for m in states),
                           reference_cycles=n_cycles + ctrl.reference_cycles if own_reference else 0,
                           requested=sweep.lanes)
 
