@@ -59,8 +59,8 @@ DESCRIPTIONS = {
     "dv_ns_per_year_mps": "north-south (out-of-plane, RSW W) component of the delta-V per year (a planner's burns)",
     "dv_ew_per_year_mps": "east-west (in-plane, RSW R and S) component of the delta-V per year (a planner's burns); "
                           "with dv_ns_per_year_mps it adds up to more than dv_per_year_mps where burns combine both",
-    "cpu_s_per_orbit": "wall seconds per cycle of the run, after compiling the loop (its set-up included); with "
-                       "compilation where it was not timed apart",
+    "cpu_s_per_orbit": "wall seconds per cycle of the compiled closed loop and its metrics alone (no set-up, no "
+                       "compilation; with them where a result carries no run time of its own)",
     "burns_total": "burns fired in the run",
     "burns_per_thruster_per_orbit": "burns per thruster per orbit",
     "mean_beta_deg": "mean pitch angle of the burns",
