@@ -496,3 +496,27 @@ def test_the_moons_shadow_cuts_the_thrust_as_the_earths_does():
     assert fired == pytest.approx(full, rel=1e-4)
     assert one_step(True, off_deg=10.0)[0] == pytest.approx(full, rel=1e-4)
     assert one_step(True)[0] == 0.0
+
+
+def test_the_boom_unloads_its_wheels_with_its_own_line(loop):
+    """The wheels over two days of the boom's transfer (``transfer.wheels``): with attitude thrusters alone they are
+    unloaded many times (eq. (8) fills 50 N m s wheels in hours of firing at joint 3's stop; the conservation and
+    the closed forms are in tests/test_transfer_wheels.py), never holding more than the 80 % threshold plus a
+    step's impulse; with the line tilted up to 30 deg the boom's own torque unloads them: fewer
+    thruster unloadings, a tilt impulse and a Delta-V across the line > 0, and the thrust along the wish lower by
+    at most 1 - cos 30 deg.  The quadrilateral's pairs fire through the centre of mass: its wheels only turn the
+    body with the orbit frame (at most I n at perigee, 2.6 N m s) and are never unloaded."""
+    plain, _ = _run(loop, transfer.load("ma2023-boom"))
+    tilted, records = _run(loop, transfer.load("ma2023-boom", {"attitude.dump_angle_max_deg": 30.0}))
+    assert float(plain.wheels.rcs_dumps) >= 10 and float(plain.wheels.tilt_impulse_nms) == 0.0
+    assert float(tilted.wheels.rcs_dumps) < 0.5 * float(plain.wheels.rcs_dumps)
+    assert float(tilted.wheels.tilt_impulse_nms) > 0.0 and float(tilted.wheels.tilt_cross_mps) > 0.0
+    assert np.max(np.abs(records.wheel_nms)) <= 0.8 * 50.0 + 0.1 * 120.0  # a step's impulse beyond the threshold
+    efficiency = lambda final: float(final.stats.aligned_s) / float(final.stats.firing_s)  # noqa: E731
+    assert efficiency(plain) * math.cos(math.radians(30.0)) - 1e-9 <= efficiency(tilted) < efficiency(plain)
+    quad, _ = _run(loop, transfer.load("ma2023-quadrilateral"))
+    r_p = (964.0 + c.R_EARTH_M / 1e3) * 1e3
+    a = 0.5 * (r_p + (35741.0 + c.R_EARTH_M / 1e3) * 1e3)
+    n_perigee = math.sqrt(c.MU_EARTH_M3_S2 * a * (1 - ((a - r_p) / a) ** 2)) / r_p**2
+    assert float(quad.wheels.rcs_dumps) == 0.0
+    assert float(np.max(quad.wheels.max_abs_nms)) <= 2000.0 * n_perigee * 1.01

@@ -4,7 +4,8 @@
 ``scenario`` loads and validates a transfer TOML; ``rollout.transfer`` is the pure per-transfer function
 (vmap it for a batch); ``run.run`` compiles and runs one.  ``steering`` holds eq. (1), ``boom`` eqs. (7)-(9)
 and the joint MPC of Sec. 3, ``quadrilateral`` the paper's baseline layout, ``pointing`` the body slew, the
-body/boom split of Remark 2 and the attitude propellant.
+body/boom split of Remark 2 and the attitude propellant, ``wheels`` the reaction wheels' momentum and its
+unloading (by attitude thrusters or by the boom's own line).
 """
 
 from geojax.transfer.rollout import STATUS_MEANINGS, Static, TransferParams, transfer

@@ -79,10 +79,16 @@ def joint_targets_rad(azimuth_rad, elevation_rad, theta2_rad=jnp.pi / 2):
     return jnp.stack([theta1, jnp.broadcast_to(theta2_rad, jnp.shape(theta1)), elevation_rad])
 
 
+def lever_m(theta_rad, d1_m, d2_m, a1_m, base_offset_m):
+    """r_W0 + l_0 [3] (m, body axes): the wrist's position from the body origin (the centre of mass), eq. (8)'s
+    lever."""
+    _, r_w0 = wrist_pose(theta_rad, d1_m, d2_m, a1_m)
+    return r_w0 + base_offset_m
+
+
 def coupling_torque_nm(theta_rad, thrust_n, d1_m, d2_m, a1_m, base_offset_m):
     """Ma 2023, eq. (8): (r_W0 + l_0) x f_thrust,b [3] (N m), the boom thrust's torque about the body origin."""
-    _, r_w0 = wrist_pose(theta_rad, d1_m, d2_m, a1_m)
-    return jnp.cross(r_w0 + base_offset_m, thrust_n * thrust_direction_body(theta_rad))
+    return jnp.cross(lever_m(theta_rad, d1_m, d2_m, a1_m, base_offset_m), thrust_n * thrust_direction_body(theta_rad))
 
 
 class JointLimits(NamedTuple):

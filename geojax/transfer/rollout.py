@@ -31,7 +31,7 @@ from geojax.physics.dynamics import SpacecraftState, Thrust, mee_rhs
 from geojax.physics.elements import mee_to_rv_xyz
 from geojax.physics.forces import Environment, ForceModel, sunlit_fraction_xyz
 from geojax.physics.integrate import rk4_step
-from geojax.transfer import boom, pointing, quadrilateral, steering
+from geojax.transfer import boom, pointing, quadrilateral, steering, wheels
 
 STATUS_MEANINGS = {0: "time limit reached first", 1: "reached GEO (end conditions met)",
                    2: "propellant exhausted", 3: "state not finite"}
@@ -66,6 +66,7 @@ class TransferParams(NamedTuple):
     d2_m: jnp.ndarray
     a1_m: jnp.ndarray
     base_offset_m: jnp.ndarray  # [3] l_0 of eq. (8)
+    wheels: wheels.WheelParams  # the reaction wheels and their unloading (``wheels``)
 
 
 class Static(NamedTuple):
@@ -111,6 +112,7 @@ class Carry(NamedTuple):
     status: jnp.ndarray  # int, STATUS_MEANINGS
     t_end_s: jnp.ndarray  # time the transfer ended (end conditions or propellant), else the time limit
     t_s: jnp.ndarray
+    wheels: wheels.Wheels  # the reaction wheels' momentum and its unloading (``wheels``)
 
 
 class Record(NamedTuple):
@@ -132,6 +134,7 @@ class Record(NamedTuple):
     omega_rad_s: jnp.ndarray  # [3]
     torque_nm: jnp.ndarray  # [3]
     pair: jnp.ndarray  # the pair that fired or would (0..3: +t, -t, +l, -l; quadrilateral.best_pair)
+    wheel_nms: jnp.ndarray  # [3] the wheels' momentum, body axes (R, S, W at zero attitude; ``wheels``)
 
 
 def initial_carry(params: TransferParams) -> Carry:
@@ -141,12 +144,14 @@ def initial_carry(params: TransferParams) -> Carry:
     body = pointing.body_share_rad(jnp.stack([wish.azimuth_rad, wish.elevation_rad]), *_joint_reach(params))
     theta0 = _joint_targets(wish, body, params)
     zero = jnp.zeros(())
+    r, v = mee_to_rv_xyz(*(params.initial.orbit[j] for j in range(6)), params.forces.mu_m3_s2)
     return Carry(
         params.initial,
         Attitude(body, jnp.zeros(2), theta0, jnp.zeros(3), theta0, body),
         wish,
         Stats(zero, zero, zero, jnp.zeros(3), jnp.zeros(3), jnp.zeros(3), zero, zero, zero, zero),
         jnp.array(False), jnp.array(0), zero, zero,
+        wheels.initial(jnp.stack(r), jnp.stack(v), body, theta0[0], params.inertia_kg_m2),
     )
 
 
@@ -203,14 +208,30 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     # (a layout without the pair, the boom behind its wish, is measured from its thrust axis)
     off_by = pointing.misalignment_rad(jnp.where(efficiency > 0, resultant / jnp.maximum(efficiency, 1e-30), axis),
                                        wished_unit)
-    (x, y, z), _ = mee_to_rv_xyz(*(craft.orbit[j] for j in range(6)), mu)
+    (x, y, z), v0 = mee_to_rv_xyz(*(craft.orbit[j] for j in range(6)), mu)
     sunlit = sunlit_fraction_xyz(x, y, z, jax.tree_util.tree_map(lambda leaf: leaf[0], env3), params.forces)
     live = (~carry.done) & (craft.mass_kg > params.dry_mass_kg)
     wants = wish.fire * sunlit * live
     aligned = (off_by <= params.max_misalignment_rad) & (efficiency > 0)
     on = wants * aligned
-    torque = boom.coupling_torque_nm(att.theta_rad, params.thrust_n * on, params.d1_m, params.d2_m, params.a1_m,
+    plain_torque = boom.coupling_torque_nm(att.theta_rad, params.thrust_n * on, params.d1_m, params.d2_m,
+                                           params.a1_m, params.base_offset_m)
+    # the boom's dumping tilt (``wheels``): the joints turn the line toward the law's tilt within their ranges, and
+    # eq. (8) is that pose's; exactly the untilted pose, torque and direction without a tilt
+    r0 = jnp.stack([x, y, z])
+    wheel, frame = wheels.start(carry.wheels, (r0, jnp.stack(v0), att.body_rad, att.theta_rad[0]),
+                                params.inertia_kg_m2, params.wheels, ~carry.done)
+    u_body = boom.thrust_direction_body(att.theta_rad)
+    lever = boom.lever_m(att.theta_rad, params.d1_m, params.d2_m, params.a1_m, params.base_offset_m)
+    tilt, _ = wheels.dump_tilt(wheel.h_body_nms, u_body, lever, params.thrust_n, on * step_s, params.wheels)
+    tilting = jnp.any(tilt != 0.0)
+    theta_flown = jnp.where(tilting, wheels.tilted_pose(att.theta_rad, u_body, tilt, params.joints), att.theta_rad)
+    torque = boom.coupling_torque_nm(theta_flown, params.thrust_n * on, params.d1_m, params.d2_m, params.a1_m,
                                      params.base_offset_m)
+    u_flown = boom.thrust_direction_body(theta_flown)
+    cos_delta = jnp.where(tilting, jnp.dot(u_flown, u_body), 1.0)
+    turn_body = jnp.where(tilting, u_flown - u_body, 0.0)
+    resultant = resultant + wheels.body_to_rsw(att.body_rad, att.theta_rad[0]) @ turn_body
     # the pair's two thrusters burn F / (Isp g0) and push eta F along its axis: the direction's norm is eta
     stepped = rk4_step(mee_rhs, craft, env3, params.forces, Thrust(resultant, params.thrust_n, params.isp_s, on),
                        step_s)
@@ -242,7 +263,7 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
     next_wish = jax.tree_util.tree_map(lambda new, old: jnp.where(moving, new, old), next_wish, wish)
     s = carry.stats
     count = moving.astype(float)
-    stats = Stats(s.firing_s + on * step_s, s.aligned_s + on * efficiency * jnp.cos(off_by) * step_s,
+    stats = Stats(s.firing_s + on * step_s, s.aligned_s + on * efficiency * jnp.cos(off_by) * cos_delta * step_s,
                   s.lost_to_slew_s + wants * (~aligned) * step_s,
                   jnp.maximum(s.track_max_rad, count * track_error), s.track_sq_rad2 + count * track_error**2,
                   s.track_steps + count * trackable, jnp.maximum(s.torque_max_nm, count * jnp.linalg.norm(torque)),
@@ -259,7 +280,10 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
                        jnp.where(~finite, 3, jnp.where(arrived, 1, jnp.where(empty, 2, 0))))
     done = carry.done | arrived | empty | ~finite
     t_end = jnp.where(carry.done, carry.t_end_s, t_s)
+    wheel = wheels.add(wheel, frame, r0, torque, torque - plain_torque,
+                       params.thrust_n * on * jnp.linalg.norm(u_flown - cos_delta * u_body) / craft.mass_kg,
+                       params.inertia_kg_m2, mu, step_s, moving)
     record = Record(t_s, after.a_m, after.e, after.i_rad, craft.mass_kg, craft.dv_mps, on, off_by, wished,
                     attitude.body_rad, attitude.body_rate_rad_s, attitude.theta_rad, target, attitude.omega_rad_s,
-                    torque, pair)
-    return Carry(craft, attitude, next_wish, stats, done, status, t_end, t_s), record
+                    torque, pair, wheel.h_body_nms)
+    return Carry(craft, attitude, next_wish, stats, done, status, t_end, t_s, wheel), record

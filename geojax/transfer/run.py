@@ -110,6 +110,23 @@ def metrics(final, params) -> dict:
     }
     # the paper's "fuel consumption" counts the attitude adjustment's with the electric thrusters'
     out["total_propellant_kg"] = out["propellant_kg"] + out["attitude_propellant_kg"]
+    # the reaction wheels (transfer.wheels): the largest momentum a wheel held, the net momentum the external
+    # torques left (undumped), the attitude thrusters' unloading and its propellant (booked apart from the total
+    # above, as the slews' bound is), the boom's dumping torque and the Delta-V its tilts put across the line
+    w = final.wheels
+    peak = np.max(np.asarray(w.max_abs_nms), axis=-1)
+    out.update({
+        "max_wheel_momentum_nms": peak,
+        "wheels_saturated": peak > np.asarray(params.wheels.capacity_nms),
+        "net_torque_momentum_nms": np.linalg.norm(np.asarray(w.torque_eci_nms), axis=-1),
+        "wheel_momentum_end_nms": np.linalg.norm(np.asarray(w.h_body_nms), axis=-1),
+        "rcs_dumps": np.asarray(w.rcs_dumps),
+        "rcs_dumped_nms": np.asarray(w.rcs_dumped_nms),
+        "dump_propellant_kg": np.asarray(pointing.attitude_propellant_kg(w.rcs_dumped_nms, params.rcs_arm_m,
+                                                                         params.rcs_isp_s)),
+        "tilt_torque_impulse_nms": np.asarray(w.tilt_impulse_nms),
+        "tilt_cross_dv_mps": np.asarray(w.tilt_cross_mps),
+    })
     for j in range(3):
         out[f"j{j + 1}_track_max_deg"] = np.rad2deg(np.asarray(stats.track_max_rad)[..., j])
         out[f"j{j + 1}_track_rms_deg"] = np.rad2deg(rms[..., j])
@@ -123,6 +140,8 @@ def record_table(records) -> dict:
            "dv_mps": np.asarray(records.dv_mps), "on_fraction": np.asarray(records.on_fraction),
            "misalignment_deg": deg(records.misalignment_rad), "torque_nm": np.asarray(records.torque_nm),
            "pair": np.asarray(records.pair)}
+    for k, axis in enumerate("xyz"):  # body axes: R, S, W at zero attitude
+        out[f"wheel_{axis}_nms"] = np.asarray(records.wheel_nms)[..., k]
     for name, values in (("wished_{}_deg", records.wished_rad), ("body_{}_deg", records.body_rad),
                          ("body_rate_{}_deg_s", records.body_rate_rad_s)):
         out[name.format("azimuth")], out[name.format("elevation")] = deg(values[..., 0]), deg(values[..., 1])

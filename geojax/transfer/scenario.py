@@ -27,6 +27,7 @@ from geojax.scenario_schema import SCHEMA as SK_SCHEMA
 from geojax.transfer.boom import JointLimits, MpcWeights
 from geojax.transfer.quadrilateral import pair_axis_efficiency
 from geojax.transfer.rollout import TransferParams
+from geojax.transfer.wheels import WheelParams
 
 MAX_ALT_KM = 1.0e6
 MAX_DAYS = 3653.0  # ten years of orbit raising is a typo
@@ -81,6 +82,14 @@ SCHEMA: dict[str, dict[str, Field]] = {
         # 1 m arm at 220 s (hydrazine monopropellant thrusters, 220-230 s; a marked choice, both layouts).
         "rcs_arm_m": _number(1.0, 0.0, 100.0),
         "rcs_isp_s": _number(220.0, 0.0, 1e4),
+        # The reaction wheels (transfer.wheels): capacity per wheel (a choice: li2022-momentum's 50 N m s), the
+        # fraction of it at which the attitude thrusters above empty them, and the boom's dumping tilt of its
+        # thrust line (limit 0: no dumping by the boom, the attitude thrusters do it all; the boom layout only)
+        # with the law's gain (states.momentum's default, 0.01 /s).
+        "wheel_capacity_nms": _number(50.0, 0.0, 1e6),
+        "rcs_dump_fraction": _number(0.8, 0.0, 1.0 + 1e-12),
+        "dump_angle_max_deg": _number(0.0, 0.0, 90.0, True),
+        "dump_gain_per_s": _number(0.01, 0.0, 1e3, True),
     },
     "boom": {  # Table 1 joint ranges, the drive limits, link lengths and the MPC of Sec. 3
         "j1_deg": Field(list, [-90.0, 0.0], length=2),
@@ -190,6 +199,10 @@ def _validate(raw: dict) -> dict:
     if not all(isinstance(j, (int, float)) and 0.0 < j < 1e9 for j in config["attitude"]["inertia_kg_m2"]):
         raise ValueError(f"attitude.inertia_kg_m2: must be three numbers in (0, 1e9) kg m^2, "
                          f"got {config['attitude']['inertia_kg_m2']}")
+    if config["attitude"]["dump_angle_max_deg"] > 0 and config["thruster"]["layout"] != "boom":
+        raise ValueError(f"attitude.dump_angle_max_deg: only the boom layout can tilt its thrust line to dump "
+                         f"momentum (thruster.layout = {config['thruster']['layout']!r}), got "
+                         f"{config['attitude']['dump_angle_max_deg']:g}; leave it at 0")
     for key in ("j1_deg", "j2_deg", "j3_deg"):
         low, high = boom[key]
         if not -180.0 <= low <= high <= 180.0:
@@ -233,4 +246,6 @@ def _params(config: dict) -> TransferParams:
                            three(np.deg2rad(bm["joint_accel_deg_s2"]))),
         weights=MpcWeights(three(bm["mpc_q"]), three(bm["mpc_q_rate"]), three(bm["mpc_r"])),
         d1_m=f(bm["d1_m"]), d2_m=f(bm["d2_m"]), a1_m=f(bm["a1_m"]), base_offset_m=jnp.asarray(bm["base_offset_m"]),
+        wheels=WheelParams(f(att["wheel_capacity_nms"]), f(att["rcs_dump_fraction"]), rad(att["dump_angle_max_deg"]),
+                           f(att["dump_gain_per_s"])),
     )
