@@ -1,6 +1,7 @@
 """Regenerate a paper's tables and figures with one command.
 
-    python studies/reproduce.py li2022 [katz2025 ye2022 ma2023 bounds ablation longrun lifetime compare ...]   # or: all
+    python studies/reproduce.py li2022 [katz2025 ye2022 ma2023 bounds ablation longrun lifetime compare momentum
+                                         navigation ...]   # or: all
     python studies/reproduce.py li2022 --only fig09 fig13         # scripts whose name contains a word
     python studies/reproduce.py all --list                         # the commands, without running them
 
@@ -39,6 +40,14 @@ STUDIES = {
     "longrun": [("longrun/predictor_reference.py", [])],
     "lifetime": [("lifetime/lifetime.py", [])],
     "compare": [("compare/windows.py", []), ("compare/table.py", ["--stage", "all"])],
+    "momentum": [("momentum/ye_accumulation.py", []), ("momentum/li_dumping.py", []),
+                 ("momentum/capacity_map.py", []), ("momentum/mpc.py", []), ("momentum/tune_dump_gain.py", []),
+                 ("momentum/ma_kong_transfer.py", ["--capacities", "50", "100"])],
+    "navigation": [("navigation/consistency.py", []), ("navigation/tracking_cost.py", []),
+                   ("navigation/tracking_cost.py", ["--controller", "fompc", "--samples", "8", "--days", "120"]),
+                   ("navigation/tracking_cost.py", ["--controller", "mpc", "--samples", "8", "--days", "120"]),
+                   ("navigation/burns_around_passes.py", []), ("navigation/bias_estimation.py", []),
+                   ("navigation/tune_thrust_ranging.py", [])],
 }
 
 

@@ -1,4 +1,4 @@
-"""``studies/reproduce.py``: every script it would run exists and is listed once; a filter that matches
+"""``studies/reproduce.py``: every script it would run exists and each setting is listed once; a filter that matches
 nothing is refused (exit 2), so a renamed study cannot silently drop out of "reproduce all"."""
 
 import importlib.util
@@ -16,16 +16,18 @@ def load():
 
 def test_every_listed_study_exists_and_each_script_of_a_paper_folder_is_listed(capsys):
     reproduce = load()
-    scripts = [script for script, _ in reproduce.selected(["all"], None)]
-    assert len(scripts) == len(set(scripts))
+    entries = [(script, tuple(args)) for script, args in reproduce.selected(["all"], None)]
+    assert len(entries) == len(set(entries))  # a script may run with several settings, each once
+    scripts = [script for script, _ in entries]
     assert all((STUDIES / script).is_file() for script in scripts)
     # every runnable script of the paper folders (not the shared sweep helper) is in the list
     runnable = {str(p.relative_to(STUDIES)) for folder in ("li2022", "katz2025", "ye2022", "ma2023", "ablation", "bounds",
-                                                                             "longrun", "lifetime", "compare")
+                                                                             "longrun", "lifetime", "compare", "momentum",
+                                                                             "navigation")
                 for p in (STUDIES / folder).glob("*.py") if "__main__" in p.read_text() and p.name != "sweep_study.py"}
     assert runnable <= set(scripts), runnable - set(scripts)
     assert reproduce.main(["all", "--list"]) == 0
-    assert f"[{len(scripts)}/{len(scripts)}]" in capsys.readouterr().out
+    assert f"[{len(entries)}/{len(entries)}]" in capsys.readouterr().out
 
 
 def test_a_filter_matching_nothing_is_refused(capsys):
