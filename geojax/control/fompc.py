@@ -181,6 +181,13 @@ def shifted(fractions, horizon):
     return fractions[jnp.minimum(jnp.arange(n_max) + 1, jnp.clip(horizon, 1, n_max) - 1)]
 
 
+def validate(config: dict) -> None:
+    """The QFFC's ``around_passes`` is not the FOMPC's: its annealing plans the inclination at eq. (31)'s nodes."""
+    if config["controller"]["around_passes"]:
+        raise ValueError("controller.around_passes: the fompc controller does not plan around the passes (the qffc "
+                         "does), got True; leave it out")
+
+
 def make(tables: list[dict]) -> Controller:
     """The FOMPC for a batch of ``[controller]`` tables: its horizon padded to their largest N (so a sweep over
     N compiles once; a single run plans over exactly its N: padded cycles are masked out of J but still

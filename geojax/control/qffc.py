@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from geojax.control import around_passes
 from geojax.control import burns as burns_mod
 from geojax.control.base import Controller, stateless_init
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_columns, remaining_fraction
 from geojax.control.predictor import predict_next
+from geojax.navigation.schedule import station_schedules
 from geojax.physics.elements import wrap_angle
 from geojax.params import LOG, NUMBER, Field, station_target
 from geojax.physics.propulsion import arm_limits
@@ -24,7 +26,7 @@ from geojax.control.qffc_solve import (ArmTrig, BurnPair, _log_at_least_one, _st
 # The solver's names (``qffc_solve``) are the QFFC's too: ``qffc.solve``, ``qffc.BurnPair`` ...
 __all__ = ["ArmTrig", "BurnPair", "CONTROLLER", "FIELDS", "_log_at_least_one", "arm_trig", "default_raise_index",
            "default_vdt_raises", "effect", "estimated_drift_rad_s", "full_correction_mps", "make", "model_cycle",
-           "model_inputs", "solve"]
+           "model_inputs", "solve", "validate"]
 
 # The [controller] keys of Li 2022's planners.  The QFFC reads vdt_estimate only; it accepts the FOMPC's keys
 # (and ignores them) so that one scenario and one sweep file run both controllers on the same grid.
@@ -43,6 +45,9 @@ FIELDS = {
     "dv_exponent": Field(NUMBER, 2.0, lower=1.0, upper=3.0, lower_inclusive=True, si="dv_exponent"),
     "chains": Field(int, 8, lower=1, upper=1025, lower_inclusive=True, static=True),
     "iterations": Field(int, 64, lower=0, upper=100001, lower_inclusive=True, static=True),
+    # QFFC: move both burn nodes off eq. (31)'s by the least shift that keeps the burns out of the stations' passes
+    # (``control.around_passes``; needs navigation.model = "ekf" with stations).  The FOMPC refuses it.
+    "around_passes": Field(bool, False, static=True),
 }
 
 
@@ -104,7 +109,7 @@ def _effect_terms(dv_rows, l_rad, coast_s):
 
 
 def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_estimate=0.0, v_n_fraction=None,
-                anchor=None):
+                anchor=None, node_shift_rad=None):
     """Plan one cycle on the predictor model: eq. (25) with the QFFC's solution (eqs. (25)-(40)).
 
     Both planners use it: the QFFC once per cycle with the full inclination
@@ -117,7 +122,9 @@ def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_es
     sets the drift goal: 0 cancels the drift (target drift), 1 leaves the drift
     of eqs. (37)-(38).  ``v_n_fraction`` scales the north-south correction (the
     FOMPC's action, eq. (40)): |V_N| = fraction * 2 V_s |di|; ``None`` is the
-    QFFC's full correction.  ``anchor``: see ``solve``.
+    QFFC's full correction.  ``anchor``: see ``solve``.  ``node_shift_rad`` moves both burn nodes
+    (``control.around_passes``): the north-south correction is then the deviation's projection on the moved
+    nodes' line, cos(shift) x |V_N|.
 
     Returns (prediction without burns [6], BurnPair, predicted state after the burns [6]).
     An infeasible cycle flies nothing (eq. (40): S = 0).
@@ -129,7 +136,10 @@ def model_cycle(x_prev, ref_window, target, l_start_rad, limits, cycle_s, vdt_es
     drift_goal = target[1] + vdt_estimate * (estimated_drift_rad_s(next_deviation, l_start_rad) - target[1])
     deviation = deviation.at[0].set(wrap_angle(deviation[0])).at[1].set(drift_goal - prediction[1])
     v_n = None if v_n_fraction is None else v_n_fraction * full_correction_mps(deviation)
-    burns, coast = solve(deviation, l_start_rad, limits, v_n_mps=v_n, anchor=anchor, with_coast=True)
+    if node_shift_rad is not None:
+        v_n = jnp.cos(node_shift_rad) * (full_correction_mps(deviation) if v_n is None else v_n)
+    burns, coast = solve(deviation, l_start_rad, limits, v_n_mps=v_n, anchor=anchor, with_coast=True,
+                         node_shift_rad=node_shift_rad)
     effect_terms = _stage(lambda b, coast: _effect_terms(_dv_rows(b), (b.l_rad[0], b.l_rad[1]), coast), burns, coast,
                           anchor=anchor)
     after = prediction + jnp.where(burns.feasible, jnp.stack(effect_terms), 0.0)
@@ -154,5 +164,37 @@ CONTROLLER = Controller(stateless_init, _plan, burns_mod.thrust, FIELDS, referen
                         lanes_cpu=128, lane_bytes=16_000, lane_bytes_per_cycle=200)
 
 
+def _plan_around_passes(params, controller_state, estimate, context, key):
+    """The QFFC with its burn nodes moved off the passes (``control.around_passes``): the plan at eq. (31)'s nodes
+    gives the burns' durations, the least clear shift, then the plan at the moved nodes."""
+    inputs = model_inputs(params, estimate, context)
+    _, plain, _ = model_cycle(*inputs)
+    burn_s = jnp.where(plain.feasible, plain.v_mps * estimate.mass_kg / params.thrusters["thrust_n"], 0.0)  # eq. (13)
+    shift, _ = around_passes.node_shift_rad(plain.l_rad[1], estimate.fix_mee[5], estimate.t_s, context.cycle_s,
+                                            burn_s, context.step_s, station_schedules(params.navigation))
+    prediction, burns, _ = model_cycle(*inputs, node_shift_rad=shift)
+    plan = burns_mod.fly(params, burns, prediction, jnp.asarray(1.0), estimate, context, key)
+    return plan, controller_state
+
+
+CONTROLLER_AROUND_PASSES = Controller(stateless_init, _plan_around_passes, burns_mod.thrust, FIELDS,
+                                      reference_cycles=3, record=burns_mod.record, lanes_cpu=128, lane_bytes=16_000,
+                                      lane_bytes_per_cycle=200)
+
+
 def make(tables: list[dict]) -> Controller:
-    return CONTROLLER
+    """The QFFC, or the QFFC planning around the passes (``around_passes``, static: one value per sweep)."""
+    chosen = {bool(t["around_passes"]) for t in tables}
+    if len(chosen) > 1:
+        raise ValueError("controller.around_passes: sets the compiled planner; one value per sweep, got both")
+    return CONTROLLER_AROUND_PASSES if chosen.pop() else CONTROLLER
+
+
+def validate(config: dict) -> None:
+    """``controller.around_passes`` needs passes to plan around: the filter (``navigation.model = "ekf"``) and at
+    least one station (``ValueError`` naming the key)."""
+    nav = config["navigation"]
+    if config["controller"]["around_passes"] and (nav["model"] != "ekf" or not nav["stations"]):
+        raise ValueError(f"controller.around_passes: plans the burns around the stations' passes, so it needs "
+                         f"navigation.model = \"ekf\" with [[navigation.stations]], got model {nav['model']!r} with "
+                         f"{len(nav['stations'])} station(s)")

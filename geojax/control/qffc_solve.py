@@ -130,7 +130,7 @@ def full_correction_mps(delta_x):
 
 
 def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None, coast_offset_s=0.0,
-          v_n_mps=None, search: str = "structured", anchor=None, with_coast: bool = False):
+          v_n_mps=None, search: str = "structured", anchor=None, with_coast: bool = False, node_shift_rad=None):
     """Two burns that cancel the predictive deviation ``delta_x`` [6] (see module docstring).
 
     ``coast_offset_s`` is added to the coast T_i of eq. (20) when the deviation
@@ -143,13 +143,17 @@ def solve(delta_x, l_start_rad, limits: ArmLimits | ArmTrig, vdt_raises_mps=None
     solve in a kernel of its own (``physics.fusion.materialized``): XLA's CPU fusion otherwise recomputes
     the node angles and the in-plane parts in every kernel that reads them (measured on the FOMPC's
     annealing, see ``control.fompc``).  ``with_coast`` (static): return (burns, (T_1, T_2)), the coasts of
-    eq. (20) that the solve used, for ``effect`` without computing them again.
+    eq. (20) that the solve used, for ``effect`` without computing them again.  ``node_shift_rad`` (optional)
+    moves both burn nodes off eq. (31)'s by that angle (``control.around_passes``); ``v_n_mps`` then says what
+    the moved pair corrects.
     """
     search_raises = default_raise_index if vdt_raises_mps is None else None
     vdt_raises_mps = default_vdt_raises() if vdt_raises_mps is None else vdt_raises_mps
     trig = arm_trig(limits)
     stage = functools.partial(_stage, anchor=anchor)
     l2 = stage(_node, delta_x)
+    if node_shift_rad is not None:
+        l2 = l2 + node_shift_rad
     l_rad = (l2 - jnp.pi, l2)
     plane, v_n_total = stage(_in_plane, delta_x, l_rad, l_start_rad, coast_offset_s, v_n_mps)
     if search != "all":

@@ -40,3 +40,18 @@ def tracking_weight(t_s, plan: Schedule):
     t = jnp.asarray(t_s)[..., None]
     in_outage = jnp.any((t >= plan.outages_s[:, 0]) & (t < plan.outages_s[:, 1]), axis=-1)
     return jnp.where(in_pass & ~in_outage, 1.0, 0.0)
+
+
+def station_schedules(nav: dict) -> Schedule:
+    """The stations' schedules from ``Params.navigation``'s leaves (``states.navigation.leaves_of``), leaves
+    [n_stations, ...]."""
+    return Schedule(nav["station_cadence_s"], nav["station_pass_s"], nav["station_phase_s"], nav["station_outages_s"])
+
+
+def overlaps_pass(start_s, stop_s, plan: Schedule):
+    """Whether the window [``start_s``, ``stop_s``) meets a pass of ``plan`` (outages not counted: a pass in an
+    outage still counts, the conservative reading); an empty window meets none.  Closed form for windows shorter
+    than the cadence: the window's start lies ``into`` = (start - phase) mod cadence after a pass's start, so it
+    starts inside that pass (into < pass) or reaches the next one (length > cadence - into)."""
+    into = jnp.mod(start_s - plan.phase_s, plan.cadence_s)
+    return (stop_s > start_s) & ((into < plan.pass_s) | (stop_s - start_s > plan.cadence_s - into))

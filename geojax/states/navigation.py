@@ -65,7 +65,7 @@ import numpy as np
 
 from geojax.navigation import ekf
 from geojax.navigation.measurements import MODELS
-from geojax.navigation.schedule import Schedule, tracking_weight
+from geojax.navigation.schedule import Schedule, station_schedules, tracking_weight
 from geojax.navigation.stations import Station, station_eci_m, station_from_geodetic
 from geojax.physics.dynamics import SpacecraftState, Thrust, cartesian_rhs, mee_rhs
 from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, wrap_angle
@@ -375,7 +375,7 @@ def thrust(layout: Layout, params, state: Navigation, planned: Thrust, ctx):
     start (where the filter resets its own (eps, phi) to the errors' prior); the plan noted for ``step``."""
     nav = params.navigation
     if layout.stations:  # burns forbidden while a station's schedule is on (where ``burns_during_passes`` is 0)
-        in_pass = jnp.any(jax.vmap(tracking_weight, in_axes=(None, 0))(ctx.t_s, _station_schedules(nav)) > 0)
+        in_pass = jnp.any(jax.vmap(tracking_weight, in_axes=(None, 0))(ctx.t_s, station_schedules(nav)) > 0)
         allowed = jnp.where(in_pass, nav["burns_during_passes"], 1.0)
         planned = planned._replace(on_fraction=planned.on_fraction * allowed)
     firing = (planned.on_fraction > 0) & (planned.thrust_n > 0)
@@ -460,11 +460,6 @@ def error_state_prediction(layout: Layout, f, state: Navigation, ctx, start):
     return anchor + f[:6, :N_STATE] @ deviation
 
 
-def _station_schedules(nav: dict) -> Schedule:
-    """The stations' schedules, leaves [n_stations, ...]."""
-    return Schedule(nav["station_cadence_s"], nav["station_pass_s"], nav["station_phase_s"], nav["station_outages_s"])
-
-
 def _unpacked(packed, n_b: int = 0):
     """(x [6], execution [4], P [n, n], NIS sum, its dof, measurements, bias estimate [n_b]) of the flat vector
     ``step`` packs (n = 10 + n_b)."""
@@ -488,7 +483,7 @@ def tracking_weights(layout: Layout, nav: dict, t_s, r_eci_m, earth_angle_rad):
         los = r_eci_m - station_eci_m(stations, earth_angle_rad)  # [n, 3]
         up = ecef_to_eci(stations.enu_ecef[:, 2], earth_angle_rad)
         visible = jnp.sum(up * los, axis=-1) >= jnp.sin(nav["station_mask_rad"]) * jnp.linalg.norm(los, axis=-1)
-        out.append(jax.vmap(tracking_weight, in_axes=(None, 0))(t_s, _station_schedules(nav)) * visible)
+        out.append(jax.vmap(tracking_weight, in_axes=(None, 0))(t_s, station_schedules(nav)) * visible)
     if layout.gnss:
         plan = Schedule(nav["gnss_cadence_s"], nav["gnss_pass_s"], nav["gnss_phase_s"], nav["gnss_outages_s"])
         out.append(tracking_weight(t_s, plan)[None])
