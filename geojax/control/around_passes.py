@@ -6,9 +6,10 @@ pi.  With ``controller.around_passes = true`` it moves both by the least shift D
 to ``MAX_SHIFT_DEG`` either way, the smaller |Delta| first, east before west) that keeps each burn's window, as
 ``control.burns.fly`` will place it (centred on its node, clipped into the cycle, eq. (13)'s duration), plus an
 integration step either side (the loop fires whole steps), clear of every station's passes
-(``navigation.schedule.overlaps_pass``).  The durations are those of the plan at the inclination's nodes; where
-no shift clears the passes the nodes stay put (and the loop's ``navigation.burns_during_passes`` decides what
-fires).
+(``navigation.schedule.overlaps_pass``).  The durations are those of the plan at the inclination's nodes.  Where
+no shift clears the passes (long burns, or passes most of the day), the shift that loses the least of the burns'
+time to them (``navigation.schedule.time_in_passes_s``; the loop's ``navigation.burns_during_passes`` decides what
+fires in them).
 
 What a shift costs.  Two burns on the line through l_2 + Delta change the inclination vector only along that line:
 the planner corrects the deviation's projection on it, |V_N| = 2 V_s |di| cos(Delta) (eq. (30) at Delta = 0), and
@@ -22,7 +23,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.navigation.schedule import Schedule, overlaps_pass
+from geojax.navigation.schedule import Schedule, overlaps_pass, time_in_passes_s
 
 STEP_DEG = 2.5  # 10 minutes of the orbit
 MAX_SHIFT_DEG = 60.0  # 4 h: a pass of 4 h twice a day and a burn of an hour still fit
@@ -44,7 +45,7 @@ def burn_windows_s(l_rad, l_start_rad, t_start_s, cycle_s, burn_s):
 def node_shift_rad(l2_rad, l_start_rad, t_start_s, cycle_s, burn_s, margin_s, stations: Schedule):
     """(Delta, clear): the least node shift of ``SHIFTS_RAD`` whose two burns (durations ``burn_s`` [2]; a burn of
     0 s is not flown and meets nothing) keep ``margin_s`` clear of every pass of ``stations`` (leaves [n, ...]), and
-    whether one does (else Delta = 0)."""
+    whether one does (else the shift that leaves the least of the burns in passes)."""
     shifts = jnp.asarray(SHIFTS_RAD)
     l2 = l2_rad + shifts[:, None]
     l_rad = jnp.concatenate([l2 - jnp.pi, l2], axis=-1)  # [n_shifts, 2]: burn 1, burn 2
@@ -54,4 +55,6 @@ def node_shift_rad(l2_rad, l_start_rad, t_start_s, cycle_s, burn_s, margin_s, st
     meets = overlaps_pass(start[..., None], stop[..., None], stations)  # [n_shifts, 2, n_stations]
     clear = ~jnp.any(meets, axis=(-1, -2))
     first = jnp.argmax(clear)
-    return jnp.where(clear[first], shifts[first], 0.0), clear[first]
+    # none clear: the shift that loses the least firing to the passes (the smaller |shift| of equals)
+    lost = jnp.sum(jnp.max(time_in_passes_s(start[..., None], stop[..., None], stations), axis=-1), axis=-1)
+    return jnp.where(clear[first], shifts[first], shifts[jnp.argmin(lost)]), clear[first]

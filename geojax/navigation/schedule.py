@@ -48,6 +48,17 @@ def station_schedules(nav: dict) -> Schedule:
     return Schedule(nav["station_cadence_s"], nav["station_pass_s"], nav["station_phase_s"], nav["station_outages_s"])
 
 
+def time_in_passes_s(start_s, stop_s, plan: Schedule):
+    """How long the window [``start_s``, ``stop_s``) spends in ``plan``'s passes (outages not counted), s; closed
+    form for windows shorter than the cadence: the pass the window's start lies ``into`` (or the last one before
+    it), [-into, pass - into) from the start, and the next one, [cadence - into, cadence - into + pass)."""
+    length = jnp.maximum(stop_s - start_s, 0.0)
+    into = jnp.mod(start_s - plan.phase_s, plan.cadence_s)
+    this = jnp.clip(plan.pass_s - into, 0.0, length)
+    following = jnp.clip(length - (plan.cadence_s - into), 0.0, plan.pass_s)
+    return this + following
+
+
 def overlaps_pass(start_s, stop_s, plan: Schedule):
     """Whether the window [``start_s``, ``stop_s``) meets a pass of ``plan`` (outages not counted: a pass in an
     outage still counts, the conservative reading); an empty window meets none.  Closed form for windows shorter
