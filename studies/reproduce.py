@@ -46,7 +46,9 @@ STUDIES = {
     "navigation": [("navigation/consistency.py", []), ("navigation/tracking_cost.py", []),
                    ("navigation/tracking_cost.py", ["--controller", "fompc", "--samples", "8", "--days", "120"]),
                    ("navigation/tracking_cost.py", ["--controller", "mpc", "--samples", "8", "--days", "120"]),
-                   ("navigation/burns_around_passes.py", []), ("navigation/bias_estimation.py", []),
+                   ("navigation/burns_around_passes.py", []),
+                   ("navigation/burns_around_passes.py", ["--controller", "fompc", "--samples", "8", "--days", "120"]),
+                   ("navigation/bias_estimation.py", []),
                    ("navigation/tune_thrust_ranging.py", [])],
 }
 

@@ -114,20 +114,23 @@ def test_the_moved_pair_corrects_the_inclination_along_its_line(shift_deg):
     np.testing.assert_allclose(achieved[:, 4:], projection, rtol=1e-9, atol=1e-15)
 
 
-def test_around_passes_needs_stations_and_the_qffc():
-    for name, message in (("li2022-qffc", "controller.around_passes: plans the burns around the stations' passes"),
-                          ("li2022-fompc", "controller.around_passes: the fompc controller does not plan around")):
-        with pytest.raises(ValueError, match=message):
+def test_around_passes_needs_stations():
+    for name in ("li2022-qffc", "li2022-fompc"):
+        with pytest.raises(ValueError, match="controller.around_passes: plans the burns around the stations' passes"):
             scenario.load(name, {"controller.around_passes": True})
-    assert scenario.load("li2022-qffc-ranging", {"controller.around_passes": True}).config["controller"]["around_passes"]
+    for kind in ("qffc", "fompc"):
+        sc = scenario.load("li2022-qffc-ranging", {"controller.around_passes": True, "controller.kind": kind})
+        assert sc.config["controller"]["around_passes"]
 
 
 @pytest.mark.slow  # two closed loops with the filter (a compilation each); the planner's parts are checked above
-def test_the_qffc_flies_its_whole_burns_around_long_passes():
+@pytest.mark.parametrize("kind", ["qffc", "fompc"])
+def test_the_planner_flies_its_whole_burns_around_long_passes(kind):
     """The loop's check: passes of 4 h twice a day placed over the QFFC's burns (from 17000 s, where the unplanned
     burns of this draw fall), burns forbidden in them, no execution errors, 4 days of li2022-qffc-ranging.  Without
     the planner the passes cut the burns (the Delta-V delivered falls short of the plan's V_1 + V_2); with
-    ``controller.around_passes`` every cycle delivers its plan (to 1e-3) and no burn's window meets a pass."""
+    ``controller.around_passes`` every cycle delivers its plan (to 1e-3) and no burn's window meets a pass.  The QFFC
+    and the FOMPC (its flown cycle moved, at the annealing's north-south fraction)."""
     from geojax.loop import rollout
 
     base = {"duration.days": 4, "navigation.burns_during_passes": False, "navigation.burn_magnitude_sigma_pct": 0.0,
@@ -136,7 +139,7 @@ def test_the_qffc_flies_its_whole_burns_around_long_passes():
             "navigation.stations[1].phase_s": 17000.0}
     ratios = {}
     for around in (False, True):
-        sc = scenario.load("li2022-qffc-ranging", {**base, "controller.around_passes": around})
+        sc = scenario.load("li2022-qffc-ranging", {**base, "controller.around_passes": around, "controller.kind": kind})
         cycles = rollout.simulate(sc, 0).records.cycles
         planned = np.sum(np.asarray(cycles.controller["burns"].v_mps), axis=-1)
         ratios[around] = np.asarray(cycles.dv_mps) / np.maximum(planned, 1e-12)

@@ -182,10 +182,8 @@ def shifted(fractions, horizon):
 
 
 def validate(config: dict) -> None:
-    """The QFFC's ``around_passes`` is not the FOMPC's: its annealing plans the inclination at eq. (31)'s nodes."""
-    if config["controller"]["around_passes"]:
-        raise ValueError("controller.around_passes: the fompc controller does not plan around the passes (the qffc "
-                         "does), got True; leave it out")
+    """``controller.around_passes`` as the QFFC's (``qffc.validate``)."""
+    qffc.validate(config)
 
 
 def make(tables: list[dict]) -> Controller:
@@ -198,12 +196,14 @@ def make(tables: list[dict]) -> Controller:
                              f"got {sorted({t[key] for t in tables})}")
     annealing = Annealing(n_max=max(t["horizon"] for t in tables), chains=tables[0]["chains"],
                           iterations=tables[0]["iterations"])
-    return controller(annealing)
+    return controller(annealing, qffc.around_passes_of(tables))
 
 
 @functools.lru_cache(maxsize=None)
-def controller(annealing: Annealing = Annealing()) -> Controller:
-    """The FOMPC with a static annealing schedule; its state is the last plan's sequence, shifted (warm start)."""
+def controller(annealing: Annealing = Annealing(), around_passes: bool = False) -> Controller:
+    """The FOMPC with a static annealing schedule; its state is the last plan's sequence, shifted (warm start).
+    ``around_passes``: the flown cycle's burns moved off the passes as the QFFC's (``qffc.around_passes_plan``), at
+    the annealing's north-south fraction; the horizon's later cycles are planned at eq. (31)'s nodes."""
 
     def init(params, context):
         return jnp.ones(annealing.n_max)
@@ -214,7 +214,11 @@ def controller(annealing: Annealing = Annealing()) -> Controller:
         prediction, _, _ = model_cycle(*inputs)
         mpc = MpcParams(c["horizon"], c["di_max"], c["penalty"], c["dv_exponent"])
         planned = plan(jax.random.fold_in(key, 1), *inputs, mpc, annealing, warm_start)
-        flown = burns_mod.fly(params, planned.burns, prediction, planned.fractions[0], estimate, context, key)
+        burns = planned.burns
+        if around_passes:
+            prediction, burns = qffc.around_passes_plan(params, estimate, context, inputs, burns,
+                                                        planned.fractions[0])
+        flown = burns_mod.fly(params, burns, prediction, planned.fractions[0], estimate, context, key)
         return flown, shifted(planned.fractions, c["horizon"])
 
     # Plans N cycles ahead: the reference at the cycle's start boundary and the n_max + 1 after it.

@@ -26,7 +26,7 @@ from geojax.control.qffc_solve import (ArmTrig, BurnPair, _log_at_least_one, _st
 # The solver's names (``qffc_solve``) are the QFFC's too: ``qffc.solve``, ``qffc.BurnPair`` ...
 __all__ = ["ArmTrig", "BurnPair", "CONTROLLER", "FIELDS", "_log_at_least_one", "arm_trig", "default_raise_index",
            "default_vdt_raises", "effect", "estimated_drift_rad_s", "full_correction_mps", "make", "model_cycle",
-           "model_inputs", "solve", "validate"]
+           "model_inputs", "solve", "validate", "around_passes_plan", "around_passes_of"]
 
 # The [controller] keys of Li 2022's planners.  The QFFC reads vdt_estimate only; it accepts the FOMPC's keys
 # (and ignores them) so that one scenario and one sweep file run both controllers on the same grid.
@@ -45,8 +45,8 @@ FIELDS = {
     "dv_exponent": Field(NUMBER, 2.0, lower=1.0, upper=3.0, lower_inclusive=True, si="dv_exponent"),
     "chains": Field(int, 8, lower=1, upper=1025, lower_inclusive=True, static=True),
     "iterations": Field(int, 64, lower=0, upper=100001, lower_inclusive=True, static=True),
-    # QFFC: move both burn nodes off eq. (31)'s by the least shift that keeps the burns out of the stations' passes
-    # (``control.around_passes``; needs navigation.model = "ekf" with stations).  The FOMPC refuses it.
+    # Move both burn nodes off eq. (31)'s by the least shift that keeps the burns out of the stations' passes
+    # (``control.around_passes``; needs navigation.model = "ekf" with stations); the FOMPC for its flown cycle.
     "around_passes": Field(bool, False, static=True),
 }
 
@@ -164,15 +164,23 @@ CONTROLLER = Controller(stateless_init, _plan, burns_mod.thrust, FIELDS, referen
                         lanes_cpu=128, lane_bytes=16_000, lane_bytes_per_cycle=200)
 
 
-def _plan_around_passes(params, controller_state, estimate, context, key):
-    """The QFFC with its burn nodes moved off the passes (``control.around_passes``): the plan at eq. (31)'s nodes
-    gives the burns' durations, the least clear shift, then the plan at the moved nodes."""
-    inputs = model_inputs(params, estimate, context)
-    _, plain, _ = model_cycle(*inputs)
-    burn_s = jnp.where(plain.feasible, plain.v_mps * estimate.mass_kg / params.thrusters["thrust_n"], 0.0)  # eq. (13)
+def around_passes_plan(params, estimate, context, inputs, plain: BurnPair, v_n_fraction=None):
+    """(prediction, burns) of the cycle with its burn nodes moved off the passes (``control.around_passes``): the
+    burns ``plain`` planned at eq. (31)'s nodes give their durations (eq. (13)), the least clear shift, then the
+    plan at the moved nodes (``inputs``: ``model_inputs``; ``v_n_fraction``: the FOMPC's, None for the QFFC's full
+    correction)."""
+    burn_s = jnp.where(plain.feasible, plain.v_mps * estimate.mass_kg / params.thrusters["thrust_n"], 0.0)
     shift, _ = around_passes.node_shift_rad(plain.l_rad[1], estimate.fix_mee[5], estimate.t_s, context.cycle_s,
                                             burn_s, context.step_s, station_schedules(params.navigation))
-    prediction, burns, _ = model_cycle(*inputs, node_shift_rad=shift)
+    prediction, burns, _ = model_cycle(*inputs, v_n_fraction=v_n_fraction, node_shift_rad=shift)
+    return prediction, burns
+
+
+def _plan_around_passes(params, controller_state, estimate, context, key):
+    """The QFFC with its burn nodes moved off the passes (``around_passes_plan``)."""
+    inputs = model_inputs(params, estimate, context)
+    _, plain, _ = model_cycle(*inputs)
+    prediction, burns = around_passes_plan(params, estimate, context, inputs, plain)
     plan = burns_mod.fly(params, burns, prediction, jnp.asarray(1.0), estimate, context, key)
     return plan, controller_state
 
@@ -182,12 +190,17 @@ CONTROLLER_AROUND_PASSES = Controller(stateless_init, _plan_around_passes, burns
                                       lane_bytes_per_cycle=200)
 
 
-def make(tables: list[dict]) -> Controller:
-    """The QFFC, or the QFFC planning around the passes (``around_passes``, static: one value per sweep)."""
+def around_passes_of(tables: list[dict]) -> bool:
+    """``around_passes`` of a batch's ``[controller]`` tables (static: one value per sweep)."""
     chosen = {bool(t["around_passes"]) for t in tables}
     if len(chosen) > 1:
         raise ValueError("controller.around_passes: sets the compiled planner; one value per sweep, got both")
-    return CONTROLLER_AROUND_PASSES if chosen.pop() else CONTROLLER
+    return chosen.pop()
+
+
+def make(tables: list[dict]) -> Controller:
+    """The QFFC, or the QFFC planning around the passes (``around_passes``)."""
+    return CONTROLLER_AROUND_PASSES if around_passes_of(tables) else CONTROLLER
 
 
 def validate(config: dict) -> None:

@@ -1,6 +1,7 @@
 """The cost of keeping burns out of the tracking passes (Gazzino 2016's orbit-determination periods).
 
-    python studies/navigation/burns_around_passes.py [--samples 16] [--days 365.25] [--out studies/navigation/results]
+    python studies/navigation/burns_around_passes.py [--controller qffc|fompc] [--samples 16] [--days 365.25]
+                                                     [--out studies/navigation/results]
 
 Gazzino 2016 plans its manoeuvres around orbit-determination periods, during which the thrusters do not fire.
 ``li2022-qffc-ranging`` (QFFC, the extended Kalman filter on two stations' ranging; ``geojax.states.navigation``)
@@ -9,8 +10,9 @@ flown ``--days`` with ``--samples`` draws, burns allowed during the passes, forb
 planning around them (``controller.around_passes = true``: both burn nodes moved off eq. (31)'s by the least shift
 that clears the passes, ``geojax.control.around_passes``); without the planner the QFFC does not know the
 windows and its next cycle makes up what was not flown.  Passes of 2 h and of 4 h twice a day, on the same draws.
-The cost is the Delta-V difference, draw by draw, and the box margin.  Writes ``burns_around_passes.md`` and
-``.json`` into ``--out``.
+The cost is the Delta-V difference, draw by draw, and the box margin.  ``--controller fompc``: the same with the
+FOMPC (its flown cycle planned around the passes).  Writes ``burns_around_passes.md`` and ``.json`` into ``--out``
+(the FOMPC's: ``burns_around_passes_fompc``).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ PASSES_S = (7200.0, 14400.0)
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--controller", choices=("qffc", "fompc"), default="qffc")
     parser.add_argument("--samples", type=int, default=16)
     parser.add_argument("--days", type=float, default=365.25)
     parser.add_argument("--out", type=Path, default=HERE / "results")
@@ -44,6 +47,7 @@ def main() -> None:
     for group in groups:
         scenarios = [scenario.load("li2022-qffc-ranging", {
             "duration.days": args.days, "navigation.burns_during_passes": allowed, "controller.around_passes": around,
+            "controller.kind": args.controller,
             "navigation.stations[0].pass_s": pass_s, "navigation.stations[1].pass_s": pass_s})
             for pass_s, allowed, around in group]
         result = simulate_batch([sc for sc in scenarios for _ in range(n)], seeds=np.tile(np.arange(n), len(group)))
@@ -64,10 +68,12 @@ def main() -> None:
                      "ok": int(np.sum(status[i] == 0)), "status": [STATUS_MEANINGS[int(s)] for s in status[i]]})
         print(rows[-1], flush=True)
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "burns_around_passes.json").write_text(json.dumps(
+    stem = "burns_around_passes" if args.controller == "qffc" else f"burns_around_passes_{args.controller}"
+    (args.out / f"{stem}.json").write_text(json.dumps(
         {"samples": n, "days": args.days, "geojax": geojax.__version__, "rows": rows}, indent=1))
-    lines = [f"# Burns kept out of the tracking passes: QFFC, {n} draws, {args.days:g} days", "",
-             f"`python studies/navigation/burns_around_passes.py --samples {n} --days {args.days:g}`; geojax "
+    lines = [f"# Burns kept out of the tracking passes: {args.controller.upper()}, {n} draws, {args.days:g} days", "",
+             f"`python studies/navigation/burns_around_passes.py "
+             f"{'' if args.controller == 'qffc' else f'--controller {args.controller} '}--samples {n} --days {args.days:g}`; geojax "
              f"{geojax.__version__}. li2022-qffc-ranging (two stations' passes twice a day at the same times); "
              "extra ΔV: against the same draws with burns allowed, mean and largest.", "",
              "| passes | burns in passes | ΔV (m/s/yr) | ± std | extra ΔV mean (m/s/yr) | extra ΔV max | "
@@ -79,7 +85,7 @@ def main() -> None:
                      f"{r['dv_per_year_mps_mean']:.3f} | {r['dv_per_year_mps_std']:.3f} | "
                      f"{r['extra_dv_per_year_mps_mean']:.3f} | {r['extra_dv_per_year_mps_max']:.3f} | "
                      f"{r['max_abs_dlon_deg']:.4f} | {r['duty_fraction_mean']:.4f} | {r['ok']}/{n} |")
-    (args.out / "burns_around_passes.md").write_text("\n".join(lines) + "\n")
+    (args.out / f"{stem}.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
 
