@@ -175,6 +175,17 @@ SCHEMA: dict[str, dict[str, Field]] = {
                               si="thrust_arm_m", symbol="L_thr", unit="m",
                               doc="distance from the centre of mass to each thruster's nozzle (the gimbal a "
                                   "dumping tilt turns about): the tilt's moment arm"),
+        "thrust_reach_m": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=100.0, si="thrust_reach_m",
+                                symbol="ρ_arm", unit="m",
+                                doc="each arm's reach from its base to the nozzle: with it the nozzle distance is "
+                                    "where the arm puts the nozzle on the line through the centre of mass, burn by "
+                                    "burn (states.momentum.nozzle_distance_m); 0: thrust_arm_m for every burn"),
+        "thrust_base_north_m": Field(list, [0.0, 0.0, 0.0], length=3, si="thrust_base_north_m", unit="m",
+                                     doc="base of the arm on the north side, body axes (it flies the burns that push "
+                                         "south: Li 2022's thruster 1); read where thrust_reach_m > 0"),
+        "thrust_base_south_m": Field(list, [0.0, 0.0, 0.0], length=3, si="thrust_base_south_m", unit="m",
+                                     doc="base of the arm on the south side, body axes (the burns that push north); "
+                                         "a single manipulator (Ye 2022): both bases its platform"),
         "dump_angle_max_deg": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=90.0,
                                     si="dump_angle_max_rad", to_si=degrees, symbol="δ_max",
                                     doc="largest tilt of a thrust line off the centre of mass to unload the "

@@ -540,3 +540,35 @@ def test_zone_nssk_fires_at_least_the_t_dump_its_measured_momentum_asks():
     params = jax.tree_util.tree_map(lambda x: x[0], setup.prepare([sc]).params)
     np.testing.assert_allclose(np.asarray(jax.vmap(lambda w: dump_time_s(params, w, 0.08))(jnp.asarray(h))), asked,
                                rtol=1e-12)
+
+
+@pytest.mark.parametrize("direction_rsw", [[-0.3, 0.2, -np.sqrt(0.87)], [-0.4, -0.1, np.sqrt(0.83)]])
+def test_an_arms_reach_puts_the_nozzle_on_the_line_through_the_centre_of_mass(direction_rsw):
+    """Closed form (``nozzle_distance_m``): with arms of reach rho from bases on the north and south sides of the
+    anti-nadir face, the burn that pushes south is flown by the north arm (and north by the south arm), its nozzle
+    r_n = -L u_hat on the line through the centre of mass at distance rho from that base (|r_n - b| = rho, the root
+    farther out); the dumping tilt's torque is then -L F (u_hat x s) with that L (the geometry's r_n x F u')."""
+    north, south, reach = [0.0, -1.0, -1.75], [0.0, 1.0, -1.75], 2.2
+    params = _params(dump_angle_max_deg=5.0, thrust_reach_m=reach, thrust_base_north_m=north,
+                     thrust_base_south_m=south, dump_gain_per_s=1e-4)
+    d = np.asarray(direction_rsw)
+    u_hat = _rsw_to_body(d)
+    base = np.asarray(north if d[2] < 0 else south)
+    arm = float(momentum.nozzle_distance_m(params.attitude, jnp.asarray(u_hat), d[2]))
+    assert np.linalg.norm(-arm * u_hat - base) == pytest.approx(reach, rel=1e-12)
+    other = -np.dot(u_hat, base) - np.sqrt(np.dot(u_hat, base) ** 2 - np.dot(base, base) + reach**2)
+    assert arm > other and arm > 0
+    flown = Thrust(jnp.asarray(d), jnp.asarray(0.5), jnp.asarray(2250.0), jnp.asarray(1.0))
+    state, tilted = momentum.thrust(params, _wheels_state([3.0, -1.0, 7.0]), flown, _at())
+    u_new = _rsw_to_body(np.asarray(tilted.direction_rsw))
+    np.testing.assert_allclose(np.asarray(state.thrust_torque_body_nm), np.cross(-arm * u_hat, 0.5 * u_new),
+                               atol=1e-12)
+    assert np.linalg.norm(np.asarray(state.thrust_torque_body_nm)) > 0
+    # without a reach: the common nozzle distance, whatever the bases
+    common = _params(thrust_base_north_m=north, thrust_arm_m=2.5)
+    assert float(momentum.nozzle_distance_m(common.attitude, jnp.asarray(u_hat), d[2])) == 2.5
+
+
+def test_an_arms_reach_needs_its_bases():
+    with pytest.raises(ValueError, match="attitude.thrust_reach_m: the arms' reach is measured from their bases"):
+        _wheels(thrust_reach_m=2.0)

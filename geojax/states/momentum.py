@@ -31,7 +31,9 @@ is conserved to rounding, ``tests/test_momentum.py``).  The torques (ECI):
 
 * the thrusters: every controller aims its thrust line through the centre of mass of the run's start (Li 2022,
   Sec. 2: "the torque-free direction that passes through the center of mass"), each nozzle at
-  ``attitude.thrust_arm_m`` from it on that line (r_n = -L u_hat, u_hat the thrust's unit direction).  Two
+  ``attitude.thrust_arm_m`` from it on that line (r_n = -L u_hat, u_hat the thrust's unit direction), or, with an
+  arm's reach (``attitude.thrust_reach_m`` > 0), where the arm from its base (``attitude.thrust_base_north_m``,
+  ``thrust_base_south_m``) puts the nozzle on that line, burn by burn (``nozzle_distance_m``).  Two
   torques follow.  The centre of mass moves as propellant is used (``attitude.tank_offset_body_m``: the
   propellant's centre p less the starting centre of mass; the centre of mass is then at
   dc = -(m0 - m) / m p), so a line through the old centre leaves tau = -dc x F (the SRP offset moves by -dc
@@ -174,7 +176,8 @@ def thrust(params, state: Wheels, flown: Thrust, ctx: ThrustContext):
     # turns more than 90 deg from the last one fired)
     new_burn = firing & (jnp.dot(u_eci, state.line_eci) < 0)
     other_eci = jnp.where(new_burn, state.line_eci, state.other_line_eci)
-    lever = a["thrust_arm_m"] * force_n
+    arm_m = nozzle_distance_m(a, u_hat, d[2])
+    lever = arm_m * force_n
     if flown.tilt_rsw is None:  # the dumping law
         tilt = law_tilt(a, state, u_hat, c @ other_eci, flown.on_fraction * ctx.step_s, lever)
     else:  # the controller's planned tilt (control.mpc_momentum), perpendicular to the line
@@ -187,13 +190,30 @@ def thrust(params, state: Wheels, flown: Thrust, ctx: ThrustContext):
     cos = jnp.sqrt(1.0 - jnp.sum(tilt * tilt))
     u_new_b = u_b + size * ((cos - 1.0) * u_hat + tilt)  # exactly u_b without a tilt
     shift = com_shift_body_m(params, ctx.mass_kg)
-    torque = flown.on_fraction * (-a["thrust_arm_m"] * force_n * jnp.cross(u_hat, tilt)
+    torque = flown.on_fraction * (-arm_m * force_n * jnp.cross(u_hat, tilt)
                                   - jnp.cross(shift, flown.thrust_n * u_new_b))
     cross_n = flown.on_fraction * force_n * jnp.linalg.norm(tilt)
     direction = jnp.stack([-u_new_b[2], u_new_b[0], -u_new_b[1]])
     state = state._replace(thrust_torque_body_nm=torque, thrust_start_eci_nm=c.T @ torque, cross_force_n=cross_n,
                            line_eci=jnp.where(firing, u_eci, state.line_eci), other_line_eci=other_eci)
     return state, flown._replace(direction_rsw=direction, tilt_rsw=None)
+
+
+def nozzle_distance_m(attitude: dict, u_hat, w_component):
+    """L (m): the nozzle's distance behind the centre of mass on the thrust line along ``u_hat`` (body axes).  Without
+    an arm's reach (``attitude.thrust_reach_m`` = 0) the common ``attitude.thrust_arm_m``.  With it, the arm whose
+    base b is on the side the burn pushes away from (north for a burn that pushes south, ``w_component`` < 0:
+    Li 2022's thruster 1) puts its nozzle r_n = -L u_hat at its reach rho from b: |-L u_hat - b| = rho, so
+    L = -(u_hat . b) + sqrt((u_hat . b)^2 - |b|^2 + rho^2), the root farther out (the nozzle beyond the base, away
+    from the body); where the line passes farther than rho from b (no root) the nearest point, L = -(u_hat . b), a
+    marked simplification (the arm cannot put that line through the centre of mass)."""
+    reach = attitude["thrust_reach_m"]
+    base = jnp.where(w_component < 0, attitude["thrust_base_north_m"], attitude["thrust_base_south_m"])
+    along = jnp.dot(u_hat, base)
+    room = along * along - jnp.dot(base, base) + reach * reach
+    reached = room > 0  # (the double where keeps a derivative through the unused branch finite)
+    mounted = -along + jnp.where(reached, jnp.sqrt(jnp.where(reached, room, 1.0)), 0.0)
+    return jnp.where(reach > 0, mounted, attitude["thrust_arm_m"])
 
 
 def law_tilt(attitude: dict, state: Wheels, u_hat, u_other_body, firing_s, lever_nm):
@@ -348,7 +368,11 @@ def validate(config: dict) -> None:
         raise ValueError(f"attitude.inertia_kg_m2: not a physical inertia tensor (principal moments "
                          f"{', '.join(f'{m:g}' for m in moments)} kg m^2: each must be > 0 and at most the sum of "
                          f"the other two), got {table['inertia_kg_m2']!r}")
-    if table["dump_angle_max_deg"] > 0 and table["thrust_arm_m"] == 0:
+    if table["thrust_reach_m"] > 0 and not any(table["thrust_base_north_m"] + table["thrust_base_south_m"]):
+        raise ValueError(f"attitude.thrust_reach_m: the arms' reach is measured from their bases "
+                         f"(attitude.thrust_base_north_m, thrust_base_south_m), none given; got reach "
+                         f"{table['thrust_reach_m']:g} m")
+    if table["dump_angle_max_deg"] > 0 and table["thrust_arm_m"] == 0 and table["thrust_reach_m"] == 0:
         raise ValueError(f"attitude.thrust_arm_m: a dumping tilt (attitude.dump_angle_max_deg = "
                          f"{table['dump_angle_max_deg']:g}) needs a thrust arm > 0, got 0")
     has_srp = config["forces"]["srp"] and config["spacecraft"]["srp_area_m2"] > 0
