@@ -46,7 +46,7 @@ def test_north_south_delta_v_is_the_closed_form():
     # |v_n1| + |v_n2| = 2 V_s |di| (eq. (30) with l_2 = l_1 + pi): the minimum for an inclination change.
     limits = arm_limits_deg(*PRESETS_DEG["weak"])
     dx = jnp.array([0.0, 0.0, 0.0, 0.0, 3e-5, -4e-5])
-    sol = qffc.solve(dx, 1.0, limits)
+    sol = jax.jit(qffc.solve)(dx, 1.0, limits)  # one program (eager, each operation compiles on its own: 20 s)
     v_s = (3.986004418e14 / R_SYNC_M) ** 0.5
     assert abs(float(jnp.sum(jnp.abs(sol.dv_rsw_mps[:, 2]))) - 2 * v_s * 5e-5) < 1e-12
 
@@ -54,7 +54,7 @@ def test_north_south_delta_v_is_the_closed_form():
 def test_unreachable_deviation_is_reported_not_solved():
     # Pitch at most 5 deg and no room to raise V_DT: a pure inclination correction cannot be made.
     limits = arm_limits_deg(5.0, 0.0, 60.0, 30.0)
-    sol = qffc.solve(jnp.array([0.0, 0.0, 0.0, 0.0, 3e-5, 0.0]), 0.0, limits, vdt_raises_mps=jnp.zeros(1))
+    sol = jax.jit(qffc.solve)(jnp.array([0.0, 0.0, 0.0, 0.0, 3e-5, 0.0]), 0.0, limits, vdt_raises_mps=jnp.zeros(1))
     assert not bool(sol.feasible)
 
 
@@ -100,10 +100,11 @@ def test_vdt_estimate_leaves_the_next_cycle_on_the_edge_of_eq35():
     period_s = 2 * np.pi * R_SYNC_M / V_SYNC_MPS  # T_s
     limits = arm_limits_deg(*PRESETS_DEG["weak"])
     dx, l_start = random_deviations(50, seed=6)
+    solve, drift_of = jax.jit(qffc.solve), jax.jit(qffc.estimated_drift_rad_s)
     for d, l0 in zip(dx, l_start, strict=True):
-        drift = qffc.estimated_drift_rad_s(d, l0)
+        drift = drift_of(d, l0)
         next_dx = d.at[0].set(-drift * period_s).at[1].set(0.0)
-        sol = qffc.solve(next_dx, l0, limits, vdt_raises_mps=jnp.zeros(1))
+        sol = solve(next_dx, l0, limits, vdt_raises_mps=jnp.zeros(1))
         # T_s = 2 pi R_s / V_s in eq. (38) and the sidereal day of the coasts differ by 1e-7, so
         # 1e-8 m/s; with eq. (38) as printed (2 / R_s) the radial component is off by ~1e-3 m/s.
         assert abs(float(jnp.max(sol.dv_rsw_mps[:, 0]))) < 1e-8
@@ -134,7 +135,7 @@ def test_a_correction_below_the_pitch_floor_is_raised_to_it():
     of di, rather than left unsolved; the in-plane rows of eq. (29) still hold."""
     limits = arm_limits_deg(90.0, 30.0, 90.0, 90.0)
     dx = jnp.array([0.0, 0.0, 1.2e-5, -0.8e-5, 1e-6, 2e-6])
-    sol = qffc.solve(dx, 0.7, limits)
+    sol = jax.jit(qffc.solve)(dx, 0.7, limits)
     assert bool(sol.feasible)
     p = jnp.hypot(sol.dv_rsw_mps[:, 0], sol.dv_rsw_mps[:, 1])
     n = jnp.abs(sol.dv_rsw_mps[:, 2])
