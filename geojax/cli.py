@@ -199,36 +199,47 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
     from geojax.loop import rollout
 
     from geojax.compilation import Compilations, waiting_note
-    from geojax.loop.setup import cycle_count, cycle_slots
+    from geojax.control.base import keeps_steps
+    from geojax.loop import report
+    from geojax.loop.setup import controller_of, cycle_count, cycle_slots
 
     say = _say(args)
     say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; compiling the environment, the reference run and "
         f"the closed loop for {cycle_slots(cycle_count(sc.days))} cycles (every duration up to that many cycles runs "
         f"the same program)...", flush=True)
     _detail(args)(f"  {waiting_note()}", flush=True)
+    figures = {}
+
+    def meanwhile():  # the file's and figures' uncontrolled run (a planner's), on the core the loop leaves idle
+        if (out or plots) and not keeps_steps(controller_of([sc])):
+            figures["reference"] = report.reference_and_target(sc, cycle_count(sc.days))
+
     with Compilations() as log:
         result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"closed loop ready in {s:.1f} s; "
-                                                                      f"running...", flush=True))
+                                                                      f"running...", flush=True),
+                                  meanwhile=meanwhile)
     say(f"  {log.summary()}")
     code = _finish(args, result, "the run is one compiled call (no host callbacks in the loop), so it reports its "
-                                 "times instead of a progress bar", out, plots)
+                                 "times instead of a progress bar", out, plots, figures.get("reference"))
     if getattr(args, "oem", None):
         print("wrote " + " and ".join(map(str, result.save_oem(args.oem))))
     return code
 
 
-def _finish(args, result, detail: str, out, plots) -> int:
+def _finish(args, result, detail: str, out, plots, reference=None) -> int:
     """Print the run's summary (and with ``-v`` the devices and ``detail``), then write its file (``--out``) and
-    figures (``--plots``), each named as it is written."""
+    figures (``--plots``), each named as it is written (``reference``: a closed loop's uncontrolled run, if computed
+    already, ``loop.report.groups``)."""
     from geojax import store
 
     for line in result.summary():
         _say(args)(line)
     _detail(args)(f"  devices {store.device_description()}; {detail}")
+    figure_reference = {} if reference is None else {"reference": reference}
     if out:
-        print(f"wrote {result.save(out)}")
+        print(f"wrote {result.save(out, **figure_reference)}")
     if plots:
-        print("wrote " + " and ".join(map(str, result.plot(plots))))
+        print("wrote " + " and ".join(map(str, result.plot(plots, **figure_reference))))
     return 0
 
 

@@ -43,6 +43,16 @@ MIN_COMPILE_S = 0.0  # every program (JAX's default, 1 s, would leave the enviro
 #                      operations a command compiles, 2-3 s in all, to compile again in every run)
 
 
+# XLA's options for a single sample's programs (``simulate``: the closed loop, its metrics and the predictor's
+# reference compiled for one sample): such a program runs a year in about a second once compiled, and its
+# compilation is the wait.  XLA's classic CPU emitters compile the one-sample QFFC closed loop (a year) in 6.1-6.7 s
+# instead of 8.4-10.5 s (its fusion emitters, the default) and run it in 0.74-1.04 s instead of 0.74-0.94 s; the
+# reference, run one segment after another, in 1.8 s instead of 3.7-4.4 s, running 0.54 s instead of 0.19 s (3 tries
+# each, 2 cores).  A batch keeps XLA's defaults: its run time is what counts there (the classic emitters ran the
+# 128-lane loop 8 % slower, ``benchmarks/results/compile_profile.md``).
+ONE_SAMPLE_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
+
+
 def default_dir() -> Path:
     """The platform's per-user cache folder for geojax's compiled programs."""
     if sys.platform == "win32":

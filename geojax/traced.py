@@ -32,9 +32,10 @@ SUFFIX = "-geojax-traced"  # beside JAX's "-cache" entries, which its LRU evicti
 MAX_FILES = 64  # the traced programs kept (the oldest removed first); a few MB each
 
 
-def call(jitted, name: str, identity, *args, **static):
-    """``jitted(*args, **static)``; its traced program kept in the cache folder when ``identity`` is not None."""
-    program = _program(jitted, name, identity, args, static)
+def call(jitted, name: str, identity, *args, compiler_options: dict | None = None, **static):
+    """``jitted(*args, **static)``; its traced program kept in the cache folder when ``identity`` is not None
+    (and compiled with XLA's ``compiler_options``, those ``jitted`` was made with)."""
+    program = _program(jitted, name, identity, args, static, compiler_options)
     return jitted(*args, **static) if program is None else program(*args)
 
 
@@ -61,7 +62,7 @@ def jitted(jitted, name: str, identity, *args):
 _IN_PROCESS: dict[str, object] = {}  # key -> jitted call of the loaded program (one lowering per process)
 
 
-def _program(jitted, name: str, identity, args, static):
+def _program(jitted, name: str, identity, args, static, compiler_options: dict | None = None):
     """The jitted call of the kept program of ``jitted`` for ``args`` (loaded, or traced and kept now); None when
     the cache is off or ``identity`` is None."""
     folder = cache_dir()
@@ -80,7 +81,7 @@ def _program(jitted, name: str, identity, args, static):
             return program.call(*values)
 
         run.__name__ = run.__qualname__ = name  # JAX names the compiled program after it (geojax.compilation)
-        _IN_PROCESS[key] = jax.jit(run)
+        _IN_PROCESS[key] = jax.jit(run, compiler_options=compiler_options)
     return _IN_PROCESS[key]
 
 

@@ -137,6 +137,45 @@ def test_lanes_padded_to_a_power_of_two_leave_each_sample_as_it_was(qffc, padded
     _equal(jax.tree_util.tree_map(lambda x: x[:2], three.metrics), padded.metrics, "metrics")
 
 
+def test_one_sample_compiled_for_start_up_is_the_batch_sample_to_rounding(qffc, padded):
+    """A single sample's programs are compiled for start-up (no lane axis, XLA's classic emitters, the reference's
+    segments one after another): second method, the same sample in the two-lane batch (vmapped, XLA's defaults,
+    the reference's segments side by side): every metric and cycle record to 1e-9 relative (the programs' own
+    rounding, ~1e-13), and the reference itself both ways."""
+    assert rollout.compiler_options(1) == compilation.ONE_SAMPLE_OPTIONS and rollout.compiler_options(2) is None
+    one = rollout.simulate_batch([qffc], seeds=[0])
+    first = lambda tree: jax.tree_util.tree_map(lambda x: np.asarray(x)[:1], tree)  # noqa: E731
+    assert one.metrics["mass_used_kg"][0] > 0
+    for what, a, b in (("metrics", one.metrics, first(padded.metrics)),
+                       ("cycles", one.records.cycles, first(padded.records.cycles))):
+        for (path, x), y in zip(jax.tree_util.tree_flatten_with_path(a)[0], jax.tree_util.tree_leaves(b), strict=True):
+            x, y = np.asarray(x, float), np.asarray(y, float)
+            np.testing.assert_allclose(x, y, rtol=1e-9, atol=1e-9 * np.max(np.abs(y), initial=1e-300),
+                                       err_msg=f"{what}: {jax.tree_util.keystr(path)}")
+    batch = prepare([qffc])
+    args = (jax.tree_util.tree_map(lambda x: x[0], batch.params), batch.reference_env)
+    static = dict(step_s=batch.step_s, dynamics=batch.dynamics, width=batch.controller.reference_cycles)
+    side_by_side = jax.jit(functools.partial(reference, **static))(*args)
+    in_turn = jax.jit(functools.partial(reference, sequential=True, **static))(*args)
+    for x, y in zip(in_turn, side_by_side, strict=True):
+        np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-12 * float(np.max(np.abs(y))))
+
+
+def test_the_command_lines_uncontrolled_run_computed_while_compiling_is_the_files(tmp_path, qffc):
+    """``geojax simulate --out`` computes the file's uncontrolled ``/reference`` while the closed loop compiles
+    (``simulate(meanwhile=...)``): the same datasets as ``reference_and_target`` called on its own afterwards."""
+    from geojax import cli, store
+    from geojax.loop.report import reference_and_target
+
+    out = tmp_path / "run.h5"
+    assert cli.main(["simulate", "li2022-qffc", "--days", "3", "--out", str(out), "-q"]) == 0
+    groups, _ = store.read_h5(out)
+    uncontrolled, target = reference_and_target(scenario.load("li2022-qffc", {"duration.days": 3}), 3)
+    assert groups["reference"]["ix"].shape == (4,)
+    _equal(uncontrolled, groups["reference"], "reference")
+    _equal(target, groups["target"], "target")
+
+
 @pytest.mark.slow
 def test_the_cache_serves_the_same_numbers_as_no_cache(tmp_path, qffc, padded):
     """A cold cache (the program traced, kept, compiled), a warm one in the same folder (loaded), and the cache

@@ -19,29 +19,31 @@ import numpy as np
 
 from geojax.control import none
 from geojax.loop.metrics import STATUS_MEANINGS, STATUS_TEXT, YEAR_CYCLES, step_table
-from geojax import traced
-from geojax.loop.setup import cycle_count, prepare, program_identity, uncontrolled_boundaries, unstack
+from geojax import compilation, traced
+from geojax.loop.setup import cycle_count, params_of, program_identity, uncontrolled_boundaries
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
-from geojax.physics.propagate import environment_grid, steps_per_cycle
+from geojax.physics.propagate import DYNAMICS, environment_grid, steps_per_cycle
 from geojax.scenario import Scenario
 
 
 DV_SPLIT = ("dv_ns_per_year_mps", "dv_ew_per_year_mps")  # a planner's (loop.metrics.dv_split_per_year)
 
 
-def groups(result) -> dict[str, dict]:
-    """The datasets of the run's file, ``{group: {name: value}}``."""
+def groups(result, reference=None) -> dict[str, dict]:
+    """The datasets of the run's file, ``{group: {name: value}}``; ``reference``: ``reference_and_target``'s
+    result where the caller computed it already (``geojax simulate`` does, while the closed loop compiles)."""
     sc = scenario_of(result)
     out = {"metrics": {**metrics(result), "status": int(result.status)}, "cycles": result.cycles()}
     if result.records.steps is not None:
         out["steps"] = step_table(result.records, result.step_s, float(result.params.station["lon_rad"]))
     else:
-        out["reference"], out["target"] = reference_and_target(sc, len(result.records.cycles.dv_mps))
+        n_cycles = len(result.records.cycles.dv_mps)
+        out["reference"], out["target"] = reference_and_target(sc, n_cycles) if reference is None else reference
     return out
 
 
-def save(result, path: str | Path) -> Path:
-    """Write the run's file to ``path`` (atomically); returns the path."""
+def save(result, path: str | Path, reference=None) -> Path:
+    """Write the run's file to ``path`` (atomically); returns the path.  ``reference``: as for ``groups``."""
     from geojax import store
     from geojax.scenario import to_toml
 
@@ -49,7 +51,7 @@ def save(result, path: str | Path) -> Path:
     attrs = {"kind": "simulate", "scenario": sc.name, "epoch_tt_s": sc.epoch_tt_s,
              **({} if result.seed is None else {"seed": result.seed}), "compile_s": result.compile_s, "run_s": result.run_s,
              "status_codes": STATUS_TEXT}
-    return store.write_h5(path, groups(result), to_toml(sc.config), result.wall_s, attrs=attrs)
+    return store.write_h5(path, groups(result, reference), to_toml(sc.config), result.wall_s, attrs=attrs)
 
 
 def metrics(result) -> dict[str, float]:
@@ -119,12 +121,12 @@ def row_notes(values: dict, n_cycles: int, result) -> dict[str, str]:
     return notes
 
 
-def plot(result, folder: str | Path) -> list[Path]:
+def plot(result, folder: str | Path, reference=None) -> list[Path]:
     """The run's figures in ``folder``, named after the scenario: from its steps (a feedback law's), the ground
     track and thrust (``NAME-ground-track.png``, ``NAME-thrust.png``), else its cycles and station keeping
-    (``NAME.png``, ``NAME-station-keeping.png``)."""
+    (``NAME.png``, ``NAME-station-keeping.png``).  ``reference``: as for ``groups``."""
     sc = scenario_of(result)
-    return draw(groups(result), sc.config["station"]["box_half_width_deg"], Path(folder) / sc.name, run_title(sc))
+    return draw(groups(result, reference), sc.config["station"]["box_half_width_deg"], Path(folder) / sc.name, run_title(sc))
 
 
 def run_title(sc: Scenario) -> str:
@@ -155,13 +157,17 @@ def draw(groups: dict, box_half_width_deg: float, stem: Path, title: str, fmt: s
 def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]:
     """The uncontrolled run from the initial state (not re-started: the path the satellite would take without
     control), its mean elements at the first ``n_cycles + 1`` cycle boundaries (``/reference``: t_s, lon_deg, ex,
-    ey, ix, iy), and the station's targets (``/target``), for figures beside a closed loop."""
-    batch = prepare([scenario], none.CONTROLLER)
-    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, batch.step_s,
-                           n_cycles + 1, steps_per_cycle(scenario.step_s))
-    identity = program_identity(scenario, "uncontrolled", batch.step_s)
-    _, ref = traced.call(_uncontrolled_jit, "uncontrolled", identity, unstack(batch.params, 0), env,
-                         step_s=batch.step_s, dynamics=batch.dynamics)
+    ey, ix, iy), and the station's targets (``/target``), for figures beside a closed loop.
+
+    One sample's program, compiled for start-up (``compilation.ONE_SAMPLE_OPTIONS``): it draws a figure."""
+    n_steps = steps_per_cycle(scenario.step_s)
+    step_s = SIDEREAL_DAY_S / n_steps
+    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, n_cycles + 1,
+                           n_steps)
+    identity = program_identity(scenario, "uncontrolled", step_s)
+    _, ref = traced.call(_uncontrolled_jit, "uncontrolled", identity, params_of(scenario, none.CONTROLLER), env,
+                         compiler_options=compilation.ONE_SAMPLE_OPTIONS, step_s=step_s,
+                         dynamics=DYNAMICS[scenario.dynamics])
     ref = np.asarray(ref)
     uncontrolled = {"t_s": np.arange(len(ref)) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
                     "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}
@@ -171,7 +177,8 @@ def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]
     return uncontrolled, goals
 
 
-_uncontrolled_jit = jax.jit(uncontrolled_boundaries, static_argnames=("step_s", "dynamics"))
+_uncontrolled_jit = jax.jit(uncontrolled_boundaries, static_argnames=("step_s", "dynamics"),
+                            compiler_options=compilation.ONE_SAMPLE_OPTIONS)
 
 
 def flown_days(days: float) -> str:

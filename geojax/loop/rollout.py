@@ -9,6 +9,7 @@ numpy arrays.
 from __future__ import annotations
 
 import functools
+import threading
 import time
 from typing import NamedTuple
 
@@ -22,7 +23,7 @@ from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
 from geojax.export import trajectory
 from geojax.loop import report
-from geojax import traced
+from geojax import compilation, traced
 from geojax.parallel import Background
 from geojax.loop.setup import Batch, controller_of, padded, prepare, program_identity, reference, unstack
 from geojax.params import static_settings
@@ -112,7 +113,18 @@ def closed_loop_batch(params, keys, shared, reference_env, controller, step_s, d
     step, dynamics), whatever the duration within the slots and the epoch."""
     one = functools.partial(loop, controller=controller, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps,
                             states=states)
-    return jax.vmap(one, in_axes=(0, 0, None, None))(params, keys, shared, reference_env)
+    return _over_lanes(one, (params, keys), (shared, reference_env))
+
+
+def _over_lanes(fn, per_lane: tuple, common: tuple):
+    """``fn(*per_lane, *common)`` vmapped over the leading axis of ``per_lane``'s leaves; a single lane runs
+    ``fn`` itself, its results given the lane axis back: without vmap's batching of the traced program (3.6 of a
+    cold one-sample QFFC year's 6.2 s of tracing; the program compiles in 9.9 s instead of 12.3), the same numbers to
+    rounding (``tests/test_compilation.py``)."""
+    if jax.tree_util.tree_leaves(per_lane)[0].shape[0] == 1:
+        first = jax.tree_util.tree_map(lambda x: x[0], per_lane)
+        return jax.tree_util.tree_map(lambda x: x[None], fn(*first, *common))
+    return jax.vmap(fn, in_axes=(0,) * len(per_lane) + (None,) * len(common))(*per_lane, *common)
 
 
 @functools.partial(jax.jit, static_argnames=("n_cycles", "step_s", "steps_per_cycle"))
@@ -120,11 +132,11 @@ def metrics_batch(params, final, records, n_cycles: int, step_s: float, steps_pe
     """``loop.metrics.summarize`` of every sample over the first ``n_cycles`` cycles of its records: a small
     program of its own, compiled per duration (the closed loop is compiled per slot count)."""
     records = records._replace(cycles=jax.tree_util.tree_map(lambda x: x[:, :n_cycles], records.cycles))
-    return jax.vmap(lambda p, f, r: summarize(p, f, r, step_s, steps_per_cycle))(params, final, records)
+    return _over_lanes(lambda p, f, r: summarize(p, f, r, step_s, steps_per_cycle), (params, final, records), ())
 
 
 def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None = None,
-             keep_steps: bool | None = None, key=None, on_compiled=None) -> Result:
+             keep_steps: bool | None = None, key=None, on_compiled=None, meanwhile=None) -> Result:
     """One closed-loop rollout of ``scenario`` (its registered controller, or ``controller``).
 
     ``seed`` (or a ``jax.random`` ``key``) draws the orbit-determination and attitude errors
@@ -135,7 +147,8 @@ def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None
     if keep_steps is None:
         keep_steps = keeps_steps(controller_of([scenario]) if controller is None else controller)
     result = simulate_batch([scenario], seeds=[seed], controller=controller, keep_steps=keep_steps,
-                            keys=None if key is None else jnp.stack([key]), on_compiled=on_compiled)
+                            keys=None if key is None else jnp.stack([key]), on_compiled=on_compiled,
+                            meanwhile=meanwhile)
     first = lambda tree: jax.tree_util.tree_map(lambda x: x[0], tree)  # noqa: E731
     return result._replace(metrics=first(result.metrics), status=result.status[0], records=first(result.records),
                            final=first(result.final), params=first(result.params), scenario=scenario,
@@ -143,7 +156,8 @@ def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None
 
 
 def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None = None, *, seeds=None, keys=None,
-                   controller: Controller | None = None, keep_steps: bool = False, on_compiled=None) -> Result:
+                   controller: Controller | None = None, keep_steps: bool = False, on_compiled=None,
+                   meanwhile=None) -> Result:
     """A batch of rollouts, vmapped in one compiled call.
 
     Either a list of scenarios (one sample each), or one scenario with ``params`` whose leaves carry a
@@ -151,7 +165,9 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     ``params.initial``).  ``seeds`` [n] (default 0, 1, ...) or ``keys`` [n] draw each sample's errors.
     ``on_compiled(seconds)``: called when the closed loop and its metrics are compiled (or loaded from the
     cache), before they run, with the seconds since their compilation began (e.g. the command line's "closed
-    loop ready in X s"); the result's ``compile_s`` is the same.
+    loop ready in X s"); the result's ``compile_s`` is the same.  ``meanwhile()``: called once the environment grid
+    and the reference are ready, while the closed loop may still compile (``geojax simulate`` computes its figures'
+    uncontrolled run then, on a core that would otherwise wait).
 
     The closed loop compiles in a thread of its own while the environment grid and the predictor's reference
     are computed (their programs compile meanwhile): XLA compiles a program on one core, so on two cores a
@@ -166,10 +182,15 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
 
     def compile_meanwhile(layout: Batch):
         compiling["begun"] = time.perf_counter()
-        compiling["programs"] = Background(functools.partial(_compiled_programs, *call(layout)))
+        lowered = threading.Event()
+        compiling["programs"] = Background(functools.partial(_compiled_programs, *call(layout), lowered=lowered))
+        return functools.partial(_wait, lowered)
 
-    batch = prepare(scenarios, controller, pad=True, on_shapes=compile_meanwhile)
+    n = len(scenarios) if params is None else jax.tree_util.tree_leaves(params)[0].shape[0]
+    batch = prepare(scenarios, controller, pad=True, on_shapes=compile_meanwhile, one_sample=n == 1)
     args, _, _, _, summarized, n = call(batch)
+    if meanwhile is not None:
+        meanwhile()
     loop_program, metrics_program = compiling["programs"].result()
     compile_s = time.perf_counter() - compiling["begun"]
     if on_compiled is not None:
@@ -212,14 +233,31 @@ def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, batch: Ba
     return args, static, identity, per_duration, summarized, n
 
 
-def _compiled_programs(args, static, identity, per_duration, summarized, n):
+def _compiled_programs(args, static, identity, per_duration, summarized, n, lowered: threading.Event):
     """The closed loop and its metrics compiled (or loaded from the cache) for ``args`` (arrays or shapes), the
-    metrics in a thread of their own once the loop's result shapes are known."""
-    lowered = traced.lowered(closed_loop_batch, "closed_loop", identity, *args, **static)
-    final, records = lowered.out_info
-    metrics = Background(lambda: traced.compiled(metrics_batch, "metrics", per_duration, args[0], final, records,
-                                                 **summarized))
-    return lowered.compile(), metrics.result()
+    metrics in a thread of their own once the loop's result shapes are known; ``lowered`` is set once the loop is
+    traced and lowered (or that failed)."""
+    options = compiler_options(jax.tree_util.tree_leaves(args[0])[0].shape[0])
+    try:
+        loop_program = traced.lowered(closed_loop_batch, "closed_loop", identity, *args, **static)
+    finally:
+        lowered.set()
+    final, records = loop_program.out_info
+    metrics = Background(lambda: traced.lowered(metrics_batch, "metrics", per_duration, args[0], final, records,
+                                                **summarized).compile(options))
+    return loop_program.compile(options), metrics.result()
+
+
+def compiler_options(lanes: int) -> dict | None:
+    """XLA's options for the programs of a batch compiled for ``lanes`` samples (None: XLA's defaults; one sample:
+    ``compilation.ONE_SAMPLE_OPTIONS``)."""
+    return dict(compilation.ONE_SAMPLE_OPTIONS) if lanes == 1 else None
+
+
+def _wait(event: threading.Event) -> None:
+    """Wait for ``event``, a tenth of a second at a time (Ctrl-C reaches the waiting thread at once)."""
+    while not event.wait(0.1):
+        pass
 
 
 def to_host(tree, lanes: int, cycles: int | None = None):

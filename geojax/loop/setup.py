@@ -23,7 +23,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax import traced
+from geojax import compilation, traced
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.control import lookup, recovery, none
 from geojax.control.base import Controller
@@ -116,7 +116,8 @@ def controller_of(scenarios: list[Scenario]) -> Controller:
 
 
 def prepare(scenarios: list[Scenario], controller: Controller | None = None,
-            segment_cycles: int = REFERENCE_SEGMENT_CYCLES, pad: bool = False, on_shapes=None) -> Batch:
+            segment_cycles: int = REFERENCE_SEGMENT_CYCLES, pad: bool = False, on_shapes=None,
+            one_sample: bool = False) -> Batch:
     """The ``Batch`` of ``scenarios`` (``controller``: a user's, else the registered one of their kind).
 
     ``segment_cycles``: cycles between re-starts of the predictor's reference (``REFERENCE_SEGMENT_CYCLES``).
@@ -128,7 +129,11 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     ``on_shapes(batch)``: called before the environment grid and the reference are computed (a few seconds of
     their own compilation) with the ``Batch`` whose ``shared`` and ``reference_env`` leaves are their shapes
     (``jax.ShapeDtypeStruct``), the rest as returned: enough to compile the closed loop meanwhile
-    (``rollout.simulate_batch`` does, in a thread: XLA compiles one program on one core).
+    (``rollout.simulate_batch`` does, in a thread: XLA compiles one program on one core).  What ``on_shapes``
+    returns, if not None, is called before the reference is traced: tracing is Python, one thread at a time, and
+    the closed loop's tracing comes first (its compilation is the longest wait; the reference compiles meanwhile).
+    ``one_sample``: the batch is one sample's (``simulate``), whose reference is compiled for start-up rather than
+    run speed (``reference(sequential=True)`` with ``compilation.ONE_SAMPLE_OPTIONS``).
     """
     controller = controller_of(scenarios) if controller is None else controller
     first = scenarios[0]
@@ -150,21 +155,26 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     sharing = functools.partial(_shared, n_cycles=n_cycles, n_slots=n_slots if pad else None)
     batch = functools.partial(Batch, controller, stacked, step_s=step_s, dynamics=dynamics, n_cycles=n_cycles,
                               reference_per_sample=per_sample, states=states_of(first.config))
+    before_reference = None
     if on_shapes is not None:
         env = environment_shape(*grid)
         ref = reference_shape(n_cycles, width, env.earth_angle_rad.dtype) if width and not per_sample else None
-        on_shapes(batch(jax.eval_shape(sharing, env, ref),
-                        reference_env=jax.eval_shape(on_segments, env) if width else None))
+        before_reference = on_shapes(batch(jax.eval_shape(sharing, env, ref),
+                                           reference_env=jax.eval_shape(on_segments, env) if width else None))
     env = environment_grid(*grid, first.config["forces"]["ephemeris"])
     segments = on_segments(env) if width else None
     ref = None
     if width and not per_sample:
-        identity = program_identity(first, "reference", step_s, width)
-        ref = traced.call(_reference_jit, "reference", identity, params[0], segments, step_s=step_s, dynamics=dynamics,
-                          width=width)
+        if before_reference is not None:
+            before_reference()
+        identity = program_identity(first, "reference", step_s, width, one_sample)
+        ref = traced.call(_REFERENCE_JIT[one_sample], "reference", identity, params[0], segments,
+                          compiler_options=compilation.ONE_SAMPLE_OPTIONS if one_sample else None, step_s=step_s,
+                          dynamics=dynamics, width=width)
     return batch(sharing(env, ref), reference_env=segments)
 
 
+@functools.partial(jax.jit, static_argnames=("n_cycles", "n_slots"))  # one small program, not ~10 eager ones
 def _shared(env, ref, n_cycles: int, n_slots: int | None) -> Shared:
     """What the samples share: the environment of the run's ``n_cycles`` and the reference (with ``n_slots``:
     repeated into the slots the loop skips, and ``Shared.n_active``)."""
@@ -188,6 +198,7 @@ def padded(tree, n_slots: int):
         lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], n_slots - x.shape[0], axis=0)]), tree)
 
 
+@functools.partial(jax.jit, static_argnames=("n_cycles", "width", "segment_cycles"))
 def reference_segments(env, n_cycles: int, width: int, segment_cycles: int) -> Segments:
     """The reference's segments over an environment grid ``env`` (leaves [n_env, ...], n_env at least
     ceil(n_cycles / segment_cycles) x segment_cycles + width - 1): segment s starts at cycle s x segment_cycles
@@ -257,17 +268,27 @@ def _check_static(scenarios: list[Scenario], controller: Controller, skip: tuple
             raise ValueError(f"controller.{key}: sets the compiled controller; one value per batch")
 
 
-def reference(params: Params, segments: Segments, step_s: float, dynamics: Dynamics, width: int) -> Reference:
+def reference(params: Params, segments: Segments, step_s: float, dynamics: Dynamics, width: int,
+              sequential: bool = False) -> Reference:
     """The predictor's reference (Li 2022 eqs. (24)-(27)) of one sample: what each cycle reads of the
     uncontrolled ``segments``, the first started from the sample's initial state, each later one from the
-    station's nominal state at its start (``predictor.station_mee``, the initial state's semi-latus rectum)."""
+    station's nominal state at its start (``predictor.station_mee``, the initial state's semi-latus rectum).
+
+    The segments run side by side (``vmap``), or with ``sequential`` one after another (``lax.map``: a program
+    that traces and compiles in half the time and runs 2-3x longer; the same numbers to rounding)."""
     mu = params.forces.mu_m3_s2
     p_m = dynamics.to_mee(params.initial.orbit, mu)[0]
     start_angle_rad = segments.env.earth_angle_rad[:, 0, 0, 0]
     anchors = jax.vmap(lambda angle: dynamics.from_mee(station_mee(params.station, p_m, angle), mu))(start_angle_rad)
     orbits = anchors.at[0].set(params.initial.orbit)
-    osc, mean = jax.vmap(lambda orbit, env: uncontrolled_boundaries(
-        params._replace(initial=params.initial._replace(orbit=orbit)), env, step_s, dynamics))(orbits, segments.env)
+    def segment(orbit, env):
+        return uncontrolled_boundaries(params._replace(initial=params.initial._replace(orbit=orbit)), env, step_s,
+                                       dynamics)
+
+    if sequential:
+        osc, mean = jax.lax.map(lambda xs: segment(*xs), (orbits, segments.env))
+    else:
+        osc, mean = jax.vmap(segment)(orbits, segments.env)
     s, j = segments.segment, segments.offset
     return Reference(osc[s, j], mean[s[:, None], j[:, None] + jnp.arange(width)[None, :]])
 
@@ -287,7 +308,10 @@ def uncontrolled_boundaries(params: Params, env, step_s: float, dynamics: Dynami
     return records.cycles.boundary, boundary.at[:, 0].set(wrap_angle(boundary[:, 0]))
 
 
-_reference_jit = jax.jit(reference, static_argnames=("step_s", "dynamics", "width"))
+# {one_sample: the reference's jitted program} (``prepare``)
+_REFERENCE_JIT = {False: jax.jit(reference, static_argnames=("step_s", "dynamics", "width")),
+                  True: jax.jit(functools.partial(reference, sequential=True), static_argnames=("step_s", "dynamics", "width"),
+                                compiler_options=compilation.ONE_SAMPLE_OPTIONS)}
 
 
 def disperse(params: Params, key, sigma_mee, sigma_offset_ecef_m, earth_angle_rad, dynamics: Dynamics) -> Params:
