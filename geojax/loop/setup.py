@@ -309,8 +309,9 @@ def uncontrolled_boundaries(params: Params, env, step_s: float, dynamics: Dynami
 
 
 # {one_sample: the reference's jitted program} (``prepare``)
-_REFERENCE_JIT = {False: jax.jit(reference, static_argnames=("step_s", "dynamics", "width")),
-                  True: jax.jit(functools.partial(reference, sequential=True), static_argnames=("step_s", "dynamics", "width"),
+_REFERENCE_STATIC = ("step_s", "dynamics", "width")
+_REFERENCE_JIT = {False: jax.jit(reference, static_argnames=_REFERENCE_STATIC),
+                  True: jax.jit(functools.partial(reference, sequential=True), static_argnames=_REFERENCE_STATIC,
                                 compiler_options=compilation.ONE_SAMPLE_OPTIONS)}
 
 
