@@ -22,7 +22,7 @@ from geojax.loop.metrics import STATUS_MEANINGS, STATUS_TEXT, YEAR_CYCLES, step_
 from geojax import compilation, traced
 from geojax.loop.setup import cycle_count, params_of, program_identity, uncontrolled_boundaries
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
-from geojax.physics.propagate import DYNAMICS, environment_grid, steps_per_cycle
+from geojax.physics.propagate import DYNAMICS, environment_grid, for_one_sample, steps_per_cycle
 from geojax.scenario import Scenario
 
 
@@ -167,7 +167,7 @@ def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]
     identity = program_identity(scenario, "uncontrolled", step_s)
     _, ref = traced.call(_uncontrolled_jit, "uncontrolled", identity, params_of(scenario, none.CONTROLLER), env,
                          compiler_options=compilation.ONE_SAMPLE_OPTIONS, step_s=step_s,
-                         dynamics=DYNAMICS[scenario.dynamics])
+                         dynamics=for_one_sample(DYNAMICS[scenario.dynamics]))
     ref = np.asarray(ref)
     uncontrolled = {"t_s": np.arange(len(ref)) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
                     "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}

@@ -29,7 +29,7 @@ from geojax.loop.setup import Batch, controller_of, padded, prepare, program_ide
 from geojax.params import static_settings
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
-from geojax.physics.propagate import Dynamics, for_lanes
+from geojax.physics.propagate import Dynamics, for_lanes, for_one_sample
 from geojax.scenario import Scenario
 
 
@@ -219,7 +219,8 @@ def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, batch: Ba
         keys = keys_of(np.arange(n) if seeds is None else seeds)
     lanes = lane_slots(n)
     args = (pad_lanes(params, lanes), pad_lanes(keys, lanes), batch.shared, _reference_env(batch))
-    static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, lanes),
+    dynamics = for_one_sample(batch.dynamics) if lanes == 1 else for_lanes(batch.dynamics, lanes)
+    static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=dynamics,
                   keep_steps=keep_steps, states=batch.states)
     summarized = dict(n_cycles=batch.n_cycles, step_s=batch.step_s,
                       steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1])

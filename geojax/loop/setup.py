@@ -34,7 +34,8 @@ from geojax.physics.forces import Environment
 from geojax.physics.frames import ecef_to_eci
 from geojax.loop.simulate import Shared, simulate
 from geojax.params import LEAF_TABLES, Params, static_settings, table_leaves
-from geojax.physics.propagate import DYNAMICS, Dynamics, environment_grid, environment_shape, steps_per_cycle
+from geojax.physics.propagate import (DYNAMICS, Dynamics, environment_grid, environment_shape, for_one_sample,
+                                      steps_per_cycle)
 from geojax.scenario import SCHEMA, Scenario, controller_fields
 from geojax.states import navigation
 from geojax.states import of_config as states_of
@@ -170,7 +171,7 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
         identity = program_identity(first, "reference", step_s, width, one_sample)
         ref = traced.call(_REFERENCE_JIT[one_sample], "reference", identity, params[0], segments,
                           compiler_options=compilation.ONE_SAMPLE_OPTIONS if one_sample else None, step_s=step_s,
-                          dynamics=dynamics, width=width)
+                          dynamics=for_one_sample(dynamics) if one_sample else dynamics, width=width)
     return batch(sharing(env, ref), reference_env=segments)
 
 

@@ -185,7 +185,7 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
             accel_ecef = jnp.stack(east(rsw_to_eci_xyz((accel * d[0], accel * d[1], accel * d[2]), r, v)))
             mee = dynamics.to_mee(state.orbit, mu)
             sums = (fghk_sum + mee[1:5], a_sum + semi_major_axis_m(mee))  # for the cycle means, summed as it goes
-            new = rk4_step(dynamics.rhs, state, env3, fm, thrust, step_s)
+            new = rk4_step(dynamics.rhs, state, env3, fm, thrust, step_s, dynamics.rk4_stages_in_loop)
             extra, extra_steps = _steps(states, params, extra, dynamics, state, new, r, v, thrust, env3,
                                         ctx.t_s + j * step_s, step_s, mu)
             return (new, sums, extra), (lon, tan_lat, accel_ecef, extra_steps)
@@ -193,9 +193,12 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
         # (A carry of six separate scalars instead of the orbit array [6] was measured slower: 3.2-5.2 against
         # 1.6-1.8 us per RHS unbatched, 146-153 against 124-128 ns at batch 1024.  The mean elements' sums are
         # carried rather than the step states stacked: 44.6 against 41.1 ns per RHS at 512 lanes.)
-        zero = jnp.zeros((), state.orbit.dtype)
+        # The sums start at a zero computed from the orbit (0 x p = +0 for MEE, +-0 for a Cartesian x: the same
+        # sums): under vmap a zero that carries the sample axis, so that vmap batches the step once, not once to
+        # find that the sums become batched and again (a two-sample QFFC loop traced in 2.1-2.3 s instead of 2.9).
+        zero = 0.0 * state.orbit[0]
         (final, (fghk_sum, a_sum), extra_end), (lon, tan_lat, accel, extra_steps) = jax.lax.scan(
-            jax.checkpoint(step), (state, (jnp.zeros(4, state.orbit.dtype), zero), extra),
+            jax.checkpoint(step), (state, (jnp.zeros(4, state.orbit.dtype) + zero, zero), extra),
             (jnp.arange(n_steps), env_steps))
         # the cycle's mean elements from the step starts' records and the end state, whose longitude and
         # latitude are stored once (``materialized``: else XLA's CPU fusion evaluates them again for each of the
@@ -224,6 +227,12 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
 
     initial_state = controller.init(params, context(jnp.asarray(0), jax.tree_util.tree_map(lambda x: x[0], env),
                                                     windows[0]))
+    # A controller's state that starts as constants (the FOMPC's warm start) becomes per sample in the loop: under
+    # vmap it starts as per-sample zeros added (x + 0 = x), so that vmap batches the cycle once, not once to find
+    # that and again (the FOMPC's 32-lane loop traced in 7.1-7.5 s instead of 8.7; see the step sums' zero below).
+    anchor = 0.0 * params.initial.orbit[0]
+    initial_state = jax.tree_util.tree_map(
+        lambda x: x + anchor.astype(x.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, initial_state)
     xs = (jnp.arange(n_cycles), env, osc_ref, windows)
     r0, v0 = position_velocity(dynamics, params.initial.orbit, mu) if states else (None, None)
     env0 = jax.tree_util.tree_map(lambda x: x[0, 0, 0], env) if states else None  # the run's first instant

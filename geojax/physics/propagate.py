@@ -30,6 +30,7 @@ class Dynamics(NamedTuple):
     from_mee: Callable  # (MEE [6], mu) -> orbit [6]
     to_cartesian: Callable  # (orbit [6], mu) -> ECI (r m, v m/s) [6]
     rv_xyz: Callable  # (orbit [6] or its six components, mu) -> ((x, y, z), (vx, vy, vz)), m and m/s
+    rk4_stages_in_loop: bool = False  # the loop's RK4 stages as a loop (``integrate.rk4_step``): ``for_one_sample``
 
 
 def _mee_to_rv(mee, mu):
@@ -64,6 +65,12 @@ def for_lanes(dynamics: Dynamics, lanes: int) -> Dynamics:
     ``BOUNDARY_LANES`` on, and more from ``RATES_BOUNDARY_LANES`` (MEE)."""
     tier = 2 if lanes >= RATES_BOUNDARY_LANES and dynamics is MEE else 1 if lanes >= BOUNDARY_LANES else 0
     return _WITH_BOUNDARIES.get((id(dynamics), tier), dynamics)
+
+
+def for_one_sample(dynamics: Dynamics) -> Dynamics:
+    """The dynamics to compile for a single sample's program (``simulate``, whose compilation is the wait): the
+    RK4 stages in a loop, the right-hand side compiled once (``integrate.rk4_step``)."""
+    return dynamics._replace(rk4_stages_in_loop=True)
 
 
 class CycleMeans(NamedTuple):
