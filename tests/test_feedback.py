@@ -73,9 +73,9 @@ def test_paper_discrete_gains_never_fire_the_x_axis():
 
 
 def test_gradient_of_delta_v_matches_central_differences():
-    """Independent check: jax.grad of the 30-day Delta-V with respect to log k_h and log k_e (continuous
+    """Independent check: jax.grad of the 10-day Delta-V with respect to log k_h and log k_e (continuous
     clipped law, full force model) against central finite differences, 1e-4 relative."""
-    sc = scenario.load("katz2025-continuous", {"duration.days": 30.0, "controller.thrust_mode": "continuous-clipped"})
+    sc = scenario.load("katz2025-continuous", {"duration.days": 10.0, "controller.thrust_mode": "continuous-clipped"})
     problem = tune.Problem(sc, ["k_h", "k_e"])
     theta = jnp.asarray(tune.to_theta(problem.base, problem.entries))
     dv = jax.jit(lambda th: problem.evaluate(th, smooth=False)[1][0])

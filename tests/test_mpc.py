@@ -94,10 +94,13 @@ def dense(operator, n):
     return np.asarray(jax.vmap(operator.matvec, in_axes=1, out_axes=1)(jnp.eye(n)))
 
 
+@pytest.mark.slow
 def test_planning_program_matches_highs(planning):
     """Second method: HiGHS on the program's explicit matrix; the operator's transpose and normal-matrix solve
     against the dense matrix (adjoint identity, a dense solve).  An 8-cycle horizon (the paper's 20 in the
-    closed-loop tests): the same program, built and checked in a third of the time."""
+    closed-loop tests): the same program, built and checked in a third of the time.  Slow tier (71 s): the
+    default tier checks the same interior-point solver (``control.lp``) against HiGHS on the momentum MPC's
+    program (``tests/test_mpc_momentum.py``)."""
     shape = mpc.Shape(n_max=8)
     horizon = {"horizon": planning["leaves"]["horizon"] * 0 + 8}
     model = build(planning, shape, **horizon)

@@ -164,6 +164,8 @@ def _identity(sweep: Sweep, controller: str, sc, batch: Batch):
                             sweep.cycles)
 
 
+@jax.jit  # one small program for every leaf (eagerly, a gather compiled per leaf shape, each waiting for a core
+#           while the controllers' loops compile: 2-10 s of a cold two-controller sweep)
 def _lanes(params, point_index):
     """The params of each lane's grid point."""
     return jax.tree_util.tree_map(lambda x: x[point_index], params)
