@@ -1,10 +1,11 @@
 """Where a closed loop's XLA compilation goes: per program, the phases of XLA's CPU compiler and the code that
 makes its kernels.
 
-    python benchmarks/compile_profile.py [--cases qffc fompc mpc field20] [--lanes 128] [--days 20] [--flags]
+    python benchmarks/compile_profile.py [--cases qffc fompc mpc field20 qffc-one] [--lanes 128] [--days 20] [--flags]
 
-For each case (li2022-qffc, -fompc, -mpc, and the QFFC with the EGM2008 20x20 field), the closed loop of
-``simulate_batch`` for ``--lanes`` samples is traced and lowered (timed), then compiled once under JAX's
+For each case (li2022-qffc, -fompc, -mpc, the QFFC with the EGM2008 20x20 field, and the QFFC for one sample as
+``simulate`` compiles it), the closed loop of ``simulate_batch`` for ``--lanes`` samples (one for ``qffc-one``) is
+traced and lowered (timed), then compiled once under JAX's
 profiler (``jax.profiler.trace``, its Perfetto trace read back): the compilation's wall time split into XLA's
 HLO passes (before and after layout assignment), emitting the kernels (``ThunkEmitter``, with each fusion's
 MLIR-to-LLVM compilation, ``FusionCompiler::Compile``, counted) and LLVM's code generation (``Codegen``); the
@@ -35,7 +36,8 @@ from pathlib import Path
 import harness
 
 CASES = {"qffc": ("li2022-qffc", {}), "fompc": ("li2022-fompc", {}), "mpc": ("li2022-mpc", {}),
-         "field20": ("li2022-qffc", {"forces.gravity_degree": 20})}
+         "field20": ("li2022-qffc", {"forces.gravity_degree": 20}), "qffc-one": ("li2022-qffc", {})}
+ONE_SAMPLE = {"qffc-one"}  # compiled for one sample, as ``simulate`` compiles its closed loop (``--lanes`` aside)
 FLAG_SETS = ["", "--xla_backend_optimization_level=1", "--xla_backend_optimization_level=0",
              "--xla_cpu_use_fusion_emitters=false", "--xla_cpu_parallel_codegen_split_count=1"]
 PHASES = {"HLO passes before layout": "HLO passes through layout assignment",
@@ -44,7 +46,8 @@ PHASES = {"HLO passes before layout": "HLO passes through layout assignment",
 
 
 def loop_program(name: str, changes: dict, lanes: int, days: float):
-    """(jitted closed loop, its arguments, its static arguments) as ``simulate_batch`` compiles it."""
+    """(jitted closed loop, its arguments, its static arguments, XLA's options) as ``simulate_batch`` compiles it
+    (one lane: for start-up, ``rollout.compiler_options``)."""
     import jax
 
     from geojax import scenario
@@ -54,22 +57,24 @@ def loop_program(name: str, changes: dict, lanes: int, days: float):
     batch = rollout.prepare([sc])
     params = rollout.prepare_params(sc, lanes)
     keys = jax.random.split(jax.random.key(0), lanes)
-    static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=rollout.for_lanes(batch.dynamics, lanes),
-                  keep_steps=False, states=batch.states)
-    return rollout.closed_loop_batch, (params, keys, batch.shared, rollout._reference_env(batch)), static
+    dynamics = rollout.for_one_sample(batch.dynamics) if lanes == 1 else rollout.for_lanes(batch.dynamics, lanes)
+    static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=dynamics, keep_steps=False,
+                  states=batch.states)
+    return (rollout.closed_loop_batch, (params, keys, batch.shared, rollout._reference_env(batch)), static,
+            rollout.compiler_options(lanes))
 
 
 def profile(case: str, lanes: int, days: float) -> dict:
     import jax
 
-    jitted, args, static = loop_program(*CASES[case], lanes, days)
+    jitted, args, static, options = loop_program(*CASES[case], 1 if case in ONE_SAMPLE else lanes, days)
     begun = time.perf_counter()
     lowered = jitted.lower(*args, **static)
     lower_s = time.perf_counter() - begun
     with tempfile.TemporaryDirectory() as folder:
         with jax.profiler.trace(folder, create_perfetto_trace=True):
             begun = time.perf_counter()
-            compiled = lowered.compile()
+            compiled = lowered.compile(options)
             compile_s = time.perf_counter() - begun
         (trace,) = glob.glob(f"{folder}/**/perfetto_trace.json.gz", recursive=True)
         events = [e for e in json.load(gzip.open(trace))["traceEvents"] if e.get("ph") == "X"]
@@ -105,7 +110,8 @@ def fusion_groups(hlo_text: str) -> collections.Counter:
             continue
         found = re.search(r'op_name="([^"]+)"', line)
         path = found.group(1) if found else "(no source)"
-        path = path.replace("jit(closed_loop_batch)/vmap()/", "").replace("closed_call/", "")
+        path = path.replace("jit(closed_loop_batch)/vmap()/", "").replace("jit(closed_loop_batch)/", "")
+        path = path.replace("closed_call/", "")
         parts = [p for p in path.split("/") if p not in ("checkpoint", "body")]
         groups["/".join(parts[:4])] += 1
     return groups
@@ -126,7 +132,7 @@ def flag_child_main(reference: str) -> None:
     import numpy as np
 
     harness.set_up(harness.Devices(host_device_count=1, replace_count=True))
-    jitted, args, static = loop_program(*CASES["qffc"], 128, 20.0)
+    jitted, args, static, _ = loop_program(*CASES["qffc"], 128, 20.0)
     begun = time.perf_counter()
     compiled = jitted.lower(*args, **static).compile()
     compile_s = time.perf_counter() - begun
@@ -149,7 +155,9 @@ def flag_child_main(reference: str) -> None:
 def markdown(rows: dict, flags: dict, lanes: int, days: float) -> list[str]:
     lines = [f"The closed loop of `simulate_batch` for {lanes} samples and {days:g} days (one CPU device), compiled "
              "once under JAX's profiler; phases from XLA's own trace events (the kernels' compilation runs on XLA's "
-             "threads inside *emitting kernels*).", "",
+             "threads inside *emitting kernels*).  `qffc-one`: the QFFC's for one sample, as `simulate` compiles it "
+             "(no lane axis, the RK4 stages in a loop, XLA's classic CPU emitters: "
+             "`geojax.compilation.ONE_SAMPLE_OPTIONS`).", "",
              *harness.table(["case", "trace + lower s", "compile s", "HLO passes before / after layout s",
                              "emitting kernels s", "LLVM codegen s", "kernels", "StableHLO lines", "run s"],
                             [[case, f"{r['lower_s']:.1f}", f"{r['compile_s']:.1f}",

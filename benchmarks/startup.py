@@ -49,6 +49,8 @@ COMMANDS = [
     ("scenarios", ["scenarios"], ""),
     ("propagate", ["propagate", "li2022", "--days", "200", "--out", "drift.h5"], ""),
     ("simulate qffc 1 yr", ["simulate", "li2022-qffc", "--out", "qffc.h5"], ""),
+    ("simulate qffc 1 yr, no file", ["simulate", "li2022-qffc"],
+     "the issue's check: no file, so no uncontrolled run for the file's figures"),
     ("simulate qffc 30 d", ["simulate", "li2022-qffc", "--days", "30"], "not in the README: the duration check"),
     ("simulate qffc 10 d after 30 d", ["simulate", "li2022-qffc", "--days", "10"],
      "run after the 30-day run, same cache"),

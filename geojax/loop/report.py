@@ -20,7 +20,8 @@ import numpy as np
 from geojax.control import none
 from geojax.loop.metrics import STATUS_MEANINGS, STATUS_TEXT, YEAR_CYCLES, step_table
 from geojax import compilation, traced
-from geojax.loop.setup import cycle_count, params_of, program_identity, uncontrolled_boundaries
+from geojax.loop.setup import (controller_of, cycle_count, environment_cycles, params_of, program_identity,
+                               uncontrolled_boundaries)
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.propagate import DYNAMICS, environment_grid, for_one_sample, steps_per_cycle
 from geojax.scenario import Scenario
@@ -159,15 +160,18 @@ def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]
     control), its mean elements at the first ``n_cycles + 1`` cycle boundaries (``/reference``: t_s, lon_deg, ex,
     ey, ix, iy), and the station's targets (``/target``), for figures beside a closed loop.
 
-    One sample's program, compiled for start-up (``compilation.ONE_SAMPLE_OPTIONS``): it draws a figure."""
+    One sample's program, compiled for start-up (``compilation.ONE_SAMPLE_OPTIONS``): it draws a figure.  Its
+    environment is the first cycles of the grid the closed loop's ``prepare`` computed (the same program, no new
+    compilation) where that covers them."""
     n_steps = steps_per_cycle(scenario.step_s)
     step_s = SIDEREAL_DAY_S / n_steps
-    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, n_cycles + 1,
-                           n_steps)
-    identity = program_identity(scenario, "uncontrolled", step_s)
+    n_env = max(n_cycles + 1, environment_cycles(n_cycles, controller_of([scenario]).reference_cycles))
+    env = environment_grid(scenario.epoch_tt_s, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, n_env, n_steps,
+                           scenario.config["forces"]["ephemeris"])
+    identity = program_identity(scenario, "uncontrolled", step_s, n_cycles + 1)
     _, ref = traced.call(_uncontrolled_jit, "uncontrolled", identity, params_of(scenario, none.CONTROLLER), env,
                          compiler_options=compilation.ONE_SAMPLE_OPTIONS, step_s=step_s,
-                         dynamics=for_one_sample(DYNAMICS[scenario.dynamics]))
+                         dynamics=for_one_sample(DYNAMICS[scenario.dynamics]), n_cycles=n_cycles + 1)
     ref = np.asarray(ref)
     uncontrolled = {"t_s": np.arange(len(ref)) * SIDEREAL_DAY_S, "lon_deg": np.degrees(ref[:, 0]),
                     "ex": ref[:, 3], "ey": ref[:, 4], "ix": ref[:, 5], "iy": ref[:, 6]}
@@ -177,7 +181,11 @@ def reference_and_target(scenario: Scenario, n_cycles: int) -> tuple[dict, dict]
     return uncontrolled, goals
 
 
-_uncontrolled_jit = jax.jit(uncontrolled_boundaries, static_argnames=("step_s", "dynamics"),
+def _uncontrolled_cycles(params, env, step_s: float, dynamics, n_cycles: int):
+    return uncontrolled_boundaries(params, jax.tree_util.tree_map(lambda x: x[:n_cycles], env), step_s, dynamics)
+
+
+_uncontrolled_jit = jax.jit(_uncontrolled_cycles, static_argnames=("step_s", "dynamics", "n_cycles"),
                             compiler_options=compilation.ONE_SAMPLE_OPTIONS)
 
 

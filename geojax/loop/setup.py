@@ -149,7 +149,7 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     width = controller.reference_cycles
     segment_cycles = min(segment_cycles, n_cycles)
     n_segments = -(-n_cycles // segment_cycles)
-    n_env = max(n_cycles, n_segments * segment_cycles + width - 1) if width else n_cycles
+    n_env = environment_cycles(n_cycles, width, segment_cycles)
     grid = (first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s, step_s, n_env, n_steps)
     per_sample = width > 0 and _references_differ(params)
     on_segments = functools.partial(reference_segments, n_cycles=n_cycles, width=width, segment_cycles=segment_cycles)
@@ -173,6 +173,14 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
                           compiler_options=compilation.ONE_SAMPLE_OPTIONS if one_sample else None, step_s=step_s,
                           dynamics=for_one_sample(dynamics) if one_sample else dynamics, width=width)
     return batch(sharing(env, ref), reference_env=segments)
+
+
+def environment_cycles(n_cycles: int, width: int, segment_cycles: int = REFERENCE_SEGMENT_CYCLES) -> int:
+    """The cycles of the environment grid ``prepare`` computes for a run of ``n_cycles``: the run's, and for a
+    controller that reads ``width`` reference boundaries the last reference segment's (``reference_segments``)."""
+    segment_cycles = min(segment_cycles, n_cycles)
+    n_segments = -(-n_cycles // segment_cycles)
+    return max(n_cycles, n_segments * segment_cycles + width - 1) if width else n_cycles
 
 
 @functools.partial(jax.jit, static_argnames=("n_cycles", "n_slots"))  # one small program, not ~10 eager ones
