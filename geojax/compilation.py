@@ -43,13 +43,13 @@ MIN_COMPILE_S = 0.0  # every program (JAX's default, 1 s, would leave the enviro
 #                      operations a command compiles, 2-3 s in all, to compile again in every run)
 
 
-# XLA's options for a single sample's programs (``simulate``: the closed loop, its metrics and the predictor's
-# reference compiled for one sample): such a program runs a year in about a second once compiled, and its
-# compilation is the wait.  XLA's classic CPU emitters compile the one-sample QFFC closed loop (a year) in 6.1-6.7 s
-# instead of 8.4-10.5 s (its fusion emitters, the default) and run it in 0.74-1.04 s instead of 0.74-0.94 s; the
-# reference, run one segment after another, in 1.8 s instead of 3.7-4.4 s, running 0.54 s instead of 0.19 s (3 tries
-# each, 2 cores).  A batch keeps XLA's defaults: its run time is what counts there (the classic emitters ran the
-# 128-lane loop 8 % slower, ``benchmarks/results/compile_profile.md``).
+# XLA's options for a single sample's programs (``simulate``: the closed loop, its metrics, the predictor's reference
+# and the file's uncontrolled run, compiled for one sample): such a program runs a year in about a second once
+# compiled, and its compilation is the wait.  XLA's classic CPU emitters compiled the one-sample QFFC closed loop (a
+# year, RK4 stages in a loop) in 5.4-6.6 s against 8.6-8.9 s with its fusion emitters, the default (3 tries each, 2
+# idle cores, by hand); the reference, its segments in turn, in 1.8 s against 3.7 s.  A batch keeps XLA's
+# defaults: its run time is what counts there, and its numbers must not move (the classic emitters move the last
+# bit and ran the 128-lane loop 2-8 % slower, ``benchmarks/results/compile_profile.md``).
 ONE_SAMPLE_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
 
 
