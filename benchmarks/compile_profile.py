@@ -61,7 +61,7 @@ def loop_program(name: str, changes: dict, lanes: int, days: float):
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=dynamics, keep_steps=False,
                   states=batch.states)
     return (rollout.closed_loop_batch, (params, keys, batch.shared, rollout._reference_env(batch)), static,
-            rollout.compiler_options(lanes))
+            rollout.compiler_options(lanes, batch.controller))
 
 
 def profile(case: str, lanes: int, days: float) -> dict:

@@ -138,11 +138,19 @@ def test_lanes_padded_to_a_power_of_two_leave_each_sample_as_it_was(qffc, padded
 
 
 def test_one_sample_compiled_for_start_up_is_the_batch_sample_to_rounding(qffc, padded):
-    """A single sample's programs are compiled for start-up (no lane axis, XLA's classic emitters, the reference's
-    segments one after another): second method, the same sample in the two-lane batch (vmapped, XLA's defaults,
-    the reference's segments side by side): every metric and cycle record to 1e-9 relative (the programs' own
-    rounding, ~1e-13)."""
+    """A single sample's programs are compiled for start-up (no lane axis, XLA's classic emitters, LLVM
+    unoptimized, the reference's segments one after another): second method, the same sample in the two-lane
+    batch (vmapped, XLA's defaults, the reference's segments side by side): every metric and cycle record to 1e-9
+    relative (the programs' own rounding, ~1e-13).  A controller that solves a program each cycle keeps LLVM's
+    optimization for its closed loop (``Controller.one_sample_opt_level``)."""
+    from geojax.control import qffc as qffc_law
+    from geojax.loop.setup import controller_of
+
     assert rollout.compiler_options(1) == compilation.ONE_SAMPLE_OPTIONS and rollout.compiler_options(2) is None
+    assert compilation.ONE_SAMPLE_OPTIONS["xla_backend_optimization_level"] == 0
+    assert rollout.compiler_options(1, qffc_law.CONTROLLER) == compilation.ONE_SAMPLE_OPTIONS
+    mpc_loop = rollout.compiler_options(1, controller_of([scenario.load("li2022-mpc")]))
+    assert mpc_loop["xla_backend_optimization_level"] == 1 and rollout.compiler_options(2, qffc_law.CONTROLLER) is None
     one = rollout.simulate_batch([qffc], seeds=[0])
     first = lambda tree: jax.tree_util.tree_map(lambda x: np.asarray(x)[:1], tree)  # noqa: E731
     assert one.metrics["mass_used_kg"][0] > 0

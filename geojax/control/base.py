@@ -110,6 +110,13 @@ class Controller:
     # 15.6 and 21.3 kB per lane), for a user's controller that does not say.
     lane_bytes: int = 32_000
     lane_bytes_per_cycle: int = 400
+    # LLVM's optimization level for a single sample's closed loop (XLA's ``xla_backend_optimization_level``, beside
+    # ``compilation.ONE_SAMPLE_OPTIONS``; a batch keeps XLA's defaults).  What ``geojax simulate`` waits for is that
+    # program's compilation, and a feedback law's or a planner's cycle is a few small kernels whose run time the
+    # loop's own overhead sets: unoptimized code (0) compiles in half the time and runs as fast.  A controller
+    # that solves a program every cycle spends its run time in arithmetic, which runs 2-3x slower unoptimized: it
+    # says 1 (``docs/speed.md``, ``benchmarks/startup.py``).
+    one_sample_opt_level: int = 0
     # Whether a single run keeps its per-step records (``geojax simulate``'s ``/steps/`` and the ground-track
     # figures): a feedback law has no plan to record per cycle, so its story is in the steps.  None: a controller
     # without the predictor's reference (``reference_cycles == 0``: a feedback law) keeps them.

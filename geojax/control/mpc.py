@@ -418,4 +418,5 @@ def controller(shape: Shape = Shape()) -> Controller:
     # per orbit per sample at 8 lanes, 1.0e-2 at 32 and 64), so 8 lanes per CPU core; XLA's memory_analysis at 8
     # lanes, 4 and 12 cycles (li2022-mpc's horizon): 1.73 MB per lane and 0.33 kB more per cycle.
     return Controller(init, plan_cycle, thrust, FIELDS, reference_cycles=shape.n_max + 1, record=record,
-                      lanes_cpu=8, lane_bytes=1_750_000, lane_bytes_per_cycle=400)
+                      lanes_cpu=8, lane_bytes=1_750_000, lane_bytes_per_cycle=400,
+                      one_sample_opt_level=1)

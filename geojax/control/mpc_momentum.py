@@ -431,4 +431,5 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
     # dominating); the lane's bytes scaled from the MPC's measured 1.73 MB by the decisions per cycle (20 against
     # 12), an estimate, not measured: the GPU's batch sizing is its only reader.
     return Controller(init, plan_cycle, thrust, FIELDS, reference_cycles=shape.n_max + 1, record=record,
-                      lanes_cpu=8, lane_bytes=2_500_000, lane_bytes_per_cycle=400)
+                      lanes_cpu=8, lane_bytes=2_500_000, lane_bytes_per_cycle=400,
+                      one_sample_opt_level=1)

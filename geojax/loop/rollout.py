@@ -238,21 +238,27 @@ def _compiled_programs(args, static, identity, per_duration, summarized, n, lowe
     """The closed loop and its metrics compiled (or loaded from the cache) for ``args`` (arrays or shapes), the
     metrics in a thread of their own once the loop's result shapes are known; ``lowered`` is set once the loop is
     traced and lowered (or that failed)."""
-    options = compiler_options(jax.tree_util.tree_leaves(args[0])[0].shape[0])
+    lanes = jax.tree_util.tree_leaves(args[0])[0].shape[0]
     try:
         loop_program = traced.lowered(closed_loop_batch, "closed_loop", identity, *args, **static)
     finally:
         lowered.set()
     final, records = loop_program.out_info
     metrics = Background(lambda: traced.lowered(metrics_batch, "metrics", per_duration, args[0], final, records,
-                                                **summarized).compile(options))
-    return loop_program.compile(options), metrics.result()
+                                                **summarized).compile(compiler_options(lanes)))
+    return loop_program.compile(compiler_options(lanes, static["controller"])), metrics.result()
 
 
-def compiler_options(lanes: int) -> dict | None:
+def compiler_options(lanes: int, controller: Controller | None = None) -> dict | None:
     """XLA's options for the programs of a batch compiled for ``lanes`` samples (None: XLA's defaults; one sample:
-    ``compilation.ONE_SAMPLE_OPTIONS``)."""
-    return dict(compilation.ONE_SAMPLE_OPTIONS) if lanes == 1 else None
+    ``compilation.ONE_SAMPLE_OPTIONS``, and for the closed loop of ``controller`` its
+    ``Controller.one_sample_opt_level``)."""
+    if lanes != 1:
+        return None
+    options = dict(compilation.ONE_SAMPLE_OPTIONS)
+    if controller is not None:
+        options["xla_backend_optimization_level"] = controller.one_sample_opt_level
+    return options
 
 
 def _wait(event: threading.Event) -> None:
