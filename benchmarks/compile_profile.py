@@ -156,7 +156,7 @@ def markdown(rows: dict, flags: dict, lanes: int, days: float) -> list[str]:
     lines = [f"The closed loop of `simulate_batch` for {lanes} samples and {days:g} days (one CPU device), compiled "
              "once under JAX's profiler; phases from XLA's own trace events (the kernels' compilation runs on XLA's "
              "threads inside *emitting kernels*).  `qffc-one`: the QFFC's for one sample, as `simulate` compiles it "
-             "(no lane axis, the RK4 stages in a loop, XLA's classic CPU emitters: "
+             "(no lane axis, the RK4 stages in a loop, XLA's classic CPU emitters and LLVM unoptimized: "
              "`geojax.compilation.ONE_SAMPLE_OPTIONS`).", "",
              *harness.table(["case", "trace + lower s", "compile s", "HLO passes before / after layout s",
                              "emitting kernels s", "LLVM codegen s", "kernels", "StableHLO lines", "run s"],

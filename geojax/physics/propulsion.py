@@ -65,7 +65,9 @@ def arm_limits_deg(beta_max_deg, beta_min_deg, alpha_max_deg, alpha_min_deg) -> 
         raise ValueError("thrusters.beta_max_deg: must be > 0; with no pitch the arms cannot control the inclination")
     if beta_min_deg == 90.0 and alpha_max_deg + alpha_min_deg == 0.0:
         raise ValueError("thrusters.beta_min_deg: 90 leaves no in-plane thrust; the longitude cannot be controlled")
-    return ArmLimits(*(jnp.deg2rad(jnp.asarray(float(v))) for v in (beta_max_deg, beta_min_deg, alpha_max_deg, alpha_min_deg)))
+    # math.radians is jnp.deg2rad's product bit for bit; eagerly, jnp.deg2rad compiled a program of its own
+    return ArmLimits(*(jnp.asarray(math.radians(float(v))) for v in (beta_max_deg, beta_min_deg, alpha_max_deg,
+                                                                      alpha_min_deg)))
 
 
 def arm_limits(thrusters: dict) -> ArmLimits:
