@@ -3,18 +3,21 @@
 Runs ``python -m pytest -q`` (the default tier, what the README and CI run) and, with ``--slow``, the slow tier
 (``-m slow``), each with a JUnit report, and writes ``benchmarks/results/suite.{md,json}``: the wall time of
 each tier, the summed test time, and the slowest files and tests.  ``--junit NAME=FILE`` reads a report an
-earlier run wrote instead of running that tier (the results then name the file it came from).  Tests share one
+earlier run wrote instead of running that tier (the results then name the file it came from); ``--keep NAME``
+keeps that tier's summary from the results file as it is (its source then says from which run).  Tests share one
 compilation cache per run (``tests/conftest.py``), so a file's time is mostly the XLA compilations it is the
 first to ask for; the slowest files are where a shared fixture or a shorter run saves the most.
 
     python benchmarks/suite.py                # the default tier, about as long as the README says
     python benchmarks/suite.py --slow         # both tiers
+    python benchmarks/suite.py --junit default=ci.xml --keep slow   # a CI run's report, the last slow tier kept
 """
 
 from __future__ import annotations
 
 import argparse
 import collections
+import json
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -70,6 +73,8 @@ def main(argv=None) -> int:
     parser.add_argument("--slow", action="store_true", help="run the slow tier too")
     parser.add_argument("--junit", action="append", default=[], metavar="TIER=FILE",
                         help="read this tier's JUnit report instead of running it")
+    parser.add_argument("--keep", action="append", default=[], metavar="TIER",
+                        help="keep this tier's summary from the results file (not run, not read from a report)")
     parser.add_argument("--top", type=int, default=20, help="files and tests listed per tier")
     parser.add_argument("--out", type=Path, default=results.RESULTS_DIR)
     args = parser.parse_args(argv)
@@ -78,9 +83,22 @@ def main(argv=None) -> int:
     unknown = set(given) - set(TIERS)
     if unknown:
         parser.error(f"--junit: tiers are {', '.join(TIERS)}, got {', '.join(sorted(unknown))}")
+    unknown = set(args.keep) - set(TIERS)
+    if unknown:
+        parser.error(f"--keep: tiers are {', '.join(TIERS)}, got {', '.join(sorted(unknown))}")
+    kept = {}
+    if args.keep:
+        before = json.loads((args.out / "suite.json").read_text())
+        for name in args.keep:
+            kept[name] = dict(before["tiers"][name])
+            if not kept[name]["source"].startswith("kept from"):
+                kept[name]["source"] = (f"kept from the run of {before['meta']['date_utc']} at "
+                                        f"{before['meta']['source_revision'][:7]} ({kept[name]['source']})")
     summaries = {}
     for name in TIERS:
-        if name in given:
+        if name in kept:
+            summaries[name] = kept[name]
+        elif name in given:
             summaries[name] = tier_summary(*read_junit(Path(given[name])), given[name], args.top)
         elif name == "default" or args.slow:
             report = args.out / f"suite-{name}.xml"
