@@ -113,9 +113,9 @@ class Controller:
     # LLVM's optimization level for a single sample's closed loop (XLA's ``xla_backend_optimization_level``, beside
     # ``compilation.ONE_SAMPLE_OPTIONS``; a batch keeps XLA's defaults).  What ``geojax simulate`` waits for is that
     # program's compilation, and a feedback law's or a planner's cycle is a few small kernels whose run time the
-    # loop's own overhead sets: unoptimized code (0) compiles faster than the year it runs loses.  A controller
+    # loop's own overhead sets: unoptimized code (0) saves more compiling than it costs a year's run.  A controller
     # that solves a program every cycle spends its run time in arithmetic, which runs 2-3x slower unoptimized: it
-    # says 1 (``docs/speed.md``, ``benchmarks/startup.py``).
+    # says 1 (measured in ``docs/speed.md``).
     one_sample_opt_level: int = 0
     # Whether a single run keeps its per-step records (``geojax simulate``'s ``/steps/`` and the ground-track
     # figures): a feedback law has no plan to record per cycle, so its story is in the steps.  None: a controller
