@@ -18,8 +18,10 @@ The cache is keyed by JAX itself: a hash of the compiled program's HLO, the comp
 JAX/jaxlib versions, so a changed program, flag or version is a miss, never a wrong hit, and a hit is the same
 executable (results are bit-for-bit those of a fresh compilation: ``tests/test_compilation.py``).  A folder that
 cannot be used (not writable, a file in its place) gives one warning line and the run goes on uncached; an entry
-that cannot be read is a miss (JAX warns and compiles).  Every program is kept, the ~40 small eager operations
-a command compiles too (``MIN_COMPILE_S``).
+that cannot be read (a truncated or overwritten file) is a miss that mends itself: it is removed, its program
+compiled and kept anew, and the process says so once (``_mend_unreadable_entries``: JAX alone would warn twice
+per entry and run after run, since it never overwrites one).  Every program is kept, the ~40 small eager
+operations a command compiles too (``MIN_COMPILE_S``).
 
 ``Compilations`` records what compiles while it is open (JAX's monitoring events): per program its name, the
 seconds spent tracing, lowering and compiling (or loading from the cache), and whether the cache served it; the
@@ -28,10 +30,12 @@ command line reports from it and ``benchmarks/startup.py`` measures with it.
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
 import tempfile
 import threading
+import warnings
 from pathlib import Path
 from typing import NamedTuple
 
@@ -90,6 +94,7 @@ def use_cache(path: str | os.PathLike | bool | None = None, max_mb: float | None
     if "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS" not in os.environ:  # the user's setting wins
         jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_S)
     _set_dir(folder)
+    _mend_unreadable_entries()
     return folder
 
 
@@ -118,6 +123,49 @@ def _set_dir(folder: Path | None) -> None:
     jax.config.update("jax_enable_compilation_cache", folder is not None)
     jax.config.update("jax_compilation_cache_dir", None if folder is None else str(folder))
     compilation_cache.reset_cache()
+
+
+# JAX's words when it cannot read an entry (``jax._src.compiler``); geojax says it once instead
+_JAX_READ_WARNING = "Error reading persistent compilation cache entry"
+
+
+def _mend_unreadable_entries() -> None:
+    """Make an unreadable cache entry a miss that mends itself: JAX's reading of an entry
+    (``jax._src.compilation_cache.get_executable_and_time``, private) wrapped so that an entry that fails is
+    removed before JAX compiles its program (JAX then keeps the new executable: it never overwrites an entry, so
+    a corrupt one would otherwise fail in every later run too), with one warning line per process in place of
+    JAX's two per entry.  Installed once; on a JAX without that function nothing changes (JAX warns as before)."""
+    from jax._src import compilation_cache as jax_cache
+
+    read = getattr(jax_cache, "get_executable_and_time", None)
+    if read is None or getattr(read, "mends_unreadable", False):
+        return
+    said, saying = [], threading.Lock()  # one line per process, whichever compiling thread meets an entry first
+
+    @functools.wraps(read)
+    def mending(cache_key, *args, **kwargs):
+        try:
+            return read(cache_key, *args, **kwargs)
+        except Exception as err:
+            folder = cache_dir()
+            if folder is not None and not isinstance(err, getattr(jax_cache, "CacheVerificationError", ())):
+                for suffix in ("-cache", "-atime"):  # ``jax._src.lru_cache``'s entry and its access time
+                    try:
+                        (folder / f"{cache_key}{suffix}").unlink(missing_ok=True)
+                    except OSError:
+                        pass  # left as it is: a miss again next run, as JAX alone would have it
+                with saying:
+                    first, said[:] = not said, [True]
+                if first:
+                    why = f"{type(err).__name__}: {err}"
+                    print(f"geojax: warning: compilation cache {folder}: an entry could not be read "
+                          f"({why[:80]}); it and any other such entry are compiled again and replaced",
+                          file=sys.stderr)
+            raise  # JAX counts it a miss, compiles and keeps the program
+
+    mending.mends_unreadable = True
+    jax_cache.get_executable_and_time = mending
+    warnings.filterwarnings("ignore", message=_JAX_READ_WARNING, category=UserWarning)
 
 
 def _unusable(folder: Path) -> str:

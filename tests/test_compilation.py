@@ -248,6 +248,37 @@ def test_compilations_are_recorded_with_their_cache_hits(tmp_path):
     assert second[0] == "1 True" and "loaded" in second[1]
 
 
+def test_unreadable_cache_entries_warn_once_and_are_replaced(tmp_path):
+    """Every entry of a filled cache overwritten: the run says so in one line (not JAX's two per entry), gets the
+    uncached program's numbers, exit 0; the entries are compiled again and replaced, so the next process is
+    served by the cache (JAX's own hit events, through ``Compilations``) and warns no more."""
+    code = ("import jax, jax.numpy as jnp, geojax; from geojax.compilation import Compilations; "
+            "log = Compilations(min_s=0.0).__enter__(); "
+            "print(repr(float(jax.jit(lambda x: jnp.sum(jnp.sin(x) ** 2))(jnp.arange(500.0))))); "
+            "print(sum(p.cached for p in log.programs), len(log.programs))")
+    env = {**{k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"},
+           "GEOJAX_CACHE_DIR": str(tmp_path), "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "0"}
+
+    def run():
+        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr
+        value, counts = out.stdout.splitlines()
+        return value, [int(n) for n in counts.split()], [line for line in out.stderr.splitlines() if line.strip()]
+
+    value, (hits, programs), warned = run()
+    assert hits == 0 and programs >= 1 and not warned
+    entries = sorted(tmp_path.glob("*-cache"))
+    assert len(entries) >= programs
+    for entry in entries:
+        entry.write_bytes(b"overwritten")
+    again, (hits, _), warned = run()
+    assert again == value and hits == 0
+    assert len(warned) == 1 and warned[0].startswith(f"geojax: warning: compilation cache {tmp_path}"), warned
+    assert all(entry.read_bytes() != b"overwritten" for entry in entries if entry.exists())
+    served, (hits, programs), warned = run()
+    assert served == value and hits == programs and not warned
+
+
 SWEEP_TOML = """name = "kept"
 scenario = "li2022-qffc"
 controllers = ["qffc"]
