@@ -41,6 +41,12 @@ def padded(qffc):
     return rollout.simulate_batch([qffc, qffc], seeds=[0, 1])
 
 
+def _environment(**settings) -> dict:
+    """This process's environment for a child geojax, without a JAX cache folder of the caller's, with
+    ``settings``."""
+    return {**{k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"}, **settings}
+
+
 def test_cycle_slots_cover_every_duration_with_half_to_spare():
     """The slot counts: at least the cycles, fewer than 1.5 times them from 32 cycles up, few distinct values."""
     for n in range(1, 3000):
@@ -188,7 +194,7 @@ def test_the_cache_serves_the_same_numbers_as_no_cache(tmp_path, qffc, padded):
             "kept = sorted(p.name for p in compilation.cache_dir().glob('*-geojax-traced')) "
             "if compilation.cache_dir() else []; "
             "np.save(sys.argv[1], np.array([r.metrics[k] for k in sorted(r.metrics)])); print(len(kept))")
-    env = {k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"}
+    env = _environment()
     folder = tmp_path / "cache"
     kept = []
     for name, extra in (("cold", {"GEOJAX_CACHE_DIR": str(folder)}), ("warm", {"GEOJAX_CACHE_DIR": str(folder)}),
@@ -207,8 +213,7 @@ def test_an_unusable_cache_folder_warns_once_and_the_run_goes_on(tmp_path):
     """A file where the folder should be: one warning line, the cache off, exit 0."""
     blocker = tmp_path / "not-a-folder"
     blocker.write_text("x")
-    env = {**{k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"},
-           "GEOJAX_CACHE_DIR": str(blocker / "cache")}
+    env = _environment(GEOJAX_CACHE_DIR=str(blocker / "cache"))
     out = subprocess.run([sys.executable, "-m", "geojax", "scenarios"], env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     warnings = [line for line in out.stderr.splitlines() if line.strip()]
@@ -240,8 +245,7 @@ def test_compilations_are_recorded_with_their_cache_hits(tmp_path):
             "f = jax.jit(lambda x: jnp.cumsum(jnp.sin(x) ** 2)); "
             "log = Compilations(min_s=0.0).__enter__(); f(jnp.arange(5000.0)).block_until_ready(); "
             "p = [q for q in log.programs if '<lambda>' in q.name]; print(len(p), p[0].cached); print(log.summary())")
-    env = {**{k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"},
-           "GEOJAX_CACHE_DIR": str(tmp_path), "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "0"}
+    env = _environment(GEOJAX_CACHE_DIR=str(tmp_path), JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="0")
     first, second = (subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                                      check=True).stdout.splitlines() for _ in range(2))
     assert first[0] == "1 False" and "compiled" in first[1]
@@ -256,8 +260,7 @@ def test_unreadable_cache_entries_warn_once_and_are_replaced(tmp_path):
             "log = Compilations(min_s=0.0).__enter__(); "
             "print(repr(float(jax.jit(lambda x: jnp.sum(jnp.sin(x) ** 2))(jnp.arange(500.0))))); "
             "print(sum(p.cached for p in log.programs), len(log.programs))")
-    env = {**{k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"},
-           "GEOJAX_CACHE_DIR": str(tmp_path), "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "0"}
+    env = _environment(GEOJAX_CACHE_DIR=str(tmp_path), JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="0")
 
     def run():
         out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
@@ -323,7 +326,7 @@ def test_a_sweep_through_its_kept_program_is_bit_for_bit_the_traced_one(tmp_path
     code = ("import sys, numpy as np; from geojax import sweep, store; "
             "out = sweep.run_sweep(sweep.load(sys.argv[1]), sys.argv[2], progress=False); "
             "np.save(sys.argv[3], store.read_h5(out)[0]['metrics']['dv_per_year_mps'])")
-    env = {k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"}
+    env = _environment()
     folder = tmp_path / "cache"
     for seed in (1, 2):
         (tmp_path / f"s{seed}.toml").write_text(SWEEP_TOML.format(seed=seed))
