@@ -253,9 +253,10 @@ def test_compilations_are_recorded_with_their_cache_hits(tmp_path):
 
 
 def test_unreadable_cache_entries_warn_once_and_are_replaced(tmp_path):
-    """Every entry of a filled cache overwritten: the run says so in one line (not JAX's two per entry), gets the
-    uncached program's numbers, exit 0; the entries are compiled again and replaced, so the next process is
-    served by the cache (JAX's own hit events, through ``Compilations``) and warns no more."""
+    """Every entry of a filled cache overwritten or cut short (a process killed while JAX wrote it: JAX writes
+    in place): the run says so in one line (not JAX's two per entry), gets the uncached program's numbers, exit 0;
+    the entries are compiled again and replaced, so the next process is served by the cache (JAX's own hit
+    events, through ``Compilations``) and warns no more."""
     code = ("import jax, jax.numpy as jnp, geojax; from geojax.compilation import Compilations; "
             "log = Compilations(min_s=0.0).__enter__(); "
             "print(repr(float(jax.jit(lambda x: jnp.sum(jnp.sin(x) ** 2))(jnp.arange(500.0))))); "
@@ -272,12 +273,15 @@ def test_unreadable_cache_entries_warn_once_and_are_replaced(tmp_path):
     assert hits == 0 and programs >= 1 and not warned
     entries = sorted(tmp_path.glob("*-cache"))
     assert len(entries) >= programs
-    for entry in entries:
-        entry.write_bytes(b"overwritten")
+    spoilt = {}
+    for i, entry in enumerate(entries):
+        whole = entry.read_bytes()
+        spoilt[entry] = b"overwritten" if i % 2 else whole[:len(whole) // 2]
+        entry.write_bytes(spoilt[entry])
     again, (hits, _), warned = run()
     assert again == value and hits == 0
     assert len(warned) == 1 and warned[0].startswith(f"geojax: warning: compilation cache {tmp_path}"), warned
-    assert all(entry.read_bytes() != b"overwritten" for entry in entries if entry.exists())
+    assert all(entry.read_bytes() != bad for entry, bad in spoilt.items() if entry.exists())
     served, (hits, programs), warned = run()
     assert served == value and hits == programs and not warned
 
