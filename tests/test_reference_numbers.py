@@ -1,0 +1,32 @@
+"""Every shipped scenario family keeps its numbers bit for bit: short runs of the padded one-sample loop and of
+the sweeps' plain scan (no part, the wheels, the navigation filter; the QFFC, FOMPC, zone NSSK and Katz's law)
+against the stored numbers of ``tests/reference/numbers.npz``.
+
+Independent check: numbers written by an earlier build (``tests/reference/write_numbers.py``, regenerated only
+deliberately, when a change is meant to move numbers), so the comparison needs no git history.
+"""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent / "reference"
+
+
+def _writer():
+    spec = importlib.util.spec_from_file_location("write_numbers", HERE / "write_numbers.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_short_runs_of_every_family_give_the_stored_numbers_bit_for_bit():
+    with np.load(HERE / "numbers.npz") as data:
+        stored = {k: data[k] for k in data.files}
+    ours = _writer().numbers()
+    assert sorted(ours) == sorted(stored), set(ours) ^ set(stored)
+    differ = [k for k in stored if not np.array_equal(ours[k], stored[k], equal_nan=True)]
+    assert not differ, differ
+    assert any(k.startswith("ranging.records.cycles.states.navigation") for k in ours)
+    assert any(k.startswith("momentum.records.cycles.states.wheels") for k in ours)
