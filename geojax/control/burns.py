@@ -39,8 +39,8 @@ from geojax.physics.propulsion import delta_v_direction_rsw, firing_fraction, su
 from geojax.physics.trig import sincos
 
 NOMINAL_3SIGMA_ATT_DEG = 0.05  # Li 2022, eq. (48)
-# ``fold_in`` constant of the magnitude errors' draw from the cycle's key (the FOMPC's search takes 1; the further
-# states ``states.base.STATE_KEY_OFFSET`` and up).
+# ``fold_in`` constant of the magnitude errors' draw from the cycle's key (the FOMPC's search takes 1; the parts
+# their own named streams, ``states.base.stream_id``).
 MAGNITUDE_KEY = 2
 
 

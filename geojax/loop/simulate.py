@@ -53,7 +53,7 @@ from geojax.physics.fusion import materialized
 from geojax.physics.integrate import rk4_step
 from geojax.params import Params
 from geojax.physics.propagate import MEE, CycleMeans, Dynamics, cycle_means
-from geojax.states.base import STATE_KEY_OFFSET, CycleStart, StateModel, StepContext, ThrustContext
+from geojax.states.base import CycleStart, StateModel, StepContext, ThrustContext, check_streams, stream_id
 
 # Li 2022, eq. (48): nominal 3-sigma determination errors per component, scaled by H_rv (the attitude's:
 # control.burns).
@@ -134,6 +134,7 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
     ``controller``, ``step_s``, ``dynamics``, ``keep_steps`` and ``states`` (the further states carried,
     ``geojax.states``) are static.
     """
+    check_streams(states)
     env = shared.env
     n_cycles, n_steps = env.earth_angle_rad.shape[:2]
     cycle_s = n_steps * step_s
@@ -247,13 +248,13 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
 
 def _cycle_start(states, params, extra: dict, dynamics, state, k, t_s, cycle_key, mu) -> dict:
     """The further states after their ``cycle`` hooks at a cycle start (unchanged without hooks)."""
-    hooked = [(place, m) for place, m in enumerate(states) if m.cycle is not None]
+    hooked = [m for m in states if m.cycle is not None]
     if not hooked:
         return extra
     r, v = position_velocity(dynamics, state.orbit, mu)
     extra = dict(extra)
-    for place, m in hooked:
-        start = CycleStart(k, t_s, r, v, state.mass_kg, jax.random.fold_in(cycle_key, STATE_KEY_OFFSET + place))
+    for m in hooked:
+        start = CycleStart(k, t_s, r, v, state.mass_kg, jax.random.fold_in(cycle_key, stream_id(m)))
         extra[m.name] = m.cycle(params, extra[m.name], start)
     return extra
 

@@ -37,6 +37,7 @@ and its ``estimate`` hook gives the controller the filter's state in place of th
 
 from __future__ import annotations
 
+import zlib
 from typing import Callable, NamedTuple
 
 import jax.numpy as jnp
@@ -53,12 +54,38 @@ class CycleStart(NamedTuple):
     r_eci_m: jnp.ndarray  # [3] true position
     v_eci_mps: jnp.ndarray  # [3] true velocity
     mass_kg: jnp.ndarray  # []
-    key: jnp.ndarray  # the model's own key this cycle: fold_in(the cycle's key, STATE_KEY_OFFSET + its place)
+    key: jnp.ndarray  # the model's own key this cycle: fold_in(the cycle's key, stream_id(model))
 
 
-# A model's key at a cycle start is the cycle's key folded with this plus its place in the tuple, apart from the
-# streams the loop and the controllers draw (rows of normal(key_k), fold_in(key_k, 1)).
-STATE_KEY_OFFSET = 1 << 16
+# The streams the loop and the controllers draw from the cycle's key: rows of normal(key_k), fold_in(key_k, 1)
+# (the FOMPC's search) and fold_in(key_k, control.burns.MAGNITUDE_KEY).  A part's stream is never one of them.
+RESERVED_STREAMS = frozenset({0, 1, 2})
+# The navigation filter's stream: the value it drew from when it was the only part (the first of the tuple,
+# 1 << 16 + its place), kept so that every scenario with the filter keeps its numbers bit for bit.
+NAVIGATION_STREAM = 1 << 16
+
+
+def stream_id(model) -> int:
+    """The id a part's key is folded with at each cycle start: its declared ``stream``, else a stable hash of its
+    name (CRC-32), never its place in the tuple, so that adding or removing a part changes no other part's draws
+    (common random numbers between runs with and without it)."""
+    if model.stream is not None:
+        return int(model.stream)
+    return zlib.crc32(model.name.encode()) | (1 << 31)  # the top bit set: apart from every small constant
+
+
+def check_streams(models) -> None:
+    """``ValueError`` where two parts share a name or a stream, or a part takes one of the loop's own streams."""
+    seen = {}
+    for m in models:
+        sid = stream_id(m)
+        if sid in RESERVED_STREAMS:
+            raise ValueError(f"state {m.name!r}: stream {sid} is the loop's own (reserved: {sorted(RESERVED_STREAMS)})")
+        if m.name in (other.name for other in seen.values()):
+            raise ValueError(f"state {m.name!r}: two parts of one name")
+        if sid in seen:
+            raise ValueError(f"state {m.name!r}: stream {sid} is also state {seen[sid].name!r}'s; give it another")
+        seen[sid] = m
 
 
 class StepContext(NamedTuple):
@@ -104,3 +131,4 @@ class StateModel(NamedTuple):
     # cycle its ``columns`` add to a sweep's kept records (``tests/test_lanes.py`` checks both against the records)
     bytes_per_cycle: int = 0
     columns_per_cycle: int = 0
+    stream: int | None = None  # its random stream's id (``stream_id``); None: a stable hash of its name

@@ -72,7 +72,7 @@ from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, wrap_ang
 from geojax.physics.frames import ecef_to_eci, rsw_basis
 from geojax.physics.fusion import skipped_where_idle
 from geojax.physics.integrate import rk4_step
-from geojax.states.base import StateModel
+from geojax.states.base import NAVIGATION_STREAM, StateModel
 
 NAME = "navigation"
 N_ORBIT = 6
@@ -593,7 +593,7 @@ def model(layout: Layout) -> StateModel:
     return StateModel(NAME, functools.partial(init, layout), functools.partial(step, layout), summary, metrics,
                       cycle=functools.partial(cycle, layout), columns=columns,
                       thrust=functools.partial(thrust, layout), estimate=estimate,
-                      bytes_per_cycle=(16 + 2 * n_b) * 8, columns_per_cycle=15 + 2 * n_b)
+                      bytes_per_cycle=(16 + 2 * n_b) * 8, columns_per_cycle=15 + 2 * n_b, stream=NAVIGATION_STREAM)
 
 
 # The registry's entry (metrics and columns, which do not depend on the layout).
