@@ -73,12 +73,19 @@ class Field:
     to_si: float | Callable = 1.0  # factor (or function) from the TOML unit to the leaf's SI unit
     transform: Transform | None = None  # how geojax.tune moves it (None: not tunable)
     static: bool = False  # sets the compiled loop's structure: equal across a sweep, never tuned
+    # For a static key: what of its value fixes the compiled program (``integration.step_s``: the steps per
+    # cycle); None: the value itself.  The static keys and the programs' identity are derived from these alone.
+    identity: Callable | None = None
     # How figures and tables name it: a symbol ("β_max"; default: the key without its unit suffix) and the unit
     # of the TOML value ("km²/s³"; default: read from the key's unit suffix, ``_deg`` -> deg; "" for none).
     symbol: str | None = None
     unit: str | None = None
     alias: str | None = None  # a short name a tuning accepts for this key, in a file and in Python alike ("k_h")
     doc: str = ""  # one line: what the key means (the documentation's key tables, ``docs/hooks.py``)
+
+    def identity_of(self, value):
+        """What of a static key's validated value fixes the compiled program (hashable)."""
+        return self.identity(value) if self.identity is not None else value
 
     def describe(self) -> str:
         if self.choices:
@@ -127,15 +134,13 @@ class Params(NamedTuple):
     station: dict
     errors: dict
     controller: dict
-    # The ``[attitude]`` table's leaves where the loop carries the wheels (``geojax.states.momentum``); else empty:
-    # a state that is absent has no leaf.
-    attitude: dict = {}
-    # The ``[navigation]`` table's leaves where the loop carries the filter (``geojax.states.navigation``:
-    # ``navigation.model = "ekf"``, the stations stacked on a leading axis); else empty.
-    navigation: dict = {}
+    # {part name: its leaves} of each part the loop carries (``geojax.states``: ``"wheels"``, ``"navigation"``, a
+    # user's own), declared by the part; a part that is absent has no entry, so no leaf.
+    states: dict = {}
 
 
-LEAF_TABLES = ("spacecraft", "thrusters", "station", "errors", "controller", "attitude", "navigation")
+# The loop's own tables of leaves (the parts' are under ``Params.states``).
+LEAF_TABLES = ("spacecraft", "thrusters", "station", "errors", "controller")
 
 
 def table_leaves(config_table: dict, fields: dict[str, Field]) -> dict:

@@ -24,6 +24,7 @@ from typing import NamedTuple
 import numpy as np
 
 from geojax.loop.metrics import STATUS_OK, STATUS_TEXT
+from geojax.states import descriptions as part_descriptions
 
 # Unit of a dataset by the end of its name (the project's naming rule: the name says the unit).
 UNIT_SUFFIXES = (
@@ -35,9 +36,6 @@ DIMENSIONLESS = {"ex", "ey", "ix", "iy", "max_abs_de", "max_abs_di", "duty_fract
                  "ns_fraction", "burns_per_thruster_per_orbit", "burns_total", "cycles_without_solution", "code",
                  "active", "loss", "step_norm", "theta", "temperature", "trust_radius", "constraint", "constraint_lon",
                  "constraint_lat", "status", "time_above_80pct_capacity_fraction"}
-# The filter's axes and units (geojax.states.navigation's metrics and columns).
-NAV_AXES = (("radial", "radial"), ("along", "along-track"), ("cross", "cross-track"))
-NAV_UNITS = (("m", "position"), ("mps", "velocity"))
 DESCRIPTIONS = {
     "dv_per_year_mps": "delta-V per year of the whole run",
     "dv_steady_per_year_mps": "delta-V per year in steady state: the mean of the years after the first",
@@ -82,33 +80,7 @@ DESCRIPTIONS = {
     **{f"constraint_{axis}": f"box constraint of the {name}: (largest excursion / box half-width)^2 - 1, <= 0 inside"
        for axis, name in (("lon", "longitude"), ("lat", "latitude"))},
     "best_dv_per_year_mps": "best feasible delta-V per year so far",
-    # The wheels' momentum (geojax.states.momentum, where attitude.wheels = true)
-    "max_wheel_momentum_nms": "largest |momentum| of any reaction wheel at any step start (body axes)",
-    "max_wheel_momentum_last_year_nms": "the same over the run's last 365.25 days (the whole run when shorter)",
-    "wheel_momentum_per_day_nms": "secular growth of the wheels' momentum: its net change from the first cycle "
-                                  "start to the last cycle end, per day",
-    "srp_torque_impulse_nms": "integral of |SRP torque| over the run (centre-of-pressure offset)",
-    "gravity_gradient_impulse_nms": "integral of |gravity-gradient torque| over the run",
-    "time_above_80pct_capacity_fraction": "fraction of the step starts with a wheel above 80 % of its capacity",
-    "thrust_torque_impulse_nms": "integral of |thrust torque| over the run (dumping tilts, the centre of mass's "
-                                 "shift): the momentum the thrusters moved",
-    "dump_cross_dv_mps": "Delta-V the dumping tilts put across the planned thrust directions over the run",
-    **{f"wheel_{axis}_nms": f"the {axis} wheel's momentum at the cycle end, body axes" for axis in "xyz"},
-    **{f"wheel_max_abs_{axis}_nms": f"largest |momentum| of the {axis} wheel within the cycle" for axis in "xyz"},
-    # Orbit determination (geojax.states.navigation, where navigation.model = "ekf")
-    **{f"nav_{axis}_{stat}_{unit}": f"{what_stat} of the filter's {name} {what} error at the decision times"
-       for axis, name in NAV_AXES for unit, what in NAV_UNITS
-       for stat, what_stat in (("rms", "RMS"), ("p95", "95th percentile of the magnitude"))},
-    "nav_position_rms_m": "RMS of the filter's position error (3-D) at the decision times",
-    "nees_mean": "the filter's NEES (6 dof: position and velocity) averaged over the decision times; 6 if consistent",
-    "nis_mean_per_dof": "the filter's NIS per degree of freedom over every measurement update; 1 if consistent",
-    "measurements_used": "measurement components the filter processed over the run",
-    **{f"nav_{kind}_{axis}_{unit}": f"the filter's {name} {what} {label} at the cycle start"
-       for axis, name in NAV_AXES for unit, what in NAV_UNITS
-       for kind, label in (("error", "error (estimate - truth)"), ("sigma", "1-sigma"))},
-    "nees": "the filter's NEES at the cycle start (6 dof)",
-    "nis_per_dof": "the filter's NIS per degree of freedom over the cycle's updates",
-    "measurements": "measurement components the filter processed in the cycle",
+    **part_descriptions(),  # each part's own (geojax.states: the wheels', the filter's)
 }
 
 

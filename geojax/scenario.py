@@ -30,15 +30,18 @@ from geojax.physics.propulsion import arm_limits_deg
 from geojax.physics.time import TT_MINUS_TAI_S, parse_utc, tai_minus_utc_s, tt_seconds_from_utc
 from geojax.control.base import ARM_LIMIT_KEYS
 from geojax.scenario_schema import (EPHEMERIS_UTC_RANGE, NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M,
-                                    NOMINAL_3SIGMA_V_MPS, ORBIT_KEYS, SCHEMA)
+                                    NOMINAL_3SIGMA_V_MPS, ORBIT_KEYS)
+from geojax.scenario_schema import SCHEMA as CORE_SCHEMA
 from geojax.scenario_toml import to_toml
-from geojax.navigation import keys as navigation_keys
-from geojax.states import momentum
+from geojax import states as parts
 
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
+
+# Every table of a scenario: the loop's own (``scenario_schema``), then each registered part's (``geojax.states``).
+SCHEMA = {**CORE_SCHEMA, **parts.tables()}
 
 __all__ = ["SCHEMA", "Scenario", "ScenarioFile", "available", "controller_fields", "from_dict", "load", "read_text",
            "read_toml_file", "started_at", "to_toml", "with_overrides"]
@@ -264,8 +267,7 @@ def _validate(raw: dict, controller=None) -> dict:
     if validate is not None:
         validate(config)
     _check_honoured(config, module)
-    momentum.validate(config)
-    config["navigation"] = navigation_keys.check_with(config)
+    parts.validate(config)
     t = config["thrusters"]
     arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
     _check_propellant(config, module)

@@ -4,15 +4,12 @@ orbit keys each kind of initial elements needs.  ``geojax.scenario`` validates a
 
 from __future__ import annotations
 
-from geojax.control.burns import NOMINAL_3SIGMA_ATT_DEG
-from geojax.loop.simulate import NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS
+from geojax.nominal_errors import NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS
 from geojax.params import LOG, NUMBER as _NUMBER, REQUIRED, Field, degrees
-from geojax.navigation.keys import FIELDS as NAVIGATION_FIELDS
 from geojax.physics import constants as c
 from geojax.physics.forces import ForceModel
 from geojax.physics.geopotential import MAX_DEGREE as MAX_GRAVITY_DEGREE
-from geojax.states.momentum import (DEFAULT_CAPACITY_NMS, DEFAULT_DUMP_GAIN_PER_S, DEFAULT_INERTIA_KG_M2,
-                                    DEFAULT_THRUST_ARM_M, DEFAULT_TRANSIENT_FRACTION)
+from geojax.physics.propagate import cycle_count, steps_per_cycle
 
 MAX_ORBIT_KM = 2.0e6  # beyond Earth's Hill sphere (1.5e6 km)
 MAX_ANGLE_RAD, MAX_ANGLE_DEG = 1.0e3, 1.0e5  # about 160 and 280 turns: more is a unit slip
@@ -26,8 +23,8 @@ EPHEMERIS_UTC_RANGE = {"meeus": ("1999-01-01", "2051-01-01"), "de421": ("1999-01
 SCHEMA: dict[str, dict[str, Field]] = {
     "": {"name": Field(str, REQUIRED), "description": Field(str, "")},
     "epoch": {
-        "utc": Field(str, REQUIRED, symbol="epoch", unit="year"),  # a sweep axis of dates is drawn in years
-        "ut1_minus_utc_s": Field(_NUMBER, 0.0, lower=-0.9, upper=0.9),
+        "utc": Field(str, REQUIRED, symbol="epoch", unit="year", static=True),  # a sweep axis of dates is drawn in years
+        "ut1_minus_utc_s": Field(_NUMBER, 0.0, lower=-0.9, upper=0.9, static=True),
     },
     "orbit": {
         "elements": Field(str, REQUIRED, choices=("mee", "kepler", "station_offset")),
@@ -137,80 +134,21 @@ SCHEMA: dict[str, dict[str, Field]] = {
         # The Earth's shadow ("conical": umbra and penumbra, Montenbruck & Gill Sec. 3.4.2); moon_shadow adds the
         # Moon as an occulting body (same model): both cut SRP and the thrusters' sunlit windows.
         "shadow": Field(str, "conical", choices=("conical", "none")),
-        "moon_shadow": Field(bool, False),
+        "moon_shadow": Field(bool, False, static=True),
         # Sun and Moon: "meeus" (analytic series, geojax.physics.ephemeris) or "de421" (JPL DE421 through
         # jplephem), evaluated once per scenario on the environment grid.
-        "ephemeris": Field(str, "meeus", choices=("meeus", "de421")),
+        "ephemeris": Field(str, "meeus", choices=("meeus", "de421"), static=True),
         "srp_pressure_n_m2": Field(_NUMBER, ForceModel._field_defaults["srp_pressure_1au_n_m2"], lower=0.0, lower_inclusive=True, upper=1e-2),
         # The Earth's field to degree and order N (EGM2008, tide-free, shipped to degree 20): replaces `j2` and
         # `c22_s22` where given (those stay for the papers' models).  Order: default the degree, 0 <= M <= N.
-        "gravity_degree": Field(int, None, lower=2, upper=MAX_GRAVITY_DEGREE + 1, lower_inclusive=True),
-        "gravity_order": Field(int, None, lower=0, upper=MAX_GRAVITY_DEGREE + 1, lower_inclusive=True),
+        "gravity_degree": Field(int, None, lower=2, upper=MAX_GRAVITY_DEGREE + 1, lower_inclusive=True, static=True),
+        "gravity_order": Field(int, None, lower=0, upper=MAX_GRAVITY_DEGREE + 1, lower_inclusive=True, static=True),
     },
     "integration": {
-        "step_s": Field(_NUMBER, 900.0, lower=0.0, upper=c.SIDEREAL_DAY_S + 1.0),
-        "dynamics": Field(str, "mee", choices=("mee", "cartesian")),
+        "step_s": Field(_NUMBER, 900.0, lower=0.0, upper=c.SIDEREAL_DAY_S + 1.0, static=True, identity=steps_per_cycle),
+        "dynamics": Field(str, "mee", choices=("mee", "cartesian"), static=True),
     },
-    "duration": {"days": Field(_NUMBER, 365.25, lower=0.0, upper=MAX_DAYS)},
-    # The reaction wheels' momentum of a nadir-pointing body (geojax.states.momentum, docs/momentum.md): carried
-    # only where `wheels = true` (the other keys are refused otherwise); every torque's default is none.
-    "attitude": {
-        "wheels": Field(bool, False, static=True,
-                        doc="carry the reaction wheels' momentum (a nadir-pointing body, three wheels on its axes)"),
-        "wheel_capacity_nms": Field(_NUMBER, DEFAULT_CAPACITY_NMS, lower=0.0, upper=1e6, si="wheel_capacity_nms",
-                                    symbol="h_max", unit="N m s",
-                                    doc="momentum each wheel stores at most; beyond it: status 6, wheels saturated"),
-        "initial_momentum_nms": Field(list, [0.0, 0.0, 0.0], length=3, si="initial_momentum_nms", unit="N m s",
-                                      doc="the wheels' momentum at the start, body axes (x along-track, y "
-                                          "anti-normal, z nadir)"),
-        "inertia_kg_m2": Field(list, list(DEFAULT_INERTIA_KG_M2), length=6, si="inertia_kg_m2", unit="kg m²",
-                               doc="inertia tensor (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) in body axes: the gravity-"
-                                   "gradient torque; default an estimate for Li 2022's 5000 kg class, principal"),
-        "srp_offset_body_m": Field(list, [0.0, 0.0, 0.0], length=3, si="srp_offset_body_m", unit="m",
-                                   doc="centre of pressure less centre of mass, body axes: SRP torque"),
-        "srp_offset_array_m": Field(list, [0.0, 0.0, 0.0], length=3, si="srp_offset_array_m", unit="m",
-                                    doc="centre of pressure less centre of mass along the solar array's axis (the "
-                                        "orbit normal), across it, along its Sun-facing normal: SRP torque"),
-        "thrust_arm_m": Field(_NUMBER, DEFAULT_THRUST_ARM_M, lower=0.0, lower_inclusive=True, upper=100.0,
-                              si="thrust_arm_m", symbol="L_thr", unit="m",
-                              doc="distance from the centre of mass to each thruster's nozzle (the gimbal a "
-                                  "dumping tilt turns about): the tilt's moment arm"),
-        "thrust_reach_m": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=100.0, si="thrust_reach_m",
-                                symbol="ρ_arm", unit="m",
-                                doc="each arm's reach from its base to the nozzle: with it the nozzle distance is "
-                                    "where the arm puts the nozzle on the line through the centre of mass, burn by "
-                                    "burn (states.momentum.nozzle_distance_m); 0: thrust_arm_m for every burn"),
-        "thrust_base_north_m": Field(list, [0.0, 0.0, 0.0], length=3, si="thrust_base_north_m", unit="m",
-                                     doc="base of the arm on the north side, body axes (it flies the burns that push "
-                                         "south: Li 2022's thruster 1); read where thrust_reach_m > 0"),
-        "thrust_base_south_m": Field(list, [0.0, 0.0, 0.0], length=3, si="thrust_base_south_m", unit="m",
-                                     doc="base of the arm on the south side, body axes (the burns that push north); "
-                                         "a single manipulator (Ye 2022): both bases its platform"),
-        "dump_angle_max_deg": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=90.0,
-                                    si="dump_angle_max_rad", to_si=degrees, symbol="δ_max",
-                                    doc="largest tilt of a thrust line off the centre of mass to unload the "
-                                        "wheels during burns; 0: no dumping"),
-        "dump_gain_per_s": Field(_NUMBER, DEFAULT_DUMP_GAIN_PER_S, lower=0.0, upper=1e3,
-                                 si="dump_gain_per_s", symbol="k_dump", unit="1/s", transform=LOG,
-                                 doc="the dumping law's gain: the torque asked of a tilt is -k_dump times the "
-                                     "measured wheel momentum"),
-        "dump_transient_fraction": Field(_NUMBER, DEFAULT_TRANSIENT_FRACTION, lower=0.0, lower_inclusive=True,
-                                         upper=1.0, si="dump_transient_fraction", symbol="f_tr", unit="",
-                                         doc="the most momentum, as a fraction of a wheel's capacity, a burn may "
-                                             "leave for the next burn to empty (the rest: margin for the torques "
-                                             "meanwhile)"),
-        "tank_offset_body_m": Field(list, [0.0, 0.0, 0.0], length=3, si="tank_offset_body_m", unit="m",
-                                    doc="the propellant's centre less the starting centre of mass, body axes: the "
-                                        "centre of mass moves as propellant is used (thrust and SRP torques)"),
-        "wheel_momentum_sigma_nms": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6,
-                                          si="wheel_momentum_sigma_nms", symbol="σ_h", unit="N m s",
-                                          doc="1-sigma error per axis of the measured wheel momentum the dumping "
-                                              "law reads (one draw per cycle)"),
-    },
-    # Orbit determination (geojax.states.navigation, docs/navigation.md): Li 2022's Gaussian fix (the errors table)
-    # by default; `model = "ekf"` carries an extended Kalman filter on the stations' or receiver's tracking, and
-    # flies every burn with the execution errors given here.  Stations are [[navigation.stations]] sub-tables.
-    "navigation": NAVIGATION_FIELDS,
+    "duration": {"days": Field(_NUMBER, 365.25, lower=0.0, upper=MAX_DAYS, static=True, identity=cycle_count)},
 }
 
 # The keys of ``orbit`` that each ``orbit.elements`` needs (every other one of them must be left out).

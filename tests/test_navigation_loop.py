@@ -133,7 +133,7 @@ def test_filter_in_the_loop_reaches_the_cramer_rao_bound():
     angle0 = float(setup.shared.env.earth_angle_rad[0, 0, 0])
     step_s = setup.step_s
     times = step_s * jnp.arange(1, 3 * 96 + 1)
-    stations = nav.stations_of(params.navigation)
+    stations = nav.stations_of(params.states[nav.NAME])
 
     def ranges(x, t):
         angle = angle0 + OMEGA_EARTH_RAD_S * t
@@ -262,7 +262,7 @@ def test_an_estimated_bias_is_updated_as_the_scalar_kalman_filter_says():
     p = jnp.zeros((12, 12)).at[10:, 10:].set(jnp.diag(jnp.full(2, sigma_b**2)))  # only the biases unknown
     filtered = (b.truth, jnp.zeros(4), p, jnp.asarray(0.0), jnp.asarray(0.0), jnp.asarray(0.0), jnp.zeros(2))
     bias = jnp.array([17.0, -9.0])
-    out = nav._updates(layout, mu, filtered, jnp.array([1.0, 0.0]), params.navigation, b.truth,
+    out = nav._updates(layout, mu, filtered, jnp.array([1.0, 0.0]), params.states[nav.NAME], b.truth,
                        b.env3.earth_angle_rad[2], bias, jax.random.key(4))
     _, _, p_after, nis_sum, _, used, estimate = (np.asarray(v) for v in out)
     big_b, big_r = sigma_b**2, sigma_r**2

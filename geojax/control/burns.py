@@ -37,8 +37,8 @@ from geojax.physics.dynamics import Thrust
 from geojax.physics.forces import sunlit_fraction_xyz
 from geojax.physics.propulsion import delta_v_direction_rsw, firing_fraction, sunlit_clock
 from geojax.physics.trig import sincos
+from geojax.nominal_errors import NOMINAL_3SIGMA_ATT_DEG  # noqa: F401 (Li 2022 eq. (48))
 
-NOMINAL_3SIGMA_ATT_DEG = 0.05  # Li 2022, eq. (48)
 # ``fold_in`` constant of the magnitude errors' draw from the cycle's key (the FOMPC's search takes 1; the parts
 # their own named streams, ``states.base.stream_id``).
 MAGNITUDE_KEY = 2

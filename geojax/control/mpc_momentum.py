@@ -60,6 +60,7 @@ from geojax.control import lp, mpc
 from geojax.control.base import Controller
 from geojax.control.effects import V_SYNC_MPS, cycle_coast_s, effect_matrix
 from geojax.control.predictor import predict_next
+from geojax.states.momentum import NAME as WHEELS
 from geojax.params import NUMBER, Field, station_target
 from geojax.physics.elements import mee_to_cartesian, wrap_angle
 from geojax.physics.propulsion import arm_limits
@@ -374,11 +375,11 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         accel = params.thrusters["thrust_n"] / mass
         r, v = mee_to_cartesian(estimate.fix_mee, context.force_model.mu_m3_s2)
         basis = rsw_basis(r, v)  # rows R0, S0, W0 in ECI
-        g_eci = basis.T @ body_to_rsw(estimate.states["wheels"])
+        g_eci = basis.T @ body_to_rsw(estimate.states[WHEELS])
         d_eci = disturbance(state, g_eci, params.controller["disturbance_gain"])
         burns, z, solution, model, momentum = plan(
             estimate.mean, target, context.reference, estimate.fix_mee[5], limits, accel, context.cycle_s,
-            params.controller, params.station, state.lines_rsw, basis @ g_eci, basis @ d_eci, mass, params.attitude,
+            params.controller, params.station, state.lines_rsw, basis @ g_eci, basis @ d_eci, mass, params.states[WHEELS],
             shape)
         prediction = predict_next(estimate.mean, context.reference[0], context.reference[1], context.cycle_s)
         prediction = prediction.at[0].set(wrap_angle(prediction[0]))
@@ -389,7 +390,7 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         # rectangle's clip and the attitude error), s = (u x J) / (L m v), so that -L m v (u x s) is J less its
         # part along u (which no tilt reaches); 0 for a burn not fired.
         fired = flown.burn_s > 0
-        arm_mass = params.attitude["thrust_arm_m"] * mass
+        arm_mass = params.states[WHEELS]["thrust_arm_m"] * mass
         impulse = -arm_mass * jnp.cross(momentum.lines, jnp.einsum("bk,bkv->bv", z, momentum.across))  # [2, 3] J
         u = flown.directions_rsw
         tilts = jnp.cross(u, impulse) / (arm_mass * jnp.where(fired, burns.v_mps, 1.0))[:, None]

@@ -16,6 +16,7 @@ from geojax.control.base import Controller, stateless_init
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_columns, remaining_fraction
 from geojax.control.predictor import predict_next
 from geojax.navigation.schedule import station_schedules
+from geojax.states.navigation import NAME as NAVIGATION
 from geojax.physics.elements import wrap_angle
 from geojax.params import LOG, NUMBER, Field, station_target
 from geojax.physics.propulsion import arm_limits
@@ -171,7 +172,7 @@ def around_passes_plan(params, estimate, context, inputs, plain: BurnPair, v_n_f
     correction)."""
     burn_s = jnp.where(plain.feasible, plain.v_mps * estimate.mass_kg / params.thrusters["thrust_n"], 0.0)
     shift, _ = around_passes.node_shift_rad(plain.l_rad[1], estimate.fix_mee[5], estimate.t_s, context.cycle_s,
-                                            burn_s, context.step_s, station_schedules(params.navigation))
+                                            burn_s, context.step_s, station_schedules(params.states[NAVIGATION]))
     prediction, burns, _ = model_cycle(*inputs, v_n_fraction=v_n_fraction, node_shift_rad=shift)
     return prediction, burns
 

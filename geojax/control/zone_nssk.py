@@ -75,6 +75,7 @@ from geojax.control.effects import R_SYNC_M, V_SYNC_MPS
 from geojax.control.qffc import BurnPair
 from geojax.physics.constants import MU_MOON_M3_S2, MU_SUN_M3_S2, OMEGA_EARTH_RAD_S, SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.elements import wrap_angle
+from geojax.states.momentum import NAME as WHEELS
 from geojax.params import NUMBER, REQUIRED, Field, degrees
 
 T_DUMP_S = 3207.0  # Ye 2022, Sec. 4: the least daily firing time the momentum dumping needs
@@ -303,7 +304,7 @@ def plan_cycle(params, estimate, context):
 
     t_min = c["t_min_s"]
     if "wheels" in estimate.states:  # the loop carries the wheels (static): eq. (40)'s t_dump from the momentum
-        asked = dump_time_s(params, estimate.states["wheels"], thrust_n)
+        asked = dump_time_s(params, estimate.states[WHEELS], thrust_n)
         t_min = jnp.where(c["t_dump_from_momentum"] > 0, jnp.minimum(jnp.maximum(t_min, asked), c["t_max_s"]), t_min)
     i_min = burn_inclination_rad(t_min, mass, thrust_n)
     i_max = burn_inclination_rad(c["t_max_s"], mass, thrust_n)
@@ -329,7 +330,7 @@ def dump_time_s(params, wheels_nms, thrust_n):
     delta_max) (body x and z: the pitch wheel's axis y is the burn's own line, which no tilt reaches).  Its norm
     is kept by the body's turn about the pitch axis until the burn; what the torques add meanwhile is the next
     day's.  0 where no tilt is allowed."""
-    a = params.attitude
+    a = params.states[WHEELS]
     capacity_nm = a["thrust_arm_m"] * thrust_n * jnp.sin(a["dump_angle_max_rad"])
     across = jnp.hypot(wheels_nms[0], wheels_nms[2])
     return jnp.where(capacity_nm > 0, across / jnp.where(capacity_nm > 0, capacity_nm, 1.0), 0.0)

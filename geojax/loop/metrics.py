@@ -10,13 +10,12 @@ computed here, inside the rollout's ``jit``:
     3 left the latitude box   (|geocentric latitude| > station.box_half_width_deg at some step start)
     4 non-finite or non-physical state (NaN / inf, or no mass left)
     5 propellant exhausted (the mass reached spacecraft.dry_mass_kg; the thrusters stopped there)
-    6 wheels saturated (a reaction wheel exceeded attitude.wheel_capacity_nms at some step start:
-      ``geojax.states.momentum``; the attitude the loop assumes held is then lost)
+    6 and up: the parts' failures (``geojax.states``: each registered part's statuses in the registry's order,
+      6 the wheels saturated; then a user's own parts'), ``STATUS_MEANINGS`` generated from them
 
-in that order of precedence (4, 5, 6, then 2, 3, 1): a saturated sample's later box checks assume an
-attitude it no longer holds, so its saturation is what it reports; it is kept, never dropped.  A further
-state the loop carries (``geojax.states``) adds its metrics (``StateModel.metrics``) and, where it
-fails (``StateModel.status``), its code.  The box is checked on the
+in that order of precedence (4, 5, the parts', then 2, 3, 1): a part's failure (saturated wheels: the attitude
+the loop assumes is lost) makes the later box checks meaningless, so the failure is what it reports; the
+sample is kept, never dropped.  Each part the loop carries adds its metrics (``StateModel.metrics``).  The box is checked on the
 osculating sub-satellite point at every step start of the whole run, the
 acquisition included (Katz 2025 eq. (10)); a sample with status 4 gets
 finite placeholders (0) for its non-finite metrics, so no NaN reaches a
@@ -41,22 +40,22 @@ from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.elements import wrap_angle
 from geojax.control.recovery import recovery_metrics
 from geojax.params import station_target
-from geojax.states import REGISTRY as STATE_MODELS
+from geojax import states as parts
 
 SECONDS_PER_YEAR = 365.25 * SECONDS_PER_DAY
 YEAR_CYCLES = round(SECONDS_PER_YEAR / SIDEREAL_DAY_S)  # 366 sidereal-day cycles: the cycles of a one-year run
-(STATUS_OK, STATUS_NO_SOLUTION, STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE, STATUS_NO_PROPELLANT,
- STATUS_WHEELS_SATURATED) = range(7)
-STATUS_MEANINGS = ("ok", "cycles without a solution", "left the longitude box", "left the latitude box",
-                   "non-finite or non-physical state", "propellant exhausted", "wheels saturated")
+(STATUS_OK, STATUS_NO_SOLUTION, STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE,
+ STATUS_NO_PROPELLANT) = range(len(parts.CORE_STATUSES))
+STATUS_MEANINGS = parts.status_meanings()  # the loop's, then the registered parts'
 STATUS_TEXT = ", ".join(f"{code} {text}" for code, text in enumerate(STATUS_MEANINGS))
 
 # Per-cycle series a sweep may keep (``cycles = true``).
 CYCLE_NAMES = ("lon_deg", "ex", "ey", "ix", "iy", "dv_mps", "ns_fraction")
 
 
-def summarize(params, final, records, step_s: float, steps_per_cycle: int) -> dict:
-    """{name: scalar} of one rollout (``loop.simulate``'s final state and records), ``"status"`` included."""
+def summarize(params, final, records, step_s: float, steps_per_cycle: int, states: tuple = ()) -> dict:
+    """{name: scalar} of one rollout (``loop.simulate``'s final state and records), ``"status"`` included;
+    ``states``: the models the loop carried (static; their metrics and status codes)."""
     cycles = records.cycles
     m = cycles.means
     n_cycles = m.lon_rad.shape[0]
@@ -89,13 +88,13 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int) -> di
         out.update(dv_split_per_year(cycles.controller, cycles.dv_mps, n_cycles * cycle_s))
     if "recovering" in cycles.controller:  # control.recovery: its cycles and Delta-V apart
         out.update(recovery_metrics(cycles.controller, cycles.dv_mps))
-    failures = []  # (failed, code) of the further states, in their order
-    for name, record in cycles.states.items():
-        model = STATE_MODELS[name]
-        values, failed = model.metrics(params, record, n_steps_total, n_cycles * cycle_s)
+    failures = []  # (failed, code) of the parts, in their order
+    meanings = parts.status_meanings(states)
+    for model in _models(states, cycles.states):
+        values, failed = model.metrics(params, cycles.states[model.name], n_steps_total, n_cycles * cycle_s)
         out.update(values)
         if model.status is not None:
-            failures.append((failed, STATUS_MEANINGS.index(model.status)))
+            failures.append((failed, meanings.index(model.status)))
     finite = jnp.all(jnp.isfinite(final.orbit)) & (final.mass_kg > 0)
     for value in out.values():
         finite &= jnp.isfinite(value)
@@ -186,7 +185,7 @@ def ns_delta_v_mps(rec: dict):
     return jnp.sum(jnp.where(fired, jnp.abs(rec["burns"].dv_rsw_mps[..., 2]), 0.0), axis=1)
 
 
-def cycle_series(records) -> dict:
+def cycle_series(records, states: tuple = ()) -> dict:
     """The per-cycle series a sweep keeps (JAX): ``CYCLE_NAMES`` (mean longitude (deg), e and i vectors (MEE f, g,
     h, k), the Delta-V delivered in the cycle (m/s) and the north-south fraction flown, 1 without a planner), then
     the columns of every extra state the loop carries (``state_columns``: the wheels', the filter's), the same for
@@ -194,20 +193,33 @@ def cycle_series(records) -> dict:
     c = records.cycles
     m = c.means
     return {"lon_deg": jnp.degrees(m.lon_rad), "ex": m.ex, "ey": m.ey, "ix": m.ix, "iy": m.iy, "dv_mps": c.dv_mps,
-            "ns_fraction": c.controller.get("ns_fraction", jnp.ones_like(c.dv_mps)), **state_columns(c.states)}
+            "ns_fraction": c.controller.get("ns_fraction", jnp.ones_like(c.dv_mps)), **state_columns(c.states, states)}
 
 
-def state_columns(states: dict) -> dict:
-    """The per-cycle columns of the extra states' records (``StateModel.columns``), in the registry's order."""
+def state_columns(records: dict, states: tuple = ()) -> dict:
+    """The per-cycle columns of the parts' records (``StateModel.columns``; ``states``: the models carried, a
+    registered part found by its name where not given)."""
     table = {}
-    for name, record in states.items():
-        columns = STATE_MODELS[name].columns
-        if columns is not None:
-            table.update(columns(record))
+    for model in _models(states, records):
+        if model.columns is not None:
+            table.update(model.columns(records[model.name]))
     return table
 
 
-def cycle_table(records) -> dict[str, np.ndarray]:
+def _models(states: tuple, records: dict) -> tuple:
+    """The model of each part whose records are in ``records``: from ``states``, else the registered one."""
+    given = {m.name: m for m in states}
+    registered = {p.name: p for p in parts.REGISTRY}
+    out = []
+    for name in records:
+        model = given.get(name) or getattr(registered.get(name), "model", None)
+        if model is None:
+            raise ValueError(f"states: records of part {name!r}, which is neither registered nor given")
+        out.append(model)
+    return tuple(out)
+
+
+def cycle_table(records, states: tuple = ()) -> dict[str, np.ndarray]:
     """Every per-cycle record in its edge units (the ``/cycles`` datasets): mean elements, and for a planner
     its burns."""
     c = records.cycles
@@ -242,7 +254,7 @@ def cycle_table(records) -> dict[str, np.ndarray]:
         table["status"] = np.where(rec["solved"], 0, 1).astype(np.int8)
     if "recovering" in rec:
         table["recovering"] = np.asarray(rec["recovering"]).astype(np.int8)
-    table.update(state_columns(c.states))
+    table.update(state_columns(c.states, states))
     return {k: np.asarray(v) for k, v in table.items()}
 
 

@@ -54,10 +54,11 @@ class Result(NamedTuple):
     run_s: float = float("nan")  # the compiled closed loop's and metrics' run alone
     scenario: Scenario | None = None  # a single rollout's
     seed: int | None = None  # a single rollout's, None where it was given a key
+    states: tuple = ()  # the models of the parts the loop carried (``geojax.states``)
 
     def cycles(self) -> dict[str, np.ndarray]:
         """The per-cycle records in edge units (``/cycles``) of a single rollout."""
-        return cycle_table(self.records)
+        return cycle_table(self.records, self.states)
 
     # What ``geojax simulate`` writes (``--out``), prints and draws (``--plots``): its report's functions.
     save, summary, plot = report.save, report.summary, report.plot
@@ -74,7 +75,7 @@ def rollout(params: Params, key, shared: Shared, reference_env=None, *, controll
     """
     final, records = loop(params, key, shared, reference_env, controller=controller, step_s=step_s,
                           dynamics=dynamics, keep_steps=keep_steps, states=states)
-    return final, records, summarize(params, final, records, step_s, shared.env.earth_angle_rad.shape[1])
+    return final, records, summarize(params, final, records, step_s, shared.env.earth_angle_rad.shape[1], states)
 
 
 def loop(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,
@@ -127,17 +128,19 @@ def _over_lanes(fn, per_lane: tuple, common: tuple):
     return jax.vmap(fn, in_axes=(0,) * len(per_lane) + (None,) * len(common))(*per_lane, *common)
 
 
-@functools.partial(jax.jit, static_argnames=("n_cycles", "step_s", "steps_per_cycle"))
-def metrics_batch(params, final, records, n_cycles: int, step_s: float, steps_per_cycle: int):
+@functools.partial(jax.jit, static_argnames=("n_cycles", "step_s", "steps_per_cycle", "states"))
+def metrics_batch(params, final, records, n_cycles: int, step_s: float, steps_per_cycle: int, states: tuple = ()):
     """``loop.metrics.summarize`` of every sample over the first ``n_cycles`` cycles of its records: a small
     program of its own, compiled per duration (the closed loop is compiled per slot count)."""
     records = records._replace(cycles=jax.tree_util.tree_map(lambda x: x[:, :n_cycles], records.cycles))
-    return _over_lanes(lambda p, f, r: summarize(p, f, r, step_s, steps_per_cycle), (params, final, records), ())
+    return _over_lanes(lambda p, f, r: summarize(p, f, r, step_s, steps_per_cycle, states), (params, final, records),
+                       ())
 
 
 def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None = None,
-             keep_steps: bool | None = None, key=None, on_compiled=None, meanwhile=None) -> Result:
-    """One closed-loop rollout of ``scenario`` (its registered controller, or ``controller``).
+             keep_steps: bool | None = None, key=None, on_compiled=None, meanwhile=None, states: tuple = ()) -> Result:
+    """One closed-loop rollout of ``scenario`` (its registered controller, or ``controller``), carrying the parts
+    the scenario turns on and ``states`` (a user's own: ``StateModel`` s or ``Part`` s, ``geojax.states.base``).
 
     ``seed`` (or a ``jax.random`` ``key``) draws the orbit-determination and attitude errors
     and any randomness of the controller; same seed, same result.  ``keep_steps`` also returns
@@ -148,7 +151,7 @@ def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None
         keep_steps = keeps_steps(controller_of([scenario]) if controller is None else controller)
     result = simulate_batch([scenario], seeds=[seed], controller=controller, keep_steps=keep_steps,
                             keys=None if key is None else jnp.stack([key]), on_compiled=on_compiled,
-                            meanwhile=meanwhile)
+                            meanwhile=meanwhile, states=states)
     first = lambda tree: jax.tree_util.tree_map(lambda x: x[0], tree)  # noqa: E731
     return result._replace(metrics=first(result.metrics), status=result.status[0], records=first(result.records),
                            final=first(result.final), params=first(result.params), scenario=scenario,
@@ -157,7 +160,7 @@ def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None
 
 def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None = None, *, seeds=None, keys=None,
                    controller: Controller | None = None, keep_steps: bool = False, on_compiled=None,
-                   meanwhile=None) -> Result:
+                   meanwhile=None, states: tuple = ()) -> Result:
     """A batch of rollouts, vmapped in one compiled call.
 
     Either a list of scenarios (one sample each), or one scenario with ``params`` whose leaves carry a
@@ -177,7 +180,7 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     scenarios = [scenarios] if isinstance(scenarios, Scenario) else list(scenarios)
     if params is not None and len(scenarios) != 1:
         raise ValueError("params: give one scenario with a batch of params, or a list of scenarios")
-    call = functools.partial(_loop_call, scenarios, params, seeds, keys, controller, keep_steps)
+    call = functools.partial(_loop_call, scenarios, params, seeds, keys, controller, keep_steps, bool(states))
     compiling = {}
 
     def compile_meanwhile(layout: Batch):
@@ -187,7 +190,7 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
         return functools.partial(_wait, lowered)
 
     n = len(scenarios) if params is None else jax.tree_util.tree_leaves(params)[0].shape[0]
-    batch = prepare(scenarios, controller, pad=True, on_shapes=compile_meanwhile, one_sample=n == 1)
+    batch = prepare(scenarios, controller, pad=True, on_shapes=compile_meanwhile, one_sample=n == 1, states=states)
     args, _, _, _, summarized, n = call(batch)
     if meanwhile is not None:
         meanwhile()
@@ -206,10 +209,10 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
                       None if records.steps is None else to_host(records.steps, n, batch.n_cycles))
     params = batch.params if params is None else params
     return Result(metrics, status, records, to_numpy(final), jax.tree_util.tree_map(np.asarray, params),
-                  batch.step_s, time.perf_counter() - start, compile_s, run_s)
+                  batch.step_s, time.perf_counter() - start, compile_s, run_s, states=batch.states)
 
 
-def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, batch: Batch):
+def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, own_states: bool, batch: Batch):
     """What ``simulate_batch`` compiles and calls for ``batch`` (its ``shared`` arrays or their shapes):
     (the loop's arguments, its static ones, the traced programs' identities of the loop and of the metrics, the
     metrics' static ones, the sample count)."""
@@ -223,9 +226,10 @@ def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, batch: Ba
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=dynamics,
                   keep_steps=keep_steps, states=batch.states)
     summarized = dict(n_cycles=batch.n_cycles, step_s=batch.step_s,
-                      steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1])
-    # A registered controller's programs are kept traced between runs (``geojax.traced``); a user's are not.
-    shipped = controller is None and scenarios[0].controller in REGISTRY  # its code is in traced's digest
+                      steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1], states=batch.states)
+    # A registered controller's programs are kept traced between runs (``geojax.traced``); a user's, or a loop
+    # carrying a user's own part, are not.
+    shipped = controller is None and scenarios[0].controller in REGISTRY and not own_states  # in traced's digest
     identity = None if not shipped else program_identity(
         scenarios[0], scenarios[0].controller, repr(sorted(static_settings(scenarios[0].config["controller"],
                                                                         batch.controller.fields).items())),

@@ -24,7 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from geojax import compilation, traced
-from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
+from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.control import lookup, recovery, none
 from geojax.control.base import Controller
 from geojax.control.predictor import Reference, station_mee
@@ -34,11 +34,10 @@ from geojax.physics.forces import Environment
 from geojax.physics.frames import ecef_to_eci
 from geojax.loop.simulate import Shared, simulate
 from geojax.params import LEAF_TABLES, Params, static_settings, table_leaves
-from geojax.physics.propagate import (DYNAMICS, Dynamics, environment_grid, environment_shape, for_one_sample,
-                                      steps_per_cycle)
+from geojax.physics.propagate import (DYNAMICS, Dynamics, cycle_count, environment_grid, environment_shape,
+                                      for_one_sample, steps_per_cycle)
 from geojax.scenario import SCHEMA, Scenario, controller_fields
-from geojax.states import navigation
-from geojax.states import of_config as states_of
+from geojax import states as parts
 
 
 # Cycles between re-starts of the predictor's reference from the station's nominal state (``control.predictor``).
@@ -83,13 +82,9 @@ class Batch(NamedTuple):
     states: tuple = ()  # the further states the loop carries (``geojax.states.of_config``), static
 
 
-def cycle_count(days: float) -> int:
-    """Control cycles (sidereal days) of a closed-loop run of ``days`` solar days."""
-    return max(1, round(days * SECONDS_PER_DAY / SIDEREAL_DAY_S))
-
-
-def params_of(sc: Scenario, controller: Controller) -> Params:
-    """The ``Params`` of one scenario: every leaf declared by a ``Field.si`` of its tables, SI units."""
+def params_of(sc: Scenario, controller: Controller, extra: tuple = ()) -> Params:
+    """The ``Params`` of one scenario: every leaf declared by a ``Field.si`` of its tables, SI units, and the
+    leaves of each part it carries (``extra``: a user's own parts beside the scenario's)."""
     cfg = sc.config
     dynamics = DYNAMICS[sc.dynamics]
     fm = jax.tree_util.tree_map(jnp.asarray, sc.force_model)
@@ -98,10 +93,7 @@ def params_of(sc: Scenario, controller: Controller) -> Params:
     fields = {t: SCHEMA[t] for t in LEAF_TABLES if t != "controller"}
     fields["controller"] = controller.fields
     leaves = {t: table_leaves(cfg[t], fields[t]) for t in LEAF_TABLES}
-    if not cfg["attitude"]["wheels"]:
-        leaves["attitude"] = {}  # no state, no leaf
-    leaves["navigation"] = navigation.leaves_of(cfg["navigation"]) if cfg["navigation"]["model"] == "ekf" else {}
-    return Params(initial, fm, **leaves)
+    return Params(initial, fm, **leaves, states=parts.leaves_of(cfg, extra))
 
 
 def controller_of(scenarios: list[Scenario]) -> Controller:
@@ -118,7 +110,7 @@ def controller_of(scenarios: list[Scenario]) -> Controller:
 
 def prepare(scenarios: list[Scenario], controller: Controller | None = None,
             segment_cycles: int = REFERENCE_SEGMENT_CYCLES, pad: bool = False, on_shapes=None,
-            one_sample: bool = False) -> Batch:
+            one_sample: bool = False, states: tuple = ()) -> Batch:
     """The ``Batch`` of ``scenarios`` (``controller``: a user's, else the registered one of their kind).
 
     ``segment_cycles``: cycles between re-starts of the predictor's reference (``REFERENCE_SEGMENT_CYCLES``).
@@ -133,6 +125,7 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     (``rollout.simulate_batch`` does, in a thread: XLA compiles one program on one core).  What ``on_shapes``
     returns, if not None, is called before the reference is traced: tracing is Python, one thread at a time, and
     the closed loop's tracing comes first (its compilation is the longest wait; the reference compiles meanwhile).
+    ``states``: a user's own parts (``StateModel`` s or ``Part`` s) carried beside the scenario's.
     ``one_sample``: the batch is one sample's (``simulate``), whose reference is compiled for start-up rather than
     run speed (``reference(sequential=True)`` with ``compilation.ONE_SAMPLE_OPTIONS``).
     """
@@ -144,7 +137,7 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     n_cycles = cycle_count(first.days)
     n_slots = cycle_slots(n_cycles) if pad else n_cycles
     dynamics = DYNAMICS[first.dynamics]
-    params = [params_of(sc, controller) for sc in scenarios]
+    params = [params_of(sc, controller, states) for sc in scenarios]
     stacked = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *params)
     width = controller.reference_cycles
     segment_cycles = min(segment_cycles, n_cycles)
@@ -155,7 +148,7 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     on_segments = functools.partial(reference_segments, n_cycles=n_cycles, width=width, segment_cycles=segment_cycles)
     sharing = functools.partial(_shared, n_cycles=n_cycles, n_slots=n_slots if pad else None)
     batch = functools.partial(Batch, controller, stacked, step_s=step_s, dynamics=dynamics, n_cycles=n_cycles,
-                              reference_per_sample=per_sample, states=states_of(first.config))
+                              reference_per_sample=per_sample, states=parts.of_config(first.config, states))
     before_reference = None
     if on_shapes is not None:
         env = environment_shape(*grid)
@@ -239,18 +232,17 @@ def _same(a, b) -> bool:
     return all(np.array_equal(x, y) for x, y in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b)))
 
 
-# What fixes the compiled loop's shapes and code, named by the key a user would sweep.
-STATIC_KEYS = {"integration.step_s": lambda sc: steps_per_cycle(sc.step_s), "duration.days": lambda sc: cycle_count(sc.days),
-               "integration.dynamics": lambda sc: sc.dynamics, "epoch.utc": lambda sc: sc.epoch_tt_s,
-               "epoch.ut1_minus_utc_s": lambda sc: sc.tt_minus_ut1_s,
-               "forces.gravity_degree": lambda sc: (sc.config["forces"]["gravity_degree"],
-                                                    sc.config["forces"]["gravity_order"]),
-               "forces.moon_shadow": lambda sc: sc.config["forces"]["moon_shadow"],
-               "forces.ephemeris": lambda sc: sc.config["forces"]["ephemeris"],
-               "attitude.wheels": lambda sc: sc.config["attitude"]["wheels"],
-               "navigation.estimate_biases": lambda sc: sc.config["navigation"]["estimate_biases"],
-               "navigation.model": lambda sc: (sc.config["navigation"]["model"],
-                                               navigation.layout_of(sc.config["navigation"]))}
+def static_keys(schema: dict) -> dict:
+    """{dotted key: the scenario's identity of it} of every static ``Field`` of ``schema``'s tables but the
+    controller's (whose static keys its own fields declare, ``_check_static``): what fixes the compiled loop's
+    shapes and code, declared on the fields alone."""
+    return {f"{table}.{key}": (lambda sc, table=table, key=key, field=field:
+                               field.identity_of(sc.config[table][key]))
+            for table, fields in schema.items() if table != "controller"
+            for key, field in fields.items() if field.static}
+
+
+STATIC_KEYS = static_keys(SCHEMA)
 
 
 def program_identity(sc: Scenario, *settings) -> tuple:

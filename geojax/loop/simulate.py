@@ -45,6 +45,7 @@ import jax.numpy as jnp
 
 from geojax.control.base import Controller, Estimate
 from geojax.control.predictor import Reference, boundary_elements, estimate_mean
+from geojax.nominal_errors import NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS
 from geojax.physics.dynamics import SpacecraftState
 from geojax.physics.elements import cartesian_to_mee, semi_major_axis_m, wrap_angle
 from geojax.physics.forces import Environment, ForceModel
@@ -55,10 +56,6 @@ from geojax.params import Params
 from geojax.physics.propagate import MEE, CycleMeans, Dynamics, cycle_means
 from geojax.states.base import CycleStart, StateModel, StepContext, ThrustContext, check_streams, stream_id
 
-# Li 2022, eq. (48): nominal 3-sigma determination errors per component, scaled by H_rv (the attitude's:
-# control.burns).
-NOMINAL_3SIGMA_R_M = 0.3
-NOMINAL_3SIGMA_V_MPS = 5e-5
 # A component of the delivered acceleration counts as firing when it exceeds this fraction of the
 # acceleration's norm: the RSW -> ECEF rotations leave ~1e-16 of it on an axis a law did not fire.
 FIRING_COMPONENT_RTOL = 1e-9

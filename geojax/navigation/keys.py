@@ -44,8 +44,12 @@ FIELDS = {
                                  doc="whether the thrusters may fire while a station tracks; false: a burn's steps "
                                      "inside any station's pass are not fired (the plan does not move them: the "
                                      "next cycle's plan makes up what was not flown)"),
-    "stations": Field(list, [], doc="the ground stations, a list of tables ([[navigation.stations]])"),
-    "gnss": Field(dict, None, doc="a GNSS-in-GEO receiver ([navigation.gnss]); absent: none"),
+    # static: the stations' count and measurement kinds shape the filter (their values are leaves)
+    "stations": Field(list, [], static=True, identity=lambda stations: tuple(tuple(s.get("measurements", ()))
+                                                                             for s in stations),
+                      doc="the ground stations, a list of tables ([[navigation.stations]])"),
+    "gnss": Field(dict, None, static=True, identity=lambda gnss: gnss is not None,
+                  doc="a GNSS-in-GEO receiver ([navigation.gnss]); absent: none"),
 }
 
 SCHEDULE_FIELDS = {

@@ -14,7 +14,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.physics.constants import SIDEREAL_DAY_S
+from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.dynamics import cartesian_rhs, mee_rhs
 from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, mee_to_rv_xyz, wrap_angle
 from geojax.physics.ephemeris import de421_sun_moon_eci_m, moon_position_eci_m, sun_position_eci_m
@@ -92,6 +92,11 @@ def steps_per_cycle(step_s: float) -> int:
     if not step_s > 0:
         raise ValueError(f"integration.step_s: must be > 0 s, got {step_s}")
     return max(1, round(SIDEREAL_DAY_S / step_s))
+
+
+def cycle_count(days: float) -> int:
+    """Control cycles (sidereal days) of a closed-loop run of ``days`` solar days."""
+    return max(1, round(days * SECONDS_PER_DAY / SIDEREAL_DAY_S))
 
 
 def environment_at(t_tt_s, frame_epoch_tt_s, tt_minus_ut1_s) -> Environment:

@@ -32,7 +32,7 @@ def field_of(key: str, controllers=()):
     the first of ``controllers``, shipped names or import paths, that declares it; of the shipped ones where
     none is named), or None."""
     from geojax.control import REGISTRY, lookup
-    from geojax.scenario_schema import SCHEMA
+    from geojax.scenario import SCHEMA
 
     table, _, name = key.rpartition(".")
     if table != "controller":

@@ -1,16 +1,90 @@
-"""Further states of the spacecraft that the closed loop carries (DESIGN.md layer 5), one module each on the
-protocol of ``states.base``: the wheels' momentum (``states.momentum``) and the orbit-determination filter (``states.navigation``).  ``REGISTRY`` maps a model's name (its key
-in the loop's records) to it; ``of_config`` picks those a scenario asks for (none by default: no state, no cost)."""
+"""The parts the closed loop carries beyond the orbit and the mass, one module each on the protocol of
+``states.base`` (a ``StateModel`` and the ``Part`` that declares its keys, leaves, validation, statuses and
+descriptions).  ``REGISTRY`` lists the shipped parts, one line each; everything else here is derived from it:
+the parts' scenario tables, the models a scenario turns on, their ``Params`` leaves and the status codes."""
 
+from __future__ import annotations
+
+from geojax.params import table_leaves
 from geojax.states import momentum, navigation
-from geojax.states.base import StateModel
+from geojax.states.base import Part, StateModel, part_of
 
-REGISTRY: dict[str, StateModel] = {momentum.NAME: momentum.MODEL, navigation.NAME: navigation.MODEL}
+REGISTRY: tuple[Part, ...] = (
+    momentum.PART,  # the reaction wheels' momentum ([attitude] wheels = true)
+    navigation.PART,  # the orbit-determination filter ([navigation] model = "ekf")
+)
+# The loop's own status codes; the parts' follow in the registry's order, then a user's own parts' in theirs.
+CORE_STATUSES = ("ok", "cycles without a solution", "left the longitude box", "left the latitude box",
+                 "non-finite or non-physical state", "propellant exhausted")
 
 
-def of_config(config: dict) -> tuple[StateModel, ...]:
-    """The models a validated scenario table asks for, in a fixed order (static: they shape the compiled loop)."""
-    wheels = (momentum.MODEL,) if config["attitude"]["wheels"] else ()
-    nav = config["navigation"]
-    # the wheels first: the filter's plan is the thrust after the dumping tilt (commanded, so known)
-    return wheels + ((navigation.model(navigation.layout_of(nav)),) if nav["model"] == "ekf" else ())
+def tables() -> dict:
+    """{table: {key: Field}} of the registered parts' scenario tables, in the registry's order."""
+    return {p.table: p.fields for p in REGISTRY if p.table is not None}
+
+
+def status_meanings(extra: tuple = ()) -> tuple[str, ...]:
+    """The meaning of every status code: the loop's, the registered parts', then those of ``extra`` (a user's own
+    parts, ``StateModel`` s or ``Part`` s) not among them."""
+    out = list(CORE_STATUSES)
+    for p in (*REGISTRY, *(part_of(e) for e in extra)):
+        out.extend(s for s in p.statuses if s not in out)
+    return tuple(out)
+
+
+def descriptions() -> dict:
+    """{metric or column name: description} the registered parts declare."""
+    return {k: v for p in REGISTRY for k, v in p.descriptions.items()}
+
+
+def selected(config: dict, extra: tuple = ()) -> tuple[tuple[Part, StateModel], ...]:
+    """(part, model) of every part a validated scenario turns on, in the registry's order, then ``extra`` (a
+    user's own: ``StateModel`` s or ``Part`` s, always on).  Static: they shape the compiled loop."""
+    out = []
+    for p in REGISTRY:
+        model = p.select(config[p.table]) if p.select is not None else p.model
+        if model is not None:
+            out.append((p, model))
+    for entry in extra:
+        p = part_of(entry)
+        model = p.model if p.select is None else p.select(config.get(p.table, {}))
+        if model is not None:
+            out.append((p, model))
+    return tuple(out)
+
+
+def of_config(config: dict, extra: tuple = ()) -> tuple[StateModel, ...]:
+    """The models a validated scenario asks for (``selected``)."""
+    return tuple(model for _, model in selected(config, extra))
+
+
+def leaves_of(config: dict, extra: tuple = ()) -> dict:
+    """``Params.states``: {model name: its SI leaves} of every part the scenario turns on (a part without a table
+    or leaves: none)."""
+    out = {}
+    for p, model in selected(config, extra):
+        table = config.get(p.table, {}) if p.table is not None else {}
+        if p.leaves is not None:
+            out[model.name] = p.leaves(table)
+        else:
+            out[model.name] = table_leaves(table, p.fields) if p.table is not None else {}
+    return out
+
+
+def validate(config: dict) -> None:
+    """Each registered part's checks across a validated scenario (in place: a part may complete its table)."""
+    for p in REGISTRY:
+        if p.validate is not None:
+            table = p.validate(config)
+            if table is not None:
+                config[p.table] = table
+
+
+def parts_of(models: tuple) -> tuple[Part, ...]:
+    """The ``Part`` of each model the loop carries (a registered part by its name, else the model's defaults)."""
+    known = {p.name: p for p in REGISTRY}
+    return tuple(known.get(m.name, part_of(m)) for m in models)
+
+
+__all__ = ["CORE_STATUSES", "Part", "REGISTRY", "StateModel", "descriptions", "leaves_of", "of_config", "parts_of",
+           "selected", "status_meanings", "tables", "validate"]

@@ -132,3 +132,43 @@ class StateModel(NamedTuple):
     bytes_per_cycle: int = 0
     columns_per_cycle: int = 0
     stream: int | None = None  # its random stream's id (``stream_id``); None: a stable hash of its name
+
+
+class Constraint(NamedTuple):
+    """A constraint a tuning keeps: ``value(params, metrics) <= 0`` inside (normalised like the box's,
+    (excursion / limit)^2 - 1), and the status meaning of a sample that breaks it."""
+
+    name: str
+    value: Callable
+    status: str
+
+
+class Part(NamedTuple):
+    """What a state of the loop declares besides its protocol, every entry optional but its name: its scenario
+    table and keys, the model a table selects, its ``Params`` leaves (``params.states[name]``), its validation,
+    the meanings of the status codes it sets, its metric and column descriptions, its tuning constraints and its
+    figures.  ``geojax.states.REGISTRY`` lists the shipped parts, one line each; a user's own ``StateModel`` is
+    a part of defaults (no table, no leaves) unless it comes as a ``Part``."""
+
+    name: str  # the model's name: its key in the loop's carry, records and ``params.states``
+    table: str | None = None  # its scenario table ("attitude"); None: no keys
+    fields: dict = {}  # {key: params.Field} of its table
+    select: Callable | None = None  # validated table -> its StateModel, or None where the table turns it off
+    leaves: Callable | None = None  # validated table -> {leaf: array} (default: the fields' SI leaves)
+    validate: Callable | None = None  # (validated config) -> its table completed (or None: unchanged), at load
+    statuses: tuple = ()  # meanings of the failure codes its model sets (``StateModel.status`` among them)
+    descriptions: dict = {}  # {metric or column name: one line} for results files, summaries and docs
+    constraints: tuple = ()  # ``Constraint`` s a tuning keeps (``geojax.tune``)
+    figures: Callable | None = None  # (result, folder) -> [paths of the figures it drew]
+    # the model where it does not depend on the table (a user's own), or the one whose metrics and columns serve
+    # every table (a registered part's)
+    model: StateModel | None = None
+
+
+def part_of(entry) -> Part:
+    """A ``Part`` of a ``StateModel`` (the defaults: no table, no leaves) or the ``Part`` itself."""
+    if isinstance(entry, Part):
+        return entry
+    if isinstance(entry, StateModel):
+        return Part(entry.name, statuses=(entry.status,) if entry.status else (), model=entry)
+    raise TypeError(f"states: a StateModel or a Part, got {type(entry).__name__}")

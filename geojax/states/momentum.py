@@ -86,7 +86,8 @@ from geojax.physics.attitude import (array_frame, body_rate_rad_s, gravity_gradi
                                      nadir_frame, srp_force_eci_n)
 from geojax.physics.constants import SECONDS_PER_DAY
 from geojax.physics.dynamics import Thrust
-from geojax.states.base import StateModel, StepContext, ThrustContext
+from geojax.params import LOG, NUMBER, Field, degrees
+from geojax.states.base import Constraint, Part, StateModel, StepContext, ThrustContext
 
 NAME = "wheels"
 # (Ixx, Iyy, Izz, Ixy, Ixz, Iyz), kg m^2: the estimate of the module docstring.
@@ -98,6 +99,62 @@ DEFAULT_TRANSIENT_FRACTION = 0.75
 # ``time_above_80pct_capacity_fraction`` counts the step starts where a wheel holds more than this of its capacity.
 HIGH_FRACTION = 0.8
 SATURATED = "wheels saturated"
+
+# The ``[attitude]`` table: carried only where ``wheels = true`` (the other keys are refused otherwise); every
+# torque's default is none.
+FIELDS = {
+    "wheels": Field(bool, False, static=True,
+                    doc="carry the reaction wheels' momentum (a nadir-pointing body, three wheels on its axes)"),
+    "wheel_capacity_nms": Field(NUMBER, DEFAULT_CAPACITY_NMS, lower=0.0, upper=1e6, si="wheel_capacity_nms",
+                                symbol="h_max", unit="N m s",
+                                doc="momentum each wheel stores at most; beyond it: status 6, wheels saturated"),
+    "initial_momentum_nms": Field(list, [0.0, 0.0, 0.0], length=3, si="initial_momentum_nms", unit="N m s",
+                                  doc="the wheels' momentum at the start, body axes (x along-track, y "
+                                      "anti-normal, z nadir)"),
+    "inertia_kg_m2": Field(list, list(DEFAULT_INERTIA_KG_M2), length=6, si="inertia_kg_m2", unit="kg m²",
+                           doc="inertia tensor (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) in body axes: the gravity-"
+                               "gradient torque; default an estimate for Li 2022's 5000 kg class, principal"),
+    "srp_offset_body_m": Field(list, [0.0, 0.0, 0.0], length=3, si="srp_offset_body_m", unit="m",
+                               doc="centre of pressure less centre of mass, body axes: SRP torque"),
+    "srp_offset_array_m": Field(list, [0.0, 0.0, 0.0], length=3, si="srp_offset_array_m", unit="m",
+                                doc="centre of pressure less centre of mass along the solar array's axis (the "
+                                    "orbit normal), across it, along its Sun-facing normal: SRP torque"),
+    "thrust_arm_m": Field(NUMBER, DEFAULT_THRUST_ARM_M, lower=0.0, lower_inclusive=True, upper=100.0,
+                          si="thrust_arm_m", symbol="L_thr", unit="m",
+                          doc="distance from the centre of mass to each thruster's nozzle (the gimbal a "
+                              "dumping tilt turns about): the tilt's moment arm"),
+    "thrust_reach_m": Field(NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=100.0, si="thrust_reach_m",
+                            symbol="ρ_arm", unit="m",
+                            doc="each arm's reach from its base to the nozzle: with it the nozzle distance is "
+                                "where the arm puts the nozzle on the line through the centre of mass, burn by "
+                                "burn (states.momentum.nozzle_distance_m); 0: thrust_arm_m for every burn"),
+    "thrust_base_north_m": Field(list, [0.0, 0.0, 0.0], length=3, si="thrust_base_north_m", unit="m",
+                                 doc="base of the arm on the north side, body axes (it flies the burns that push "
+                                     "south: Li 2022's thruster 1); read where thrust_reach_m > 0"),
+    "thrust_base_south_m": Field(list, [0.0, 0.0, 0.0], length=3, si="thrust_base_south_m", unit="m",
+                                 doc="base of the arm on the south side, body axes (the burns that push north); "
+                                     "a single manipulator (Ye 2022): both bases its platform"),
+    "dump_angle_max_deg": Field(NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=90.0,
+                                si="dump_angle_max_rad", to_si=degrees, symbol="δ_max",
+                                doc="largest tilt of a thrust line off the centre of mass to unload the "
+                                    "wheels during burns; 0: no dumping"),
+    "dump_gain_per_s": Field(NUMBER, DEFAULT_DUMP_GAIN_PER_S, lower=0.0, upper=1e3,
+                             si="dump_gain_per_s", symbol="k_dump", unit="1/s", transform=LOG,
+                             doc="the dumping law's gain: the torque asked of a tilt is -k_dump times the "
+                                 "measured wheel momentum"),
+    "dump_transient_fraction": Field(NUMBER, DEFAULT_TRANSIENT_FRACTION, lower=0.0, lower_inclusive=True,
+                                     upper=1.0, si="dump_transient_fraction", symbol="f_tr", unit="",
+                                     doc="the most momentum, as a fraction of a wheel's capacity, a burn may "
+                                         "leave for the next burn to empty (the rest: margin for the torques "
+                                         "meanwhile)"),
+    "tank_offset_body_m": Field(list, [0.0, 0.0, 0.0], length=3, si="tank_offset_body_m", unit="m",
+                                doc="the propellant's centre less the starting centre of mass, body axes: the "
+                                    "centre of mass moves as propellant is used (thrust and SRP torques)"),
+    "wheel_momentum_sigma_nms": Field(NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6,
+                                      si="wheel_momentum_sigma_nms", symbol="σ_h", unit="N m s",
+                                      doc="1-sigma error per axis of the measured wheel momentum the dumping "
+                                          "law reads (one draw per cycle)"),
+}
 
 
 class Wheels(NamedTuple):
@@ -141,7 +198,7 @@ class WheelCycle(NamedTuple):
 
 def init(params, r_eci_m, v_eci_mps, env, fm) -> Wheels:
     """The wheels at the run's start: ``attitude.initial_momentum_nms`` (body axes), and the torques there."""
-    a = params.attitude
+    a = params.states[NAME]
     h0 = a["initial_momentum_nms"]
     inertia = inertia_matrix(a["inertia_kg_m2"])
     srp, gg, c = torques(a, inertia, r_eci_m, v_eci_mps, env, fm)
@@ -154,7 +211,7 @@ def init(params, r_eci_m, v_eci_mps, env, fm) -> Wheels:
 def cycle(params, state: Wheels, start) -> Wheels:
     """At a cycle start: this cycle's error of the measured wheel momentum (Gaussian, 1-sigma
     ``attitude.wheel_momentum_sigma_nms`` per axis, from the model's own key)."""
-    sigma = params.attitude["wheel_momentum_sigma_nms"]
+    sigma = params.states[NAME]["wheel_momentum_sigma_nms"]
     return state._replace(error_nms=sigma * jax.random.normal(start.key, (3,), state.error_nms.dtype))
 
 
@@ -163,7 +220,7 @@ def thrust(params, state: Wheels, flown: Thrust, ctx: ThrustContext):
     with its line tilted within ``attitude.dump_angle_max_deg`` and the state noting the thrust's torque (tilt and
     centre-of-mass shift, body axes) and the force across the plan for ``step``.  No tilt at a 0 deg limit, the
     direction then exactly the controller's."""
-    a = params.attitude
+    a = params.states[NAME]
     d = flown.direction_rsw
     u_b = jnp.stack([d[1], -d[2], -d[0]])  # body = (S, -W, -R)
     size = jnp.linalg.norm(u_b)  # 1, or less for a mean of time-shared directions
@@ -262,14 +319,14 @@ def com_shift_body_m(params, mass_kg):
     """dc [3]: the centre of mass less the run's starting one, body axes, with the propellant used (m0 - m) gone
     from ``attitude.tank_offset_body_m``."""
     m0 = params.initial.mass_kg
-    return -(m0 - mass_kg) / mass_kg * params.attitude["tank_offset_body_m"]
+    return -(m0 - mass_kg) / mass_kg * params.states[NAME]["tank_offset_body_m"]
 
 
 def step(params, state: Wheels, ctx: StepContext):
     """One integration step: the torques at the step's start (carried from the step before) and end, their
     impulse (trapezoid rule; the thrust's, held in body axes over the step, turned with the body) added to
     H_eci, the wheels' momentum in body axes at the end."""
-    a, fm = params.attitude, ctx.force_model
+    a, fm = params.states[NAME], ctx.force_model
     inertia = inertia_matrix(a["inertia_kg_m2"])
     end_env = jax.tree_util.tree_map(lambda x: x[2], ctx.env)
     srp1, gg1, c1 = torques(a, inertia, ctx.r_end_eci_m, ctx.v_end_eci_mps, end_env, fm,
@@ -332,7 +389,7 @@ def metrics(params, cycles: WheelCycle, n_steps_total: int, run_s: float):
         "thrust_torque_impulse_nms": cycles.thrust_impulse_nms[-1],
         "dump_cross_dv_mps": cycles.cross_dv_mps[-1],
     }
-    return out, peak > params.attitude["wheel_capacity_nms"]
+    return out, peak > params.states[NAME]["wheel_capacity_nms"]
 
 
 def columns(cycles: WheelCycle) -> dict:
@@ -347,17 +404,35 @@ def columns(cycles: WheelCycle) -> dict:
 MODEL = StateModel(NAME, init, step, summary, metrics, cycle=cycle, status=SATURATED, columns=columns,
                    thrust=thrust, estimate=estimate, bytes_per_cycle=14 * 8, columns_per_cycle=6)  # WheelCycle's
 
+DESCRIPTIONS = {
+    "max_wheel_momentum_nms": "largest |momentum| of any reaction wheel at any step start (body axes)",
+    "max_wheel_momentum_last_year_nms": "the same over the run's last 365.25 days (the whole run when shorter)",
+    "wheel_momentum_per_day_nms": "secular growth of the wheels' momentum: its net change from the first cycle "
+                                  "start to the last cycle end, per day",
+    "srp_torque_impulse_nms": "integral of |SRP torque| over the run (centre-of-pressure offset)",
+    "gravity_gradient_impulse_nms": "integral of |gravity-gradient torque| over the run",
+    "time_above_80pct_capacity_fraction": "fraction of the step starts with a wheel above 80 % of its capacity",
+    "thrust_torque_impulse_nms": "integral of |thrust torque| over the run (dumping tilts, the centre of mass's "
+                                 "shift): the momentum the thrusters moved",
+    "dump_cross_dv_mps": "Delta-V the dumping tilts put across the planned thrust directions over the run",
+    **{f"wheel_{axis}_nms": f"the {axis} wheel's momentum at the cycle end, body axes" for axis in "xyz"},
+    **{f"wheel_max_abs_{axis}_nms": f"largest |momentum| of the {axis} wheel within the cycle" for axis in "xyz"},
+}
+
+
+def within_capacity(params, metrics: dict):
+    """The tuner's constraint of the wheels: (largest |h| / capacity)^2 - 1, <= 0 within the capacity."""
+    return (metrics["max_wheel_momentum_nms"] / params.states[NAME]["wheel_capacity_nms"]) ** 2 - 1.0
+
 
 def validate(config: dict) -> None:
     """Checks across the ``[attitude]`` table at load (``ValueError`` naming the key): every key but ``wheels``
     is read only where ``attitude.wheels = true``; the inertia tensor is physical (positive definite, each
     principal moment at most the sum of the other two); an SRP offset needs SRP (``forces.srp`` and
     ``spacecraft.srp_area_m2`` > 0); a dumping tilt needs a thrust arm."""
-    from geojax.scenario_schema import SCHEMA  # the schema imports this module's defaults
-
     table = config["attitude"]
     if not table["wheels"]:
-        for key, field in SCHEMA["attitude"].items():
+        for key, field in FIELDS.items():
             if key != "wheels" and table[key] != field.default:
                 raise ValueError(f"attitude.{key}: read only where attitude.wheels = true, got {table[key]!r}; "
                                  f"set attitude.wheels = true or leave it out")
@@ -380,3 +455,8 @@ def validate(config: dict) -> None:
         if any(table[key]) and not has_srp:
             raise ValueError(f"attitude.{key}: an SRP torque needs SRP (forces.srp = true and "
                              f"spacecraft.srp_area_m2 > 0), got {table[key]!r}")
+
+
+PART = Part(NAME, table="attitude", fields=FIELDS, select=lambda table: MODEL if table["wheels"] else None,
+            validate=validate, statuses=(SATURATED,), descriptions=DESCRIPTIONS, constraints=(Constraint("wheels", within_capacity, SATURATED),),
+            model=MODEL)

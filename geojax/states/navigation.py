@@ -72,7 +72,8 @@ from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, wrap_ang
 from geojax.physics.frames import ecef_to_eci, rsw_basis
 from geojax.physics.fusion import skipped_where_idle
 from geojax.physics.integrate import rk4_step
-from geojax.states.base import NAVIGATION_STREAM, StateModel
+from geojax.navigation.keys import FIELDS as KEYS, check_with
+from geojax.states.base import NAVIGATION_STREAM, Part, StateModel
 
 NAME = "navigation"
 N_ORBIT = 6
@@ -326,7 +327,7 @@ def n_biases(layout: Layout) -> int:
 def init(layout: Layout, params, r_eci_m, v_eci_mps, env, fm) -> Navigation:
     """The filter at the run's start: the true elements (``cycle`` adds the initial error at cycle 0) and the
     initial covariance diag(sigma_r^2 I, sigma_v^2 I); no burn."""
-    nav, mu = params.navigation, fm.mu_m3_s2
+    nav, mu = params.states[NAME], fm.mu_m3_s2
     n_b = n_biases(layout)
     p = jnp.zeros((N_STATE + n_b, N_STATE + n_b)).at[:6, :6].set(_initial_cartesian(nav))
     if n_b:  # the estimated biases' prior: the sigmas they are drawn with, uncorrelated
@@ -348,7 +349,7 @@ def cycle(layout: Layout, params, state: Navigation, start) -> Navigation:
     """At a cycle start: the cycle's key; at cycle 0 the initial estimate error (Gaussian, the initial
     covariance) and the sample's biases; the estimation error, 1-sigma and NEES at this decision time; the
     cycle's sums reset."""
-    nav, mu = params.navigation, params.forces.mu_m3_s2
+    nav, mu = params.states[NAME], params.forces.mu_m3_s2
     first = start.index == 0
     truth = jnp.concatenate([start.r_eci_m, start.v_eci_mps])
     drawn = truth + jnp.sqrt(jnp.diag(_initial_cartesian(nav))) * jax.random.normal(
@@ -373,7 +374,7 @@ def cycle(layout: Layout, params, state: Navigation, start) -> Navigation:
 def thrust(layout: Layout, params, state: Navigation, planned: Thrust, ctx):
     """The thrust flown: the planned one with the current burn's true execution errors, a new draw at each burn's
     start (where the filter resets its own (eps, phi) to the errors' prior); the plan noted for ``step``."""
-    nav = params.navigation
+    nav = params.states[NAME]
     if layout.stations:  # burns forbidden while a station's schedule is on (where ``burns_during_passes`` is 0)
         in_pass = jnp.any(jax.vmap(tracking_weight, in_axes=(None, 0))(ctx.t_s, station_schedules(nav)) > 0)
         allowed = jnp.where(in_pass, nav["burns_during_passes"], 1.0)
@@ -408,7 +409,7 @@ def _reset_execution(p, sigma):
 def step(layout: Layout, params, state: Navigation, ctx):
     """One integration step: the time update (planned thrust, SNC) and the measurement updates at the step's end
     (skipped for a whole batch where no sample tracks: most steps of a pass schedule)."""
-    nav, fm = params.navigation, ctx.force_model
+    nav, fm = params.states[NAME], ctx.force_model
     mu = fm.mu_m3_s2
     n_b = _n_estimated(state)
     start = jnp.concatenate([ctx.r_eci_m, ctx.v_eci_mps])
@@ -598,3 +599,27 @@ def model(layout: Layout) -> StateModel:
 
 # The registry's entry (metrics and columns, which do not depend on the layout).
 MODEL = model(Layout((), False, "loop"))
+
+DESCRIBED_AXES = tuple(zip(AXES, ("radial", "along-track", "cross-track")))
+DESCRIBED_UNITS = (("m", "position"), ("mps", "velocity"))
+DESCRIPTIONS = {
+    **{f"nav_{axis}_{stat}_{unit}": f"{what_stat} of the filter's {name} {what} error at the decision times"
+       for axis, name in DESCRIBED_AXES for unit, what in DESCRIBED_UNITS
+       for stat, what_stat in (("rms", "RMS"), ("p95", "95th percentile of the magnitude"))},
+    "nav_position_rms_m": "RMS of the filter's position error (3-D) at the decision times",
+    "nees_mean": "the filter's NEES (6 dof: position and velocity) averaged over the decision times; 6 if consistent",
+    "nis_mean_per_dof": "the filter's NIS per degree of freedom over every measurement update; 1 if consistent",
+    "measurements_used": "measurement components the filter processed over the run",
+    **{f"nav_{kind}_{axis}_{unit}": f"the filter's {name} {what} {label} at the cycle start"
+       for axis, name in DESCRIBED_AXES for unit, what in DESCRIBED_UNITS
+       for kind, label in (("error", "error (estimate - truth)"), ("sigma", "1-sigma"))},
+    "nees": "the filter's NEES at the cycle start (6 dof)",
+    "nis_per_dof": "the filter's NIS per degree of freedom over the cycle's updates",
+    "measurements": "measurement components the filter processed in the cycle",
+}
+
+
+PART = Part(NAME, table="navigation", fields=KEYS,
+            select=lambda table: model(layout_of(table)) if table["model"] == "ekf" else None,
+            leaves=leaves_of, validate=check_with, descriptions=DESCRIPTIONS,
+            model=MODEL)  # its metrics and columns, which do not depend on the layout

@@ -134,7 +134,7 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int, on_phase, devices
             p = disperse(p, jax.random.fold_in(key, DISPERSION_STREAM), *dispersion, angle0, batch.dynamics)
         _, records, out = one_rollout(p, key, shared=shared, reference_env=reference_env)
         if sweep.cycles:
-            out.update({f"cycles__{k}": v for k, v in cycle_series(records).items()})
+            out.update({f"cycles__{k}": v for k, v in cycle_series(records, batch.states).items()})
         return out
 
     shared = [shared_of(b, g) for b, g in zip(batches, groups, strict=True)]

@@ -44,7 +44,7 @@ class ShortHorizonWarning(UserWarning):
 class TuneResult:
     best_theta: np.ndarray | None  # None when no iterate kept the box
     best_dv_per_year_mps: float
-    best_constraint: np.ndarray  # [C]: lon, lat (and wheels where carried; ``tune.objective.CONSTRAINTS``)
+    best_constraint: np.ndarray  # [C]: lon, lat (then the carried parts'; ``Problem.constraint_names``)
     best_params: Params | None
     history: dict[str, np.ndarray]  # the /iterations datasets
     starts: np.ndarray

@@ -4,9 +4,9 @@
 controller's own law) and the derivatives of its smooth surrogate (``Controller.surrogate``; a controller
 without one is smooth and its own).  The figure minimised is the yearly Delta-V of the horizon
 (``dv_per_year_mps``); the box is Katz 2025's eq. (10), normalised: one constraint per axis,
-g = max(excursion^2) / Delta_s^2 - 1 <= 0; where the scenario carries the wheels (``states.momentum``) a third,
-their capacity in the same form, g = (max |h_w| / capacity)^2 - 1 <= 0, so a dumping gain is tuned with the box and
-the wheels as constraints (``CONSTRAINTS``).
+g = max(excursion^2) / Delta_s^2 - 1 <= 0; then each carried part's constraints in the same form
+(``states.base.Constraint``: the wheels' g = (max |h_w| / capacity)^2 - 1 <= 0, so a dumping gain is tuned with
+the box and the wheels as constraints).
 
 Derivatives are forward-mode by default (``jacfwd``: no tape, so memory does not grow with the horizon; for 2-7
 parameters about twice as fast as reverse mode on a CPU); ``gradient = "reverse"`` takes them through the
@@ -21,15 +21,16 @@ import numpy as np
 
 from geojax import scenario as scenario_mod
 from geojax.control.base import SURROGATE_TEMPERATURE, Controller
-from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_NONFINITE, STATUS_WHEELS_SATURATED
+from geojax import states as parts
+from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_NONFINITE
 from geojax.loop.rollout import rollout_fn
 from geojax.loop.setup import prepare, unstack
 from geojax.parallel import shard_batch
 from geojax.params import Params
 from geojax.tune.space import from_theta, tuned
 
-# The constraints' names, in the order of ``Problem.evaluate``'s constraint vector (the wheels' only where carried).
-CONSTRAINTS = ("lon", "lat", "wheels")
+# The box's constraints, the first of ``Problem.evaluate``'s constraint vector (the carried parts' follow).
+BOX_CONSTRAINTS = ("lon", "lat")
 
 
 class Problem:
@@ -42,9 +43,11 @@ class Problem:
         self.base = unstack(self.batch.params, 0)
         self.entries = tuned(sc, controller, names)
         self.names = tuple(e.name for e in self.entries)
-        self.sizes = [int(np.size(getattr(self.base, e.table)[e.field.si])) for e in self.entries]
+        self.sizes = [int(np.size(e.leaves_in(self.base)[e.field.si])) for e in self.entries]
         self.box_half_width_rad = float(self.base.station["box_half_width_rad"])
-        self.constraint_names = CONSTRAINTS if sc.config["attitude"]["wheels"] else CONSTRAINTS[:2]
+        self.part_constraints = tuple(c for p in parts.parts_of(self.batch.states) for c in p.constraints)
+        self.constraint_names = BOX_CONSTRAINTS + tuple(c.name for c in self.part_constraints)
+        self.statuses = parts.status_meanings(self.batch.states)
         self._rollouts = {False: rollout_fn(self.batch, lanes=lanes),
                           True: rollout_fn(self.batch, controller=self.batch.controller.surrogate or self.batch.controller,
                                            lanes=lanes)}
@@ -77,10 +80,9 @@ class Problem:
         # Katz eq. (10): delta^2 - Delta_s^2 <= 0, (lambda - lambda_d)^2 - Delta_s^2 <= 0, normalised.
         constraint = (excursion / self.box_half_width_rad) ** 2 - 1.0
         failed = [STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE]
-        if len(self.constraint_names) == 3:  # the wheels within their capacity, the same form
-            fill = m["max_wheel_momentum_nms"] / params.attitude["wheel_capacity_nms"]
-            constraint = jnp.append(constraint, fill ** 2 - 1.0)
-            failed.append(STATUS_WHEELS_SATURATED)
+        for c in self.part_constraints:  # the parts' (the wheels within their capacity), the same form
+            constraint = jnp.append(constraint, c.value(params, m))
+            failed.append(self.statuses.index(c.status))
         loss = m["dv_per_year_mps"] + self.penalty_mps * jnp.sum(jax.nn.relu(constraint + self.margin))
         box_ok = ~jnp.isin(m["status"], jnp.array(failed))
         return loss, (m["dv_per_year_mps"], constraint, box_ok.astype(float))

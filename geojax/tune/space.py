@@ -17,6 +17,7 @@ import numpy as np
 
 from geojax import scenario as scenario_mod
 from geojax.control.base import Controller
+from geojax import states as parts
 from geojax.params import LEAF_TABLES, Field, Params, degrees
 
 # Iterates are kept within this many natural-log units of their start (about 3 decades).
@@ -29,13 +30,24 @@ class Tuned(NamedTuple):
     name: str  # "controller.k_h_per_km2_s"
     table: str
     field: Field
+    part: str | None = None  # the part whose table it is (its leaves under ``Params.states[part]``); None: the loop's
+
+    def leaves_in(self, params: Params) -> dict:
+        """The SI leaves of its table in ``params``."""
+        return params.states[self.part] if self.part is not None else getattr(params, self.table)
 
 
 def fields_of(sc: scenario_mod.Scenario, controller: Controller | None) -> dict[str, dict[str, Field]]:
     """{table: {key: Field}} of the scenario's leaf tables, ``[controller]`` from its controller."""
     fields = {t: scenario_mod.SCHEMA[t] for t in LEAF_TABLES if t != "controller"}
     fields["controller"] = scenario_mod.controller_fields(sc.config["controller"], controller)
+    fields.update({p.table: p.fields for p, _ in parts.selected(sc.config) if p.table is not None})
     return fields
+
+
+def _part_of_table(sc: scenario_mod.Scenario, table: str) -> str | None:
+    """The name of the carried part whose table ``table`` is (None: one of the loop's)."""
+    return next((model.name for p, model in parts.selected(sc.config) if p.table == table), None)
 
 
 def tunable(sc: scenario_mod.Scenario, controller: Controller | None) -> list[str]:
@@ -64,7 +76,7 @@ def tuned(sc: scenario_mod.Scenario, controller: Controller | None, names) -> li
             raise ValueError(f"parameters: {name!r} is not tunable here; tunable: {', '.join(tunable(sc, controller))}")
         if sc.config[table].get(key) is None:
             raise ValueError(f"parameters: {name!r} is not set in scenario {sc.name} (it is not used there)")
-        out.append(Tuned(name, table, field))
+        out.append(Tuned(name, table, field, _part_of_table(sc, table)))
     return out
 
 
@@ -72,7 +84,7 @@ def to_theta(params: Params, entries: list[Tuned]) -> np.ndarray:
     """The unconstrained vector of the tuned leaves (each by its declared transform)."""
     parts = []
     for e in entries:
-        leaves = {k: np.asarray(v) for k, v in getattr(params, e.table).items()}
+        leaves = {k: np.asarray(v) for k, v in e.leaves_in(params).items()}
         parts.append(np.atleast_1d(e.field.transform.to_theta(leaves[e.field.si], leaves)))
     return np.concatenate(parts).astype(float)
 
@@ -80,14 +92,15 @@ def to_theta(params: Params, entries: list[Tuned]) -> np.ndarray:
 def from_theta(theta, base: Params, entries: list[Tuned]) -> Params:
     """``base`` with the tuned leaves replaced by those of ``theta`` (jax-traceable)."""
     tables = {t: dict(getattr(base, t)) for t in LEAF_TABLES}
+    states = {name: dict(leaves) for name, leaves in base.states.items()}
     i = 0
     for e in entries:
-        leaves = tables[e.table]
+        leaves = states[e.part] if e.part is not None else tables[e.table]
         size = int(np.size(leaves[e.field.si]))
         value = e.field.transform.from_theta(theta[i:i + size] if np.ndim(leaves[e.field.si]) else theta[i], leaves)
         leaves[e.field.si] = value
         i += size
-    return base._replace(**tables)
+    return base._replace(**tables, states=states)
 
 
 def toml_value(field: Field, leaf):
@@ -121,7 +134,7 @@ def reported_entries(params: Params, entries: list[Tuned]) -> dict[str, float]:
     out = {}
     for entry in entries:
         if entry.table != "controller":
-            value = toml_value(entry.field, getattr(params, entry.table)[entry.field.si])
+            value = toml_value(entry.field, entry.leaves_in(params)[entry.field.si])
             out[entry.name] = value if not isinstance(value, list) else value[0]
     return out
 

@@ -130,7 +130,7 @@ def tuned_config(spec, params: Params, dv_per_year_mps: float | None = None) -> 
     a description that says what was tuned, on which scenario, over how long and (given) to what Delta-V."""
     config = copy.deepcopy(spec.scenario.config)
     for entry in tuned(spec.scenario, spec.controller, spec.parameters):
-        leaf = getattr(params, entry.table)[entry.field.si]
+        leaf = entry.leaves_in(params)[entry.field.si]
         config[entry.table][entry.name.rpartition(".")[2]] = toml_value(entry.field, leaf)
     outcome = "" if dv_per_year_mps is None else \
         f": {dv_per_year_mps:.3f} m/s/yr of Delta-V per year with the exact law, box kept"
