@@ -6,7 +6,7 @@ A generated part sits between two lines of its own, ``<!-- generated: NAME -->``
 -->``; ``<!-- include: PATH -->`` ... ``<!-- end include: PATH -->`` holds a file of the repository
 (``studies/README.md``) as it is.  The generated parts:
 
-* ``scenario-keys``: every table and key of a scenario file from ``geojax.scenario_schema.SCHEMA`` (the ``Field``
+* ``scenario-keys``: every table and key of a scenario file from ``geojax.scenario.SCHEMA`` (the ``Field``
   declarations the loader validates with): type, default, allowed range or choices, the ``Params`` leaf it becomes
   and whether ``geojax tune`` can move it;
 * ``controller-keys``: the ``[controller]`` keys of every registered controller, from each module's ``FIELDS``;
@@ -106,7 +106,7 @@ def _field_rows(table: str, fields: dict) -> list[str]:
         leaf = f"`{field.si}`" if field.si else ""
         tunable = field.transform.name if field.transform else ""
         tunable += f" (alias `{field.alias}`)" if field.transform and field.alias else ""
-        static = " (static: not sweepable)" if field.static else ""
+        static = " (static: sets the compiled program, one value per batch)" if field.static else ""
         rows.append(f"| `{dotted}` | {_kind(field)} | {_default(field)} | {_cell(field.describe())}{static} | "
                     f"{leaf} | {tunable} |")
     return rows
@@ -116,7 +116,7 @@ HEADER = ["| key | type | default | allowed | Params leaf (SI) | tunable |", "|-
 
 
 def scenario_keys() -> str:
-    from geojax.scenario_schema import SCHEMA
+    from geojax.scenario import SCHEMA  # the loop's tables, then each registered part's
 
     out = []
     for table, fields in SCHEMA.items():
@@ -125,7 +125,7 @@ def scenario_keys() -> str:
 
 
 def navigation_keys() -> str:
-    """The planned ``[navigation]`` keys (``geojax.navigation.keys``: validated, not yet in the scenario schema)."""
+    """The ``[navigation]`` keys and its sub-tables' (``geojax.navigation.keys``)."""
     from geojax.navigation import keys
 
     out = []

@@ -16,7 +16,9 @@ The public API (shapes and units in each docstring):
   ``read_results`` as plain arrays.
 * ``load_tuning`` / ``tune_gains``: gains tuned by derivatives through rollouts.
 * ``Controller`` (``init``, ``plan``, ``thrust`` and their ``Field`` declarations), ``Thrust``, ``Params``:
-  to write a controller of one's own (see the README).
+  to write a controller of one's own (see the README); ``StateModel`` (``init``, ``step``, ``summary``,
+  ``metrics``, optional ``cycle``, ``thrust``, ``estimate``, ``columns``) and ``Part`` (its keys, leaves and
+  descriptions): a part of one's own the loop carries, ``simulate(..., states=(model,))`` (docs/python.md).
 """
 
 import jax
@@ -36,6 +38,7 @@ from geojax.loop.rollout import Result, prepare_params, simulate, simulate_batch
 from geojax.loop.simulate import CycleContext, StepEnvironment  # noqa: E402
 from geojax.params import LOG, Field, Params  # noqa: E402
 from geojax.scenario import Scenario  # noqa: E402
+from geojax.states.base import CycleStart, Part, StateModel, StepContext, ThrustContext  # noqa: E402
 from geojax.scenario import available as available_scenarios  # noqa: E402
 from geojax.scenario import load as load_scenario  # noqa: E402
 from geojax.results import open_results  # noqa: E402
@@ -44,8 +47,9 @@ from geojax.sweep import load as load_sweep  # noqa: E402
 from geojax.sweep import run_sweep  # noqa: E402
 
 __all__ = [
-    "Controller", "CycleContext", "Estimate", "Field", "LOG", "Params", "Result", "STATUS_MEANINGS", "Scenario",
-    "SpacecraftState", "StepEnvironment", "Thrust", "available_scenarios", "load_scenario", "load_sweep",
+    "Controller", "CycleContext", "CycleStart", "Estimate", "Field", "LOG", "Params", "Part", "Result",
+    "STATUS_MEANINGS", "Scenario", "SpacecraftState", "StateModel", "StepContext", "StepEnvironment", "Thrust",
+    "ThrustContext", "available_scenarios", "load_scenario", "load_sweep",
     "load_tuning", "open_results", "prepare_params", "read_results", "run_sweep", "simulate", "simulate_batch", "tune_gains",
     "tuning_from_dict",
 ]

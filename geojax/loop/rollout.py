@@ -24,6 +24,7 @@ from geojax.loop.metrics import cycle_table, summarize
 from geojax.export import trajectory
 from geojax.loop import report
 from geojax import compilation, traced
+from geojax import states as parts
 from geojax.parallel import Background
 from geojax.loop.setup import Batch, controller_of, padded, prepare, program_identity, reference, unstack
 from geojax.params import static_settings
@@ -55,6 +56,11 @@ class Result(NamedTuple):
     scenario: Scenario | None = None  # a single rollout's
     seed: int | None = None  # a single rollout's, None where it was given a key
     states: tuple = ()  # the models of the parts the loop carried (``geojax.states``)
+
+    @property
+    def status_meanings(self) -> tuple[str, ...]:
+        """The meaning of each status code of this result: the loop's, the shipped parts', then its own parts'."""
+        return parts.status_meanings(self.states)
 
     def cycles(self) -> dict[str, np.ndarray]:
         """The per-cycle records in edge units (``/cycles``) of a single rollout."""
