@@ -1,6 +1,6 @@
-"""The ephemeris of a single run at every integration step, for its CCSDS files: recorded through the loop's
-extension point for further states (``states.base``), only when asked (``simulate(..., ephemeris=True)``).
+"""A single run's ephemeris at every integration step, recorded only when asked (``simulate(..., ephemeris=True)``).
 
+It rides the loop's extension point for further states (``states.base``), for the run's CCSDS files.
 The loop keeps no Cartesian state per step.  Asked for an ephemeris, the loop carries one more model,
 ``TRUTH``, with no state, whose step record is the true ECI position and velocity at the step's start, and its
 navigation filter (where it has one) is replaced by the same filter whose step record adds the filter's estimate

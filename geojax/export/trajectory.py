@@ -1,5 +1,6 @@
-"""A single rollout's ephemeris and burns for operations and for a cross-check in another tool (Orekit, GMAT,
-STK): ``save_oem``, the CCSDS OEM of the truth or of the estimate, with the filter's covariance.
+"""A single rollout's ephemeris (truth or estimate, with covariance) as a CCSDS OEM and its burns: ``save_oem``.
+
+For operations and for a cross-check in another tool (Orekit, GMAT, STK).
 
 **States.**  A run made with ``simulate(..., ephemeris=True)`` (``geojax simulate --oem`` makes it) kept the true
 ECI state at every integration step start (``export.recorder``); the OEM holds every ``stride``-th of them
