@@ -3,7 +3,8 @@
     geojax demo [--out DIR]
     geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5] [--plots DIR]
     geojax simulate SCENARIO [--controller KIND] [--horizon N] [--days D] [--step S] [--seed S] [--h-rv H] [--h-att H]
-                    [--out FILE.h5] [--plots DIR] [--oem FILE]
+                    [--out FILE.h5] [--plots DIR] [--oem FILE [--oem-step S] [--oem-of truth|estimate]]
+                    [--maneuvers FILE.opm]
     geojax bound SCENARIO [--days D] [--step S] [--slot-steps N] [--thrusters arms|gimbal|fixed4]
                  [--acquisition-days D] [--free-end] [--out FILE.h5] [--plots DIR]
     geojax transfer SCENARIO [--days D] [--out FILE.h5] [--plots DIR]
@@ -35,7 +36,8 @@ from geojax.sweep.report import summary as sweep_summary, title as sweep_title  
 EXIT_BAD_INPUT = 2
 # The flag of each spec key a library error may name (the library speaks in spec keys, the command line in flags).
 FLAGS = {"bound.slot_steps": "--slot-steps", "bound.acquisition_days": "--acquisition-days",
-         "bound.thrusters": "--thrusters", "out": "--out", "oem": "--oem", "resume": "--resume", "chunk": "--chunk",
+         "bound.thrusters": "--thrusters", "out": "--out", "oem": "--oem", "oem_step": "--oem-step",
+         "oem_of": "--oem-of", "maneuvers": "--maneuvers", "resume": "--resume", "chunk": "--chunk",
          "workers": "--workers", "ray": "--ray"}
 
 
@@ -167,6 +169,11 @@ def _check_outputs(args) -> None:
         check_output_file(args.out)
     if getattr(args, "oem", None):
         check_output_file(args.oem, "oem")
+    for flag in ("oem_step", "oem_of"):
+        if getattr(args, flag, None) is not None and not getattr(args, "oem", None):
+            raise ValueError(f"{flag}: needs --oem FILE")
+    if getattr(args, "maneuvers", None):
+        check_output_file(args.maneuvers, "maneuvers")
     if getattr(args, "plots", None):
         plots = Path(args.plots)
         if plots.exists() and not plots.is_dir():
@@ -192,6 +199,13 @@ def _simulate(args) -> int:
     if sc.controller == "none":
         raise ValueError(f"controller.kind: {sc.name} has no controller; give --controller or use 'geojax propagate'")
     _check_outputs(args)
+    if args.oem_step is not None:
+        from geojax.physics.constants import SIDEREAL_DAY_S
+        from geojax.physics.propagate import steps_per_cycle
+
+        step_s = SIDEREAL_DAY_S / steps_per_cycle(sc.step_s)
+        if not args.oem_step >= step_s:  # NaN too
+            raise ValueError(f"oem_step: must be at least the integration step, {step_s:.6g} s, got {args.oem_step:g}")
     return _run_simulation(sc, args.seed, args.out, args.plots, args)
 
 
@@ -217,12 +231,15 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
     with Compilations() as log:
         result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"closed loop ready in {s:.1f} s; "
                                                                       f"running...", flush=True),
-                                  meanwhile=meanwhile)
+                                  meanwhile=meanwhile, ephemeris=bool(getattr(args, "oem", None)))
     say(f"  {log.summary()}")
     code = _finish(args, result, "the run is one compiled call (no host callbacks in the loop), so it reports its "
                                  "times instead of a progress bar", out, plots, figures.get("reference"))
     if getattr(args, "oem", None):
-        print("wrote " + " and ".join(map(str, result.save_oem(args.oem))))
+        print("wrote " + " and ".join(map(str, result.save_oem(args.oem, oem_step_s=args.oem_step,
+                                                               of=args.oem_of or "truth"))))
+    if getattr(args, "maneuvers", None):
+        print(f"wrote {result.save_maneuvers(args.maneuvers)}")
     return code
 
 

@@ -82,9 +82,17 @@ def parser() -> argparse.ArgumentParser:
                      "3-sigma in %% of the planned (errors.sigma3_dv_pct; a planner's burns)")
     sim.add_argument("--out", help="write /metrics and /cycles to this HDF5 file")
     sim.add_argument("--plots", help="folder for the figures")
-    sim.add_argument("--oem", metavar="FILE", help="write the true state at each cycle start and the end as a CCSDS "
-                     "OEM 2.0 (EME2000, UTC; XML where FILE ends in .xml, else KVN) and a planner's burns as "
-                     "FILE's stem + -burns.csv (start, firing time, RTN Delta-V), for Orekit, GMAT or STK")
+    sim.add_argument("--oem", metavar="FILE", help="write the true state at every integration step and the end as a "
+                     "CCSDS OEM 2.0 (EME2000, UTC; LAGRANGE interpolation metadata; with the navigation filter its "
+                     "covariance blocks; XML where FILE ends in .xml, else KVN) and a planner's burns as FILE's "
+                     "stem + -burns.csv (start, firing time, RTN Delta-V), for operations, Orekit, GMAT or STK")
+    sim.add_argument("--oem-step", type=float, metavar="SECONDS", help="with --oem: the states' spacing, as the "
+                     "largest whole number of integration steps within SECONDS (default: every step)")
+    sim.add_argument("--oem-of", choices=("truth", "estimate"), help="with --oem: the true ephemeris (default) or the "
+                     "estimated one: the navigation filter's, or without one the Gaussian fix at each cycle start")
+    sim.add_argument("--maneuvers", metavar="FILE", help="write a planner's burns as a CCSDS OPM 2.0 (KVN): the initial "
+                     "state and one maneuver block per burn flown (MAN_EPOCH_IGNITION, MAN_DURATION, "
+                     "MAN_DELTA_MASS, MAN_REF_FRAME = RTN, MAN_DV_1..3), the planned Delta-V in each block's COMMENT")
 
     tune = command("tune", help="tune controller gains by gradients through the rollout (Katz 2025)")
     tune.add_argument("file", help="a tuning file (TOML; its keys: geojax.tune.spec)")

@@ -187,7 +187,7 @@ def test_oem_read_back_equals_the_run(run, tmp_path, suffix, frame, time_system)
 
 
 def test_covariance_blocks_read_back(tmp_path):
-    """A filter's covariance (none in geojax yet): the KVN lower triangle and the XML CX_X ... CZ_DOT_Z_DOT
+    """Covariance blocks (a navigation filter's: tests/test_ccsds.py): the KVN lower triangle and the XML CX_X ... CZ_DOT_Z_DOT
     elements give back the symmetric matrix to the printed 8 digits."""
     rng = np.random.default_rng(0)
     a = rng.normal(size=(6, 6))
@@ -222,6 +222,39 @@ def test_ccsds_ndm_reads_both_encodings(run, tmp_path):
         again = io.to_string(message, ndm.NDMFileFormats.XML)
         theirs = [e.tag.split("}")[-1] for e in ElementTree.fromstring(again.encode()).iter()]
         assert theirs == [e.tag for e in ElementTree.parse(xml).getroot().iter()]
+
+
+def test_estimate_without_a_filter_is_the_gaussian_fix(tmp_path):
+    """``of="estimate"`` without a filter (li2022-qffc with H_rv = 1): the fix at each cycle start, its diagonal
+    covariance Li 2022's 1-sigma (eq. 48: 3-sigma 0.3 m and 5e-5 m/s per component, times H_rv), its error within
+    5 sigma of the truth and not zero."""
+    run = rollout.simulate(scenario.load("li2022-qffc", {"duration.days": DAYS, "errors.h_rv": 1.0}), 0)
+    keys, states, covariances = read_kvn(run.save_oem(tmp_path / "e.oem", of="estimate", burns_csv=False)[0])
+    _, truth, _ = read_kvn(run.save_oem(tmp_path / "t.oem", burns_csv=False)[0])
+    assert len(states) == DAYS and [e for e, _ in states] == [e for e, _ in truth[:-1]]
+    assert "INTERPOLATION" not in keys and len(covariances) == DAYS
+    h_rv = run.scenario.config["errors"]["h_rv"]
+    sigma_km = h_rv * np.repeat([0.3 / 3, 5e-5 / 3], 3) / 1e3
+    np.testing.assert_allclose(covariances[0][2], np.diag(sigma_km**2), rtol=1e-7, atol=1e-20)  # rotated: 1e-27
+    error = np.array([s for _, s in states]) - np.array([s for _, s in truth[:-1]])
+    assert np.all(np.abs(error) < 5 * sigma_km) and np.any(np.abs(error) > 0.1 * sigma_km)
+
+
+def test_opm_maneuvers_equal_the_run(run, tmp_path):
+    """``ccsds-ndm`` reads the OPM: one maneuver block per burn (``burns_total``), their ΔV sums to the Delta-V the
+    loop integrated and their propellant to ``mass_used_kg`` (no execution errors in li2022-qffc), the N part to
+    ``dv_ns_per_year_mps`` over the run."""
+    ndm = pytest.importorskip("ccsds_ndm.ndm_io")
+    blocks = ndm.NdmIo().from_path(run.save_maneuvers(tmp_path / "m.opm")).body.segment.data.maneuver_parameters
+    assert len(blocks) == run.metrics["burns_total"] > 0
+    dv = np.array([[float(getattr(b, f"man_dv_{i}").value) for i in (1, 2, 3)] for b in blocks]) * 1e3
+    delivered = float(run.final.dv_mps - run.params.initial.dv_mps)
+    assert abs(np.linalg.norm(dv, axis=1).sum() - delivered) < 1e-8 * len(blocks) + 1e-9 * delivered
+    used = -sum(float(b.man_delta_mass.value) for b in blocks)
+    assert abs(used - run.metrics["mass_used_kg"]) < 1e-9 * len(blocks)  # 9 decimals of kg printed per burn
+    run_s = DAYS * 86164.0905
+    np.testing.assert_allclose(np.abs(dv[:, 2]).sum() * 365.25 * SECONDS_PER_DAY / run_s,
+                               run.metrics["dv_ns_per_year_mps"], rtol=1e-6)
 
 
 # --- the burns ---------------------------------------------------------------------------------------------

@@ -1,1 +1,1 @@
-"""A run's results in other tools' formats: CCSDS Orbit Ephemeris Messages and a burn list (``trajectory``)."""
+"""A run's results in other tools' formats: CCSDS OEM (``trajectory``), OPM of the burns (``maneuvers``), a burn list."""

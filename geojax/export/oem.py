@@ -9,7 +9,7 @@ states are, their frame and time system, is the caller's to say (``export.trajec
 Written here rather than with a library: the format is a page of text, and the candidates (``ccsds-ndm``,
 GPL-3, an object tree generated from the schemas; ``oem``, which brings astropy) would add more than they
 write.  ``tests/test_export.py`` reads the files back with a reader of its own and, where it is installed, with
-``ccsds-ndm`` (the schema's own model).
+``ccsds-ndm`` (the schema's own model).  The covariance's lower triangle keeps 8 significant digits (``7e``).
 """
 
 from __future__ import annotations
@@ -41,6 +41,8 @@ class Metadata(NamedTuple):
     center_name: str = "EARTH"
     ref_frame_epoch: str | None = None  # for a frame whose epoch is not in its name (e.g. MOD of an epoch)
     comments: tuple[str, ...] = ()
+    interpolation: str | None = None  # the method a reader should interpolate the states with (e.g. LAGRANGE)
+    interpolation_degree: int | None = None  # its polynomial degree
 
 
 class Covariance(NamedTuple):
@@ -101,8 +103,13 @@ def _metadata_items(metadata: Metadata) -> list[tuple[str, str]]:
              ("CENTER_NAME", metadata.center_name), ("REF_FRAME", metadata.ref_frame)]
     if metadata.ref_frame_epoch is not None:
         items.append(("REF_FRAME_EPOCH", metadata.ref_frame_epoch))
-    return items + [("TIME_SYSTEM", metadata.time_system), ("START_TIME", metadata.start_time),
-                    ("STOP_TIME", metadata.stop_time)]
+    items += [("TIME_SYSTEM", metadata.time_system), ("START_TIME", metadata.start_time),
+              ("STOP_TIME", metadata.stop_time)]
+    if metadata.interpolation is not None:
+        items.append(("INTERPOLATION", metadata.interpolation))
+        if metadata.interpolation_degree is not None:
+            items.append(("INTERPOLATION_DEGREE", str(metadata.interpolation_degree)))
+    return items
 
 
 def _kvn(metadata, epochs, states_km, originator, covariances, comments, data_comments, created) -> str:

@@ -1,11 +1,24 @@
-"""A single rollout's trajectory and burns for a cross-check in another tool (Orekit, GMAT, STK): ``save_oem``.
+"""A single rollout's ephemeris (truth or estimate, with covariance) as a CCSDS OEM and its burns: ``save_oem``.
 
-**States.**  The loop keeps no Cartesian state per step; it records, per control cycle, the true osculating
-``boundary`` = (lon, a, f, g, h, k) at the cycle start (``control.predictor.boundary_elements``: lon is the
-mean longitude l = L - 2 f sin L + 2 g cos L less the Earth angle).  ``cycle_states`` inverts that map exactly
-(Newton on L, then p = a (1 - f**2 - g**2)) with the Earth angle at the cycle start, and appends the final
-state: one true state per sidereal day and the end, the states a propagator with the burn list
-reproduces cycle by cycle.  They are samples of a closed loop, not nodes to interpolate between (a day apart).
+For operations and for a cross-check in another tool (Orekit, GMAT, STK).
+
+**States.**  A run made with ``simulate(..., ephemeris=True)`` (``geojax simulate --oem`` makes it) kept the true
+ECI state at every integration step start (``export.recorder``); the OEM holds every ``stride``-th of them
+(``oem_step_s``: the largest whole number of integration steps within it, default 1) and the run's end, with
+INTERPOLATION = LAGRANGE of degree ``INTERPOLATION_DEGREE``: through every other state of a 3-day run (1795 s
+apart) it gives back the states between to 2.2 mm where its nodes span no burn's start or end, and to 7 m across
+one (the thrust's jump; ``tests/test_ccsds.py``), as the file's comment says.  A run without it has only its per-cycle records: the true osculating ``boundary`` = (lon, a,
+f, g, h, k) at each cycle start (``control.predictor.boundary_elements``: lon is the mean longitude l = L - 2 f sin
+L + 2 g cos L less the Earth angle), which ``cycle_states`` inverts exactly (Newton on L, then p = a (1 - f**2 -
+g**2)) with the Earth angle there; that OEM holds one state per sidereal day and the end, not nodes to interpolate
+(no INTERPOLATION).
+
+**Estimate and covariance** (``of="estimate"``).  With a navigation filter (``navigation.model = "ekf"``) the
+filter's estimate at the same step starts (after the previous step's measurement updates), and in either OEM the
+filter's covariance of its ECI position and velocity at each state's epoch (COVARIANCE blocks, turned into the
+OEM's frame).  Without a filter the controller is told the Gaussian fix at each cycle start (``loop.simulate``:
+the truth plus ``normal(fold_in(key, k), (2, 6))[0]`` scaled by Li 2022's 1-sigma): the estimate OEM holds
+those fixes, one per cycle, each with its diagonal covariance; there is no estimate between them.
 
 **Frame and time.**  geojax's ECI is the mean equator and equinox of the scenario epoch
 (``physics.ephemeris``).  ``frame="EME2000"`` (the default, what Orekit, GMAT and STK read without
@@ -18,13 +31,15 @@ takes MOD as mean *of date* would be off by the 50"/yr precession since the epoc
 **Burns.**  A planner's records (``control.burns.record``) give each burn's firing start in its cycle, firing
 time and unit velocity increment in RSW (= CCSDS RTN: radial, transverse, normal), attitude errors included;
 a burn's Delta-V is the rocket equation over its firing time from the mass left by the burns before it, at
-the thrust and Isp of the scenario.  A feedback law thrusts per step, not in burns: it has no burn list.
+the thrust and Isp of the scenario.  A feedback law thrusts per step, not in burns: it has no burn list.  The
+burns as a CCSDS message: ``export.maneuvers``.
 """
 
 from __future__ import annotations
 
 import csv
 import datetime as dt
+import math
 from pathlib import Path
 from typing import NamedTuple
 
@@ -41,6 +56,10 @@ from geojax.physics.time import TT_MINUS_TAI_S, tai_minus_utc_s
 
 FRAMES = ("EME2000", "MOD")
 TIME_SYSTEMS = ("UTC", "TT")
+OF = ("truth", "estimate")
+INTERPOLATION_DEGREE = 8  # Lagrange through 9 states (the module's docstring: what it gives back)
+ACROSS_BURNS = ("Interpolate within coast arcs and burns: across a burn's start or end (the burn list) the thrust's "
+                "jump makes a Lagrange interpolation err by metres.")
 J2000_TT = dt.datetime(2000, 1, 1, 12)  # J2000.0 as a TT calendar date
 BURN_COLUMNS = ("cycle", "thruster", "start_utc", "start_tt_s", "duration_s", "dv_mps", "dv_r_mps", "dv_t_mps",
                 "dv_n_mps")
@@ -56,16 +75,29 @@ class Burns(NamedTuple):
     dv_rtn_mps: np.ndarray  # [m, 3] Delta-V along R, T, N (held fixed in RTN through the burn)
 
 
-def save_oem(result, path: str | Path, *, frame: str = "EME2000", time_system: str = "UTC",
-             object_name: str | None = None, object_id: str | None = None, xml: bool | None = None,
-             burns_csv: bool = True, covariances: tuple[Covariance, ...] = ()) -> list[Path]:
+class States(NamedTuple):
+    """What an OEM holds: epochs, ECI states and the covariance where there is one."""
+
+    t_tt_s: np.ndarray  # [n] TT seconds since J2000.0
+    rv: np.ndarray  # [n, 6] ECI (r m, v m/s)
+    covariance: np.ndarray | None  # [n, 6, 6] m^2, m^2/s, m^2/s^2 (NaN where none: the run's end)
+    what: str  # the data comment: what the states are
+    interpolable: bool  # step states (nodes to interpolate), not one per cycle
+
+
+def save_oem(result, path: str | Path, *, oem_step_s: float | None = None, of: str = "truth",
+             frame: str = "EME2000", time_system: str = "UTC", object_name: str | None = None,
+             object_id: str | None = None, xml: bool | None = None, burns_csv: bool = True,
+             covariance: bool = True) -> list[Path]:
     """Write a single rollout's states as a CCSDS OEM at ``path`` (XML where it ends in ``.xml``, or as ``xml``
     says; else KVN) and, for a planner, its burns beside it as ``STEM-burns.csv`` (``BURN_COLUMNS``; the
     columns are described in docs/results-files.md).
 
-    ``frame``: EME2000 or MOD (of the scenario epoch); ``time_system``: UTC or TT; ``object_name`` /
-    ``object_id``: default the scenario's name; ``covariances``: a navigation filter's, in km and s (none
-    in geojax yet).  Returns the paths written.
+    ``oem_step_s``: the states' spacing in s, as the largest whole number of integration steps within it
+    (default: every step; a run made without ``ephemeris=True`` has the cycle starts only, and a finer spacing is
+    refused); ``of``: "truth" or "estimate" (the filter's, or the Gaussian fix's); ``covariance``: the filter's
+    covariance blocks where there is one; ``frame``: EME2000 or MOD (of the scenario epoch); ``time_system``: UTC
+    or TT; ``object_name`` / ``object_id``: default the scenario's name.  Returns the paths written.
     """
     from geojax import __version__
     from geojax.loop.report import scenario_of
@@ -74,32 +106,120 @@ def save_oem(result, path: str | Path, *, frame: str = "EME2000", time_system: s
         raise ValueError(f"frame: must be one of {', '.join(FRAMES)}, got {frame!r}")
     if time_system not in TIME_SYSTEMS:
         raise ValueError(f"time_system: must be one of {', '.join(TIME_SYSTEMS)}, got {time_system!r}")
+    if of not in OF:
+        raise ValueError(f"oem_of: must be one of {', '.join(OF)}, got {of!r}")
     sc = scenario_of(result)
-    t_tt_s, r_m, v_mps = cycle_states(result)
+    states = oem_states(result, oem_step_s, of)
+    rv = states.rv
+    to_frame = np.eye(3)
     if frame == "EME2000":
-        to_j2000 = precession_from_j2000(sc.epoch_tt_s)  # J2000 -> epoch; its transpose back, here on rows
-        r_m, v_mps = r_m @ to_j2000, v_mps @ to_j2000
-    epochs = [calendar(t, time_system) for t in t_tt_s]
+        to_frame = np.asarray(precession_from_j2000(sc.epoch_tt_s))  # J2000 -> epoch; its transpose back, on rows
+    six = np.kron(np.eye(2), to_frame)
+    rv = rv @ six
+    epochs = [calendar(t, time_system) for t in states.t_tt_s]
     epoch_text = calendar(sc.epoch_tt_s, time_system)
     path = Path(path)
     burns = run_burns(result)
     written_burns = path.with_name(f"{path.stem}-burns.csv") if burns is not None and burns_csv else None
+    covariances = ()
+    if covariance and states.covariance is not None:
+        covariances = tuple(Covariance(epoch, six.T @ p @ six / 1e6) for epoch, p in zip(epochs, states.covariance)
+                            if np.all(np.isfinite(p)))
     comments = (f"geojax {__version__}: scenario {sc.name}, controller {sc.controller}, "
                 f"{'seed ' + str(result.seed) if result.seed is not None else 'a given key'}",)
     frame_note = (f"REF_FRAME EME2000: geojax's ECI (mean equator and equinox of {epoch_text} {time_system}) "
                   f"turned by the IAU 1976 precession" if frame == "EME2000" else
                   f"REF_FRAME MOD: mean equator and equinox of REF_FRAME_EPOCH, fixed (not of date)")
-    data_comments = ("True states at each control-cycle start (one sidereal day apart) and at the end of the run;",
-                     "samples of the closed loop, not nodes to interpolate between.",
+    data_comments = (states.what,
+                     *([f"Covariance: the filter's of its estimate of (r, v) at {len(covariances)} of the epochs"]
+                       if covariances else []),
                      *([f"Burns: {written_burns.name} (RTN Delta-V, m/s)"] if written_burns else []))
     metadata = Metadata(object_name or sc.name, object_id or sc.name, frame, time_system, epochs[0], epochs[-1],
-                        ref_frame_epoch=epoch_text if frame == "MOD" else None, comments=(frame_note,))
-    states_km = np.concatenate([r_m, v_mps], axis=1) / 1e3
-    written = [write_oem(path, metadata, epochs, states_km, covariances=covariances, comments=comments,
+                        ref_frame_epoch=epoch_text if frame == "MOD" else None, comments=(frame_note,),
+                        interpolation="LAGRANGE" if states.interpolable else None,
+                        interpolation_degree=INTERPOLATION_DEGREE if states.interpolable else None)
+    written = [write_oem(path, metadata, epochs, rv / 1e3, covariances=covariances, comments=comments,
                          data_comments=data_comments, xml=xml)]
     if written_burns:
         written.append(write_burns_csv(written_burns, burns))
     return written
+
+
+def oem_states(result, oem_step_s: float | None = None, of: str = "truth") -> States:
+    """The ``States`` ``save_oem`` writes (geojax ECI, SI): see the module's docstring."""
+    from geojax.loop.report import scenario_of
+
+    sc = scenario_of(result)
+    eph = result.ephemeris
+    n_steps = steps_per_cycle(sc.step_s)
+    if oem_step_s is not None and not (math.isfinite(oem_step_s) and oem_step_s >= result.step_s):
+        raise ValueError(f"oem_step: must be at least the integration step, {result.step_s:.6g} s, got {oem_step_s}")
+    stride = 1 if oem_step_s is None else int(math.floor(oem_step_s / result.step_s * (1 + 1e-12)))
+    filtered = _filter_on(result)
+    if eph is None and (oem_step_s is not None or of == "estimate" and filtered):
+        raise ValueError("oem_step: this run kept no states between its cycle starts; run it with "
+                         "geojax.simulate(..., ephemeris=True)")
+    if of == "estimate" and not filtered:
+        t_tt_s, r, v = cycle_states(result)
+        truth = np.hstack([r, v])[:-1] if eph is None else np.asarray(eph.truth, float)[:, 0]
+        fix, sigma = gaussian_fixes(result, truth)
+        return States(t_tt_s[:-1], fix, np.broadcast_to(np.diag(sigma**2), (len(fix), 6, 6)),
+                      "The Gaussian orbit-determination fix the controller was told at each cycle start (no "
+                      "navigation filter: no estimate between them); covariance: its errors' (diagonal).", False)
+    if eph is None:
+        t_tt_s, r, v = cycle_states(result)
+        return States(t_tt_s, np.hstack([r, v]), None, "True states at each control-cycle start (one sidereal day "
+                      "apart) and at the end of the run; samples of the closed loop, not nodes to interpolate "
+                      "between.", False)
+    n_total = eph.truth.shape[0] * n_steps
+    t_steps = sc.epoch_tt_s + np.arange(n_total + 1) * result.step_s  # the loop's grid times, k n_steps step_s
+    every = np.arange(0, n_total, stride)
+    cov = None if eph.covariance is None else np.asarray(eph.covariance, float).reshape(n_total, 6, 6)
+    spacing = (f"every {stride} integration steps" if stride > 1 else "every integration step") + \
+        f" ({stride * result.step_s:.6g} s)"
+    if of == "estimate":
+        return States(t_steps[every], np.asarray(eph.estimate, float).reshape(n_total, 6)[every], cov[every],
+                      f"The navigation filter's estimate at {spacing}, each after the measurements before it. "
+                      f"{ACROSS_BURNS}", True)
+    final = np.asarray(DYNAMICS[sc.dynamics].to_cartesian(np.asarray(result.final.orbit),
+                                                          float(result.params.forces.mu_m3_s2)))
+    ends = np.append(every, n_total)
+    rv = np.vstack([np.asarray(eph.truth, float).reshape(n_total, 6)[every], final])
+    if cov is not None:
+        cov = np.concatenate([cov[every], np.full((1, 6, 6), np.nan)])
+    return States(t_steps[ends], rv, cov, f"True states at {spacing} and at the end of the run. {ACROSS_BURNS}",
+                  True)
+
+
+def _filter_on(result) -> bool:
+    from geojax.states import navigation
+
+    return navigation.NAME in result.records.cycles.states
+
+
+def gaussian_fixes(result, truth_rv) -> tuple[np.ndarray, np.ndarray]:
+    """(fixes [n, 6], their 1-sigma [6]): the orbit-determination fix the loop drew at each of the n cycle starts
+    from the true ``truth_rv`` [n, 6] there (``loop.simulate.measured_mee``'s errors, the same draws from the
+    run's seed), ECI m and m/s."""
+    from geojax.loop.simulate import NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS
+
+    if result.seed is None:
+        raise ValueError("oem_of: estimate: this Result was made with a key, not a seed; its fixes cannot be drawn")
+    errors = {k: float(v) for k, v in result.params.errors.items() if k in ("h_rv", "rv_r", "rv_v")}
+    sigma = errors["h_rv"] * np.repeat([errors["rv_r"] * NOMINAL_3SIGMA_R_M / 3,
+                                        errors["rv_v"] * NOMINAL_3SIGMA_V_MPS / 3], 3)
+    noise = np.asarray(_fix_noise(jax.random.key(result.seed), len(truth_rv)))
+    return truth_rv + sigma * noise, sigma
+
+
+@jax.jit
+def _cycle_noise(key, k):
+    return jax.random.normal(jax.random.fold_in(key, k), (2, 6))[0]
+
+
+def _fix_noise(key, n_cycles: int):
+    """[n_cycles, 6] the fix's N(0, 1) draws: row 0 of normal(fold_in(key, k), (2, 6)), as the loop draws them."""
+    return jax.vmap(_cycle_noise, in_axes=(None, 0))(key, np.arange(n_cycles))
 
 
 def cycle_states(result) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -21,7 +21,7 @@ from geojax.control import REGISTRY
 from geojax.control.base import Controller, keeps_steps
 from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
-from geojax.export import trajectory
+from geojax.export import maneuvers, recorder, trajectory
 from geojax.loop import report
 from geojax import compilation, traced
 from geojax import states as parts
@@ -56,6 +56,7 @@ class Result(NamedTuple):
     scenario: Scenario | None = None  # a single rollout's
     seed: int | None = None  # a single rollout's, None where it was given a key
     states: tuple = ()  # the models of the parts the loop carried (``geojax.states``)
+    ephemeris: recorder.Ephemeris | None = None  # per step, where asked for (``simulate(..., ephemeris=True)``)
 
     @property
     def status_meanings(self) -> tuple[str, ...]:
@@ -68,7 +69,8 @@ class Result(NamedTuple):
 
     # What ``geojax simulate`` writes (``--out``), prints and draws (``--plots``): its report's functions.
     save, summary, plot = report.save, report.summary, report.plot
-    save_oem = trajectory.save_oem  # CCSDS OEM of the states at the cycle starts, and the burns as CSV
+    save_oem = trajectory.save_oem  # CCSDS OEM of the truth or the estimate (and covariance), and the burns as CSV
+    save_maneuvers = maneuvers.save_maneuvers  # CCSDS OPM with one maneuver block per burn flown
 
 
 def rollout(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,
@@ -144,7 +146,8 @@ def metrics_batch(params, final, records, n_cycles: int, step_s: float, steps_pe
 
 
 def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None = None,
-             keep_steps: bool | None = None, key=None, on_compiled=None, meanwhile=None, states: tuple = ()) -> Result:
+             keep_steps: bool | None = None, key=None, on_compiled=None, meanwhile=None, states: tuple = (),
+             ephemeris: bool = False) -> Result:
     """One closed-loop rollout of ``scenario`` (its registered controller, or ``controller``), carrying the parts
     the scenario turns on and ``states`` (a user's own: ``StateModel`` s or ``Part`` s, ``geojax.states.base``).
 
@@ -152,21 +155,25 @@ def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None
     and any randomness of the controller; same seed, same result.  ``keep_steps`` also returns
     the per-step records (``records.steps``, leaves [n_cycles, n_steps, ...]); by default as the controller says
     (``Controller.keeps_steps``: a feedback law's are kept, its figures are drawn per step; a planner's are not).
+    ``ephemeris`` also returns the true state at every step start and, with a navigation filter, its estimate and
+    covariance there (``Result.ephemeris``, ``export.recorder``; every other number as without it), what
+    ``Result.save_oem`` writes at step resolution.
     """
     if keep_steps is None:
         keep_steps = keeps_steps(controller_of([scenario]) if controller is None else controller)
     result = simulate_batch([scenario], seeds=[seed], controller=controller, keep_steps=keep_steps,
                             keys=None if key is None else jnp.stack([key]), on_compiled=on_compiled,
-                            meanwhile=meanwhile, states=states)
+                            meanwhile=meanwhile, states=states, ephemeris=ephemeris)
     first = lambda tree: jax.tree_util.tree_map(lambda x: x[0], tree)  # noqa: E731
     return result._replace(metrics=first(result.metrics), status=result.status[0], records=first(result.records),
                            final=first(result.final), params=first(result.params), scenario=scenario,
-                           seed=None if key is not None else seed)
+                           seed=None if key is not None else seed,
+                           ephemeris=None if result.ephemeris is None else first(result.ephemeris))
 
 
 def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None = None, *, seeds=None, keys=None,
                    controller: Controller | None = None, keep_steps: bool = False, on_compiled=None,
-                   meanwhile=None, states: tuple = ()) -> Result:
+                   meanwhile=None, states: tuple = (), ephemeris: bool = False) -> Result:
     """A batch of rollouts, vmapped in one compiled call.
 
     Either a list of scenarios (one sample each), or one scenario with ``params`` whose leaves carry a
@@ -176,7 +183,7 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     cache), before they run, with the seconds since their compilation began (e.g. the command line's "closed
     loop ready in X s"); the result's ``compile_s`` is the same.  ``meanwhile()``: called once the environment grid
     and the reference are ready, while the closed loop may still compile (``geojax simulate`` computes its figures'
-    uncontrolled run then, on a core that would otherwise wait).
+    uncontrolled run then, on a core that would otherwise wait).  ``ephemeris``: as for ``simulate``.
 
     The closed loop compiles in a thread of its own while the environment grid and the predictor's reference
     are computed (their programs compile meanwhile): XLA compiles a program on one core, so on two cores a
@@ -186,7 +193,8 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     scenarios = [scenarios] if isinstance(scenarios, Scenario) else list(scenarios)
     if params is not None and len(scenarios) != 1:
         raise ValueError("params: give one scenario with a batch of params, or a list of scenarios")
-    call = functools.partial(_loop_call, scenarios, params, seeds, keys, controller, keep_steps, bool(states))
+    call = functools.partial(_loop_call, scenarios, params, seeds, keys, controller, keep_steps, bool(states),
+                             ephemeris)
     compiling = {}
 
     def compile_meanwhile(layout: Batch):
@@ -206,6 +214,7 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
         on_compiled(compile_s)
     begun = time.perf_counter()
     final, records = jax.block_until_ready(loop_program(*args))
+    records, kept = recorder.split(records) if ephemeris else (records, None)
     metrics = jax.block_until_ready(metrics_program(args[0], final, records))
     run_s = time.perf_counter() - begun
     to_numpy = lambda tree: to_host(tree, n)  # noqa: E731
@@ -214,11 +223,13 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     records = Records(to_host(records.cycles, n, batch.n_cycles),
                       None if records.steps is None else to_host(records.steps, n, batch.n_cycles))
     params = batch.params if params is None else params
+    kept = None if kept is None else recorder.Ephemeris(*(None if x is None else to_host(x, n, batch.n_cycles)
+                                                          for x in kept))
     return Result(metrics, status, records, to_numpy(final), jax.tree_util.tree_map(np.asarray, params),
-                  batch.step_s, time.perf_counter() - start, compile_s, run_s, states=batch.states)
+                  batch.step_s, time.perf_counter() - start, compile_s, run_s, states=batch.states, ephemeris=kept)
 
 
-def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, own_states: bool, batch: Batch):
+def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, own_states: bool, ephemeris, batch: Batch):
     """What ``simulate_batch`` compiles and calls for ``batch`` (its ``shared`` arrays or their shapes):
     (the loop's arguments, its static ones, the traced programs' identities of the loop and of the metrics, the
     metrics' static ones, the sample count)."""
@@ -230,7 +241,7 @@ def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, own_state
     args = (pad_lanes(params, lanes), pad_lanes(keys, lanes), batch.shared, _reference_env(batch))
     dynamics = for_one_sample(batch.dynamics) if lanes == 1 else for_lanes(batch.dynamics, lanes)
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=dynamics,
-                  keep_steps=keep_steps, states=batch.states)
+                  keep_steps=keep_steps, states=recorder.with_recording(batch.states) if ephemeris else batch.states)
     summarized = dict(n_cycles=batch.n_cycles, step_s=batch.step_s,
                       steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1], states=batch.states)
     # A registered controller's programs are kept traced between runs (``geojax.traced``); a user's, or a loop
@@ -239,7 +250,7 @@ def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, own_state
     identity = None if not shipped else program_identity(
         scenarios[0], scenarios[0].controller, repr(sorted(static_settings(scenarios[0].config["controller"],
                                                                         batch.controller.fields).items())),
-        lanes, keep_steps, batch.step_s)
+        lanes, keep_steps, batch.step_s, *(("ephemeris",) if ephemeris else ()))
     per_duration = None if identity is None else (*identity, batch.n_cycles)  # the metrics' static cycle count
     return args, static, identity, per_duration, summarized, n
 
@@ -254,6 +265,8 @@ def _compiled_programs(args, static, identity, per_duration, summarized, n, lowe
     finally:
         lowered.set()
     final, records = loop_program.out_info
+    if recorder.NAME in records.cycles.states:  # the metrics never see the ephemeris (``recorder.split``)
+        records = recorder.split(records)[0]
     metrics = Background(lambda: traced.lowered(metrics_batch, "metrics", per_duration, args[0], final, records,
                                                 **summarized).compile(compiler_options(lanes)))
     return loop_program.compile(compiler_options(lanes, static["controller"])), metrics.result()
