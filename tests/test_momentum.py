@@ -568,7 +568,7 @@ def test_an_arms_reach_puts_the_nozzle_on_the_line_through_the_centre_of_mass(di
     assert np.linalg.norm(np.asarray(state.thrust_torque_body_nm)) > 0
     # without a reach: the common nozzle distance, whatever the bases
     common = _params(thrust_base_north_m=north, thrust_arm_m=2.5)
-    assert float(momentum.nozzle_distance_m(common.attitude, jnp.asarray(u_hat), d[2])) == 2.5
+    assert float(momentum.nozzle_distance_m(common.states[momentum.NAME], jnp.asarray(u_hat), d[2])) == 2.5
 
 
 def test_an_arms_reach_needs_its_bases():

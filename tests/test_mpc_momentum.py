@@ -18,7 +18,7 @@ def planning():
     """A planning problem of li2022-momentum-mpc: the reference's means from cycle 40 on, a start off the targets,
     wheels holding 30 N m s in the orbit's plane and an external torque of 12 N m s a cycle."""
     out = planning_of("li2022-momentum-mpc")
-    return {**out, "attitude": out["params"].attitude, "mass": out["params"].initial.mass_kg}
+    return {**out, "attitude": out["params"].states["wheels"], "mass": out["params"].initial.mass_kg}
 
 
 def program(planning, shape, g0=(18.0, -24.0, 6.0), d=(4.0, -11.0, 0.5)):
