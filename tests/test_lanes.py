@@ -155,3 +155,32 @@ def test_the_states_stated_bytes_and_columns_are_their_records(name, changes):
         assert model.bytes_per_cycle == stated, (model.name, model.bytes_per_cycle, stated)
         columns = jax.eval_shape(lambda r: state_columns({model.name: r}), record)
         assert model.columns_per_cycle == len(columns), (model.name, model.columns_per_cycle, len(columns))
+
+
+@pytest.mark.parametrize("name, overrides, n, days", [
+    ("li2022-qffc", {"errors.h_rv": 1.0, "errors.h_att": 1.0}, 40, 10),  # 1-2 of 40 an ulp apart before
+    ("li2022-qffc-ranging", {}, 24, 6),  # the filter's RMS and NEES: 5-12 of 24 an ulp apart before
+])
+def test_every_metric_is_the_same_at_every_lane_width(name, overrides, n, days):
+    """The metrics program of one batch's records compiled at n, 64 and 1024 lanes gives every metric bit for bit
+    (the N-S and E-W split, the filter's RMS, percentiles and means included: ``geojax.reductions`` stores the
+    values before it adds them, in the cycles' order). Independent check: the same records, three compiled
+    widths."""
+    from geojax import scenario, simulate_batch
+    from geojax.loop import rollout
+
+    sc = [scenario.load(name, {"duration.days": days, **overrides})] * n
+    result = simulate_batch(sc, seeds=np.arange(n))
+    batch = rollout.prepare(sc)
+    records = jax.tree_util.tree_map(jnp.asarray, result.records)
+    final = jax.tree_util.tree_map(jnp.asarray, result.final)
+    widths = {}
+    for width in (n, 64, 1024):
+        p, f, r = (rollout.pad_lanes(t, width) for t in (batch.params, final, records))
+        m = rollout.metrics_batch(p, f, r, n_cycles=batch.n_cycles, step_s=batch.step_s,
+                                  steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1], states=batch.states)
+        widths[width] = {k: np.asarray(v)[:n] for k, v in m.items()}
+    for width in (64, 1024):
+        differ = [k for k in widths[n] if not np.array_equal(widths[n][k], widths[width][k])]
+        assert not differ, (width, differ)
+    assert np.all(widths[n]["dv_per_year_mps"] > 0)

@@ -51,6 +51,7 @@ from geojax.physics.constants import J2, OMEGA_EARTH_RAD_S, R_EARTH_M, SECONDS_P
 from geojax.physics.dynamics import Thrust
 from geojax.physics.elements import wrap_angle
 from geojax.physics.trig import sincos
+from geojax.reductions import sum_over_cycles
 from geojax.scenario_schema import SCHEMA
 
 # The re-acquisition law's stated constants (see the module docstring).
@@ -190,4 +191,4 @@ def recovery_metrics(rec: dict, dv_mps) -> dict:
     """``recovery_cycles`` (cycles flown by recovery) and ``dv_recovery_mps`` (their Delta-V) of a run's records."""
     recovering = rec["recovering"]
     return {"recovery_cycles": jnp.sum(recovering).astype(float),
-            "dv_recovery_mps": jnp.sum(jnp.where(recovering, dv_mps, 0.0))}
+            "dv_recovery_mps": sum_over_cycles(jnp.where(recovering, dv_mps, 0.0))}

@@ -40,6 +40,7 @@ from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.elements import wrap_angle
 from geojax.control.recovery import recovery_metrics
 from geojax.params import station_target
+from geojax.reductions import mean_over_cycles, sum_in_order, sum_over_cycles
 from geojax import states as parts
 
 SECONDS_PER_YEAR = 365.25 * SECONDS_PER_DAY
@@ -115,11 +116,13 @@ def yearly_dv(dv_mps, cycle_s: float) -> dict:
     days: ``dv_year1_mps`` ...; with two years or more, ``dv_steady_per_year_mps``, the mean of the years after
     the first.  None for a run shorter than a year."""
     n_years = dv_mps.shape[0] // YEAR_CYCLES
-    years = jnp.sum(dv_mps[:n_years * YEAR_CYCLES].reshape(n_years, YEAR_CYCLES), axis=1)
+    if n_years == 0:
+        return {}
+    years = sum_over_cycles(dv_mps[:n_years * YEAR_CYCLES].reshape(n_years, YEAR_CYCLES).T)
     years = years * SECONDS_PER_YEAR / (YEAR_CYCLES * cycle_s)
     out = {f"dv_year{k + 1}_mps": years[k] for k in range(n_years)}
     if n_years >= 2:
-        out["dv_steady_per_year_mps"] = jnp.mean(years[1:])
+        out["dv_steady_per_year_mps"] = mean_over_cycles(years[1:])
     return out
 
 
@@ -162,21 +165,12 @@ def dv_split_per_year(rec: dict, dv_mps, run_s: float) -> dict:
     would spend)."""
     d = rec["directions_rsw"]
     weight = rec["fired_s"] / jnp.maximum(jnp.sum(rec["fired_s"], axis=1, keepdims=True), 1e-300)
-    ns = dv_mps * jnp.sum(weight * jnp.abs(d[..., 2]), axis=1)
-    ew = dv_mps * jnp.sum(weight * jnp.hypot(d[..., 0], d[..., 1]), axis=1)
+    # the weighted parts stored before they are added (``geojax.reductions``: fused, the last bit depended on
+    # the lane width, 1-2 of 40 QFFC samples an ulp apart at 64 and 1024 lanes)
+    ns = dv_mps * sum_in_order(weight * jnp.abs(d[..., 2]))
+    ew = dv_mps * sum_in_order(weight * jnp.hypot(d[..., 0], d[..., 1]))
     return {"dv_ns_per_year_mps": sum_over_cycles(ns) * SECONDS_PER_YEAR / run_s,
             "dv_ew_per_year_mps": sum_over_cycles(ew) * SECONDS_PER_YEAR / run_s}
-
-
-def sum_over_cycles(values):
-    """The sum over the leading (cycle) axis, term after term.
-
-    Under ``vmap`` a ``jnp.sum`` over cycles is a reduction of a [lanes, cycles] array, which XLA's CPU
-    compiler vectorises by the batch's shape: the order of the additions, and so the last bit, then depends
-    on the lane width (measured: QFFC ``mean_beta_deg`` 4.5e-16 apart at 128 and 1024 lanes).  A scan adds
-    the cycles in order for every width (a few microseconds per call).
-    """
-    return jax.lax.scan(lambda total, v: (total + v, None), jnp.zeros_like(values[0]), values)[0]
 
 
 def ns_delta_v_mps(rec: dict):

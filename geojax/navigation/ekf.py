@@ -1,29 +1,17 @@
 """The extended Kalman filter's pure pieces on the Cartesian state x = (r m, v m/s) [6], ECI.
 
-* ``time_update``: x and P carried through one step of a propagation function given as an argument, the state
-  transition matrix by ``jax.jacfwd`` of that step, plus ``process_noise``;
 * ``process_noise``: state-noise compensation (SNC), white acceleration of density q = sigma_a^2 per axis
   (m^2/s^3): Q(dt) = q [[dt^3/3 I, dt^2/2 I], [dt^2/2 I, dt I]] (Tapley, Schutz & Born 2004, Sec. 4.9; the
   covariance of the position and velocity a white acceleration integrates to over dt);
 * ``measurement_update``: Joseph form, (I - K H) P (I - K H)^T + K R K^T, symmetric and positive definite for
   any gain, weighted 0/1 by the schedule and visibility (a weight of 0 leaves x and P as they are);
-* ``burn_covariance`` / ``add_burn_uncertainty``: a burn's execution error in the velocity covariance;
 * ``nees`` / ``nis`` and ``chi2_bounds``: the filter's consistency (outside jit for the bounds).
 """
 
 from __future__ import annotations
 
-from typing import Callable
-
 import jax
 import jax.numpy as jnp
-
-
-def time_update(step: Callable, x, p, q):
-    """``step(x) -> x`` [6] one propagation step; returns (x [6], P [6, 6], STM [6, 6]) after the step:
-    P = Phi P Phi^T + Q, Phi = d step / d x."""
-    stm = jax.jacfwd(step)(x)
-    return step(x), _symmetric(stm @ p @ stm.T + q), stm
 
 
 def process_noise(dt_s, snc_mps2_per_rthz):
@@ -46,24 +34,6 @@ def measurement_update(x, p, innovation, h, r, weight=1.0):
     a = p - gain @ hp  # (I - K H) P
     joseph = a - (a @ h.T) @ gain.T + gain @ r @ gain.T  # (I - K H) P (I - K H)^T + K R K^T
     return x + gain @ innovation, _symmetric(joseph), s
-
-
-def burn_covariance(dv_eci_mps, magnitude_sigma, pointing_sigma_rad):
-    """Covariance [3, 3] (m^2/s^2) of a burn's delivered-minus-planned Delta-V.
-
-    Delivered: (1 + eps) |dv| (u + d), eps ~ N(0, magnitude_sigma^2) (a fraction), d the pointing error
-    perpendicular to the planned direction u, N(0, pointing_sigma^2) in each of the two perpendicular axes.  To
-    first order the error is eps dv + |dv| d: along u variance magnitude_sigma^2 |dv|^2, across it
-    (pointing_sigma |dv|)^2 per axis, so Sigma = magnitude_sigma^2 dv dv^T + pointing_sigma^2 (|dv|^2 I - dv dv^T),
-    written without u so that it is smooth (and zero) at dv = 0.
-    """
-    outer = jnp.outer(dv_eci_mps, dv_eci_mps)
-    return magnitude_sigma**2 * outer + pointing_sigma_rad**2 * (jnp.dot(dv_eci_mps, dv_eci_mps) * jnp.eye(3) - outer)
-
-
-def add_burn_uncertainty(p, dv_eci_mps, magnitude_sigma, pointing_sigma_rad):
-    """P [6, 6] with a burn's execution covariance (``burn_covariance``) added to its velocity block."""
-    return p.at[3:, 3:].add(burn_covariance(dv_eci_mps, magnitude_sigma, pointing_sigma_rad))
 
 
 def nees(error, p):

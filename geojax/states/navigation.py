@@ -72,11 +72,11 @@ from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, wrap_ang
 from geojax.physics.frames import ecef_to_eci, rsw_basis
 from geojax.physics.fusion import skipped_where_idle
 from geojax.physics.integrate import rk4_step
+from geojax.reductions import mean_over_cycles, percentile_over_cycles, sum_in_order, sum_over_cycles
 from geojax.navigation.keys import FIELDS as KEYS, check_with
 from geojax.states.base import NAVIGATION_STREAM, Part, StateModel
 
 NAME = "navigation"
-N_ORBIT = 6
 N_STATE = 10  # the elements, eps, phi [3]; then the measurement biases where they are estimated (``n_state``)
 # ``fold_in`` constants of the model's draws from its cycle key (the step's draws fold the step index into
 # MEASUREMENT_KEY first).
@@ -560,13 +560,13 @@ def metrics(params, cycles: NavigationCycle, n_steps_total: int, run_s: float):
     for k, axis in enumerate(AXES):
         for offset, unit in ((0, "m"), (3, "mps")):
             e = cycles.error_rsw[:, offset + k]
-            out[f"nav_{axis}_rms_{unit}"] = jnp.sqrt(jnp.mean(e**2))
-            out[f"nav_{axis}_p95_{unit}"] = jnp.percentile(jnp.abs(e), 95.0)
-    out["nav_position_rms_m"] = jnp.sqrt(jnp.mean(jnp.sum(cycles.error_rsw[:, :3] ** 2, axis=-1)))
-    out["nees_mean"] = jnp.mean(cycles.nees)
-    dof = jnp.sum(cycles.nis_dof)
-    out["nis_mean_per_dof"] = jnp.sum(cycles.nis_sum) / jnp.where(dof > 0, dof, 1.0)
-    out["measurements_used"] = jnp.sum(cycles.measurements)
+            out[f"nav_{axis}_rms_{unit}"] = jnp.sqrt(mean_over_cycles(e**2))
+            out[f"nav_{axis}_p95_{unit}"] = percentile_over_cycles(jnp.abs(e), 95.0)
+    out["nav_position_rms_m"] = jnp.sqrt(mean_over_cycles(sum_in_order(cycles.error_rsw[:, :3] ** 2)))
+    out["nees_mean"] = mean_over_cycles(cycles.nees)
+    dof = sum_over_cycles(cycles.nis_dof)
+    out["nis_mean_per_dof"] = sum_over_cycles(cycles.nis_sum) / jnp.where(dof > 0, dof, 1.0)
+    out["measurements_used"] = sum_over_cycles(cycles.measurements)
     return out, jnp.asarray(False)
 
 
