@@ -36,7 +36,7 @@ EXIT_BAD_INPUT = 2
 # The flag of each spec key a library error may name (the library speaks in spec keys, the command line in flags).
 FLAGS = {"bound.slot_steps": "--slot-steps", "bound.acquisition_days": "--acquisition-days",
          "bound.thrusters": "--thrusters", "out": "--out", "oem": "--oem", "resume": "--resume", "chunk": "--chunk",
-         "workers": "--workers", "ray": "--ray"}
+         "workers": "--workers", "ray": "--ray", "force": "--force", "plots": "--plots"}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -159,18 +159,19 @@ def _overrides(args) -> dict:
     return {key: getattr(args, flag) for flag, key in names.items() if getattr(args, flag, None) is not None}
 
 
-def _check_outputs(args) -> None:
-    """Output paths are checked before any computation (a run never finds out after an hour that it cannot save)."""
-    from geojax.store import check_output_file
+def _check_outputs(args, *files) -> None:
+    """Output paths are checked before any computation (a run never finds out after an hour that it cannot save),
+    and a results file that exists is refused without ``--force`` (a sweep's ``--resume`` continues it instead);
+    ``files``: more paths the command writes (a tuning's scenario)."""
+    from geojax.store import check_output_file, check_output_folder
 
-    if getattr(args, "out", None):
-        check_output_file(args.out)
-    if getattr(args, "oem", None):
-        check_output_file(args.oem, "oem")
+    replace = args.force or args.command == "sweep"  # a sweep's file and parts: run_sweep, which knows --resume
+    named = [(name, getattr(args, name, None)) for name in ("out", "oem")]
+    for name, path in [*named, *(("out", f) for f in files)]:
+        if path:
+            check_output_file(path, name, replace)
     if getattr(args, "plots", None):
-        plots = Path(args.plots)
-        if plots.exists() and not plots.is_dir():
-            raise ValueError(f"--plots {str(plots)!r}: exists and is not a folder")
+        check_output_folder(args.plots)
 
 
 def _propagate(args) -> int:
@@ -270,7 +271,7 @@ def _tune(args) -> int:
     from geojax import tune
 
     spec = tune.load(args.file)
-    _check_outputs(args)
+    _check_outputs(args, tune.tuned_scenario_path(args.out))
     say = _say(args)
     with warnings.catch_warnings():  # a short horizon is said at once, on one line, whatever --quiet says
         warnings.simplefilter("always", tune.ShortHorizonWarning)
@@ -295,9 +296,11 @@ def _tune(args) -> int:
 def _demo(args) -> int:
     from geojax import scenario, uncontrolled
 
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--out {str(out)!r}: exists and is not a folder")
+    from geojax.store import check_output_file, check_output_folder
+
+    out = check_output_folder(args.out, "out")
+    for name in ("li2022-uncontrolled.h5", "li2022-qffc.h5"):
+        check_output_file(out / name, "out", args.force)
     say = _say(args)
     sc = scenario.load("li2022")
     say("geojax demo 1/2: one year of li2022 without station keeping (Li 2022 initial state, J2 + Sun + Moon + SRP)")
@@ -321,7 +324,7 @@ def _sweep(args) -> int:
     say(f"{spec.name}: {len(spec.controllers)} controller(s) x {spec.n_points} grid point(s) x "
         f"{spec.repetitions} repetition(s) = {len(spec.controllers) * n} samples", flush=True)
     path = sweep.run_sweep(spec, args.out, resume=args.resume, chunk=args.chunk, progress=False if args.quiet else None,
-                           ray=args.ray, workers=args.workers, lanes=args.lanes)
+                           ray=args.ray, workers=args.workers, lanes=args.lanes, force=args.force)
     groups, attrs = store.read_h5(path)
     lanes = f" ({attrs['lanes_per_device']} lanes per device)" if attrs.get("lanes_per_device") else ""
     _detail(args)(f"  compiled in {float(attrs.get('compile_s', float('nan'))):.1f} s, {float(attrs['wall_s']):.1f} s "

@@ -6,6 +6,9 @@ import argparse
 
 import geojax
 
+FORCE_HELP = ("replace the files the command writes (results, OEM, tuned scenario) where they exist (default: "
+              "refused, exit 2, before anything runs; a sweep's --resume continues its file instead); figures are "
+              "redrawn in place either way")
 DAYS_HELP = ("duration in solar days (default: the scenario's); the run is that many sidereal-day cycles, "
              "rounded (20 days: 20 cycles), the same in propagate, bound and simulate (a sweep file sets it as "
              "\"duration.days\" in [set], a tuning file as days)")
@@ -29,8 +32,11 @@ def parser() -> argparse.ArgumentParser:
                              "$GEOJAX_CACHE_DIR or the user's cache folder and reused by later runs; "
                              "GEOJAX_NO_CACHE=1 does the same as this flag)")
 
-    def command(name, **kw):
-        return sub.add_parser(name, parents=[common], **kw)
+    writes = argparse.ArgumentParser(add_help=False)  # every command that writes results files
+    writes.add_argument("--force", action="store_true", help=FORCE_HELP)
+
+    def command(name, writing: bool = True, **kw):
+        return sub.add_parser(name, parents=[common, writes] if writing else [common], **kw)
 
     demo = command("demo", help="li2022 for one year, without control and with the QFFC: summaries, figures")
     demo.add_argument("--out", default="geojax-demo", help="folder for the figures and HDF5 files (default: geojax-demo)")
@@ -107,7 +113,7 @@ def parser() -> argparse.ArgumentParser:
     swp.add_argument("--workers", type=int, help="with --ray: worker processes (default one per GPU of a GPU node "
                      "and one per CPU node, each using its share of the node's cores)")
 
-    plot = command("plot", help="draw the figures of a results file (simulate, propagate, sweep, tune, bound, transfer)")
+    plot = command("plot", writing=False, help="draw the figures of a results file (simulate, propagate, sweep, tune, bound, transfer)")
     plot.add_argument("file", help="an HDF5 file written by geojax")
     plot.add_argument("--out", help="folder for the figures (default: next to the file)")
     plot.add_argument("--format", choices=("png", "pdf", "svg"), default="png", help="figure format (default png)")
@@ -120,6 +126,6 @@ def parser() -> argparse.ArgumentParser:
     xfer.add_argument("--out", help="write /metrics and the daily /records to this HDF5 file")
     xfer.add_argument("--plots", help="folder for the figure of the orbit and mass against time (NAME.png)")
 
-    scen = command("scenarios", help="list the shipped scenarios, or print one's TOML")
+    scen = command("scenarios", writing=False, help="list the shipped scenarios, or print one's TOML")
     scen.add_argument("--show", metavar="NAME", help="print the TOML of the shipped scenario NAME")
     return top
