@@ -31,6 +31,7 @@ def summary(spec, groups) -> list[str]:
         for j, point in enumerate(points[:SUMMARY_ROWS]):
             where = ", ".join(f"{k.rpartition('.')[2]} {v if isinstance(v, str) else format(v, 'g')}"
                               for k, v in zip(keys, point, strict=True))
+            where = where or f"{spec.repetitions} repetitions"  # a sweep without a grid: one point
             lines.append(f"    {where}: {_point(dv, dlon, dlat, j, status[j], STATUS_MEANINGS)}")
         if len(points) > SUMMARY_ROWS:
             lines.append(f"    ... {len(points) - SUMMARY_ROWS} more grid points (geojax plot, geojax.open_results)")
@@ -65,7 +66,8 @@ def _point(dv, dlon, dlat, j: int, status, meanings) -> str:
 
 def title(attrs, axes: list[str]) -> str:
     """What a sweep figure shows: its swept keys, the sweep's name and the run's length
-    ("thrusters.beta_max_deg: fig09, 365.25 days"; "thrusters.beta_max_deg × errors.h_rv: ...")."""
+    ("thrusters.beta_max_deg: fig09, 365.25 days"; "thrusters.beta_max_deg × errors.h_rv: ..."; without a grid,
+    "repetitions alone: mc, 10 days")."""
     from geojax import scenario
 
     days = ""
@@ -74,4 +76,5 @@ def title(attrs, axes: list[str]) -> str:
         days = f", {base['duration']['days']:g} days"
     except (ValueError, KeyError, TypeError):
         pass
-    return f"{' × '.join(axes[1:])}: {attrs.get('name', 'sweep')}{days}"
+    swept = " × ".join(axes[1:]) or "repetitions alone"  # a sweep without a grid
+    return f"{swept}: {attrs.get('name', 'sweep')}{days}"
