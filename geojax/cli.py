@@ -1,18 +1,19 @@
 """The ``geojax`` command line: arguments in, the library's runs called, their summaries printed and files written.
 
     geojax demo [--out DIR]
-    geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5] [--plots DIR]
+    geojax propagate SCENARIO [--days D] [--step S] [--set KEY=VALUE ...] [--out FILE.h5] [--plots DIR]
     geojax simulate SCENARIO [--controller KIND] [--horizon N] [--days D] [--step S] [--seed S] [--h-rv H] [--h-att H]
-                    [--out FILE.h5] [--plots DIR] [--oem FILE]
+                    [--set KEY=VALUE ...] [--out FILE.h5] [--plots DIR] [--oem FILE]
     geojax bound SCENARIO [--days D] [--step S] [--slot-steps N] [--thrusters arms|gimbal|fixed4]
-                 [--acquisition-days D] [--free-end] [--out FILE.h5] [--plots DIR]
-    geojax transfer SCENARIO [--days D] [--out FILE.h5] [--plots DIR]
+                 [--acquisition-days D] [--free-end] [--set KEY=VALUE ...] [--out FILE.h5] [--plots DIR]
+    geojax transfer SCENARIO [--days D] [--set KEY=VALUE ...] [--out FILE.h5] [--plots DIR]
     geojax sweep SWEEP.toml --out FILE.h5 [--resume] [--chunk N] [--lanes N] [--ray [ADDRESS]] [--workers N]
     geojax tune TUNE.toml --out FILE.h5
     geojax plot FILE.h5 [--out DIR] [--format png|pdf|svg] [--dpi N]
     geojax scenarios [--show NAME]
 
-Every command takes -q (print only the files written) and -v (also compilation times and devices).
+Every command takes -q (print only the files written) and -v (also compilation times and devices); every one that
+writes files takes --force (replace them; refused by default, before anything runs).
 ``--days D`` means D solar days, run as round(D / sidereal day) cycles, in every station-keeping command.
 What a run writes and prints is its result's (``Result.save`` / ``summary`` / ``plot`` and the like): this module
 parses, calls and prints.
@@ -28,7 +29,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from geojax.cli_args import parser as _parser
+from geojax.cli_args import check_outputs as _check_outputs, overrides as _overrides, parser as _parser, set_values
 from geojax.loop.report import flown_days  # noqa: F401  (printed before a run; tests read it here)
 from geojax.sweep.report import summary as sweep_summary, title as sweep_title  # noqa: F401
 
@@ -152,28 +153,6 @@ def _detail(args):
     return print if getattr(args, "verbose", False) else (lambda *a, **k: None)
 
 
-def _overrides(args) -> dict:
-    names = {"days": "duration.days", "step": "integration.step_s", "controller": "controller.kind",
-             "horizon": "controller.horizon", "h_rv": "errors.h_rv", "h_att": "errors.h_att",
-             **{flag: f"errors.{flag}" for flag in ("sigma3_r_m", "sigma3_v_mps", "sigma3_att_deg", "sigma3_dv_pct")}}
-    return {key: getattr(args, flag) for flag, key in names.items() if getattr(args, flag, None) is not None}
-
-
-def _check_outputs(args, *files) -> None:
-    """Output paths are checked before any computation (a run never finds out after an hour that it cannot save),
-    and a results file that exists is refused without ``--force`` (a sweep's ``--resume`` continues it instead);
-    ``files``: more paths the command writes (a tuning's scenario)."""
-    from geojax.store import check_output_file, check_output_folder
-
-    replace = args.force or args.command == "sweep"  # a sweep's file and parts: run_sweep, which knows --resume
-    named = [(name, getattr(args, name, None)) for name in ("out", "oem")]
-    for name, path in [*named, *(("out", f) for f in files)]:
-        if path:
-            check_output_file(path, name, replace)
-    if getattr(args, "plots", None):
-        check_output_folder(args.plots)
-
-
 def _propagate(args) -> int:
     from geojax import scenario, uncontrolled
 
@@ -261,7 +240,7 @@ def _bound(args) -> int:
 def _transfer(args) -> int:
     from geojax import transfer
 
-    sc = transfer.load(args.scenario)
+    sc = transfer.load(args.scenario, set_values(args.set))  # its --days is the run's limit, not a scenario key
     _check_outputs(args)
     result = transfer.run(sc, days=args.days)
     return _finish(args, result, f"{result.wall_s:.1f} s with compilation", args.out, args.plots)
