@@ -184,9 +184,9 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
     from geojax.loop.setup import controller_of, cycle_count, cycle_slots
 
     say = _say(args)
-    say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; compiling the environment, the reference run and "
-        f"the closed loop for {cycle_slots(cycle_count(sc.days))} cycles (every duration up to that many cycles runs "
-        f"the same program)...", flush=True)
+    say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; the environment, the reference run and the closed "
+        f"loop for {cycle_slots(cycle_count(sc.days))} cycles (every duration up to that many cycles runs the same "
+        f"program), compiled or loaded from the cache...", flush=True)
     _detail(args)(f"  {waiting_note()}", flush=True)
     figures = {}
 
@@ -195,8 +195,8 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
             figures["reference"] = report.reference_and_target(sc, cycle_count(sc.days))
 
     with Compilations() as log:
-        result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"closed loop ready in {s:.1f} s; "
-                                                                      f"running...", flush=True),
+        result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"closed loop ready in {s:.1f} s "
+                                                                      f"({log.made()}); running...", flush=True),
                                   meanwhile=meanwhile)
     say(f"  {log.summary()}")
     code = _finish(args, result, "the run is one compiled call (no host callbacks in the loop), so it reports its "
@@ -242,7 +242,7 @@ def _transfer(args) -> int:
 
     sc = transfer.load(args.scenario, set_values(args.set))  # its --days is the run's limit, not a scenario key
     _check_outputs(args)
-    result = transfer.run(sc, days=args.days)
+    result = transfer.run(sc, days=args.days, progress=False if args.quiet else None)
     return _finish(args, result, f"{result.wall_s:.1f} s with compilation", args.out, args.plots)
 
 
