@@ -178,7 +178,8 @@ def test_quiet_prints_only_the_files_written_and_days_mean_cycles_everywhere(tmp
 def test_sweep_summary_per_grid_point_and_identical_repetitions_warned():
     from types import SimpleNamespace
 
-    spec = SimpleNamespace(controllers=("qffc", "fompc"), grid={"thrusters.beta_max_deg": [60.0, 90.0]}, repetitions=3)
+    spec = SimpleNamespace(controllers=("qffc", "fompc"), grid={"thrusters.beta_max_deg": [60.0, 90.0]}, repetitions=3,
+                           fixed={"duration.days": 365.25})
     dv = np.array([[[62.0, 62.0, 62.0], [58.0, 58.0, 58.0]],  # qffc: every repetition the same
                    [[57.0, 58.0, 59.0], [55.0, 55.5, 56.0]]])
     metrics = {"dv_per_year_mps": dv, "max_abs_dlon_deg": np.full_like(dv, 0.01), "max_abs_dlat_deg": np.full_like(dv, 0.006)}
@@ -190,6 +191,11 @@ def test_sweep_summary_per_grid_point_and_identical_repetitions_warned():
     assert "beta_max_deg 60: ΔV 62.00 ± 0.00 m/s/yr" in text and "beta_max_deg 90: ΔV 55.25 ± 0.25 m/s/yr" in text
     assert "2 held, 1 failed (1 left the longitude box)" in text
     assert "identical for qffc:" in text and "fompc:" not in lines[-1]
+    # A short sweep's yearly rate is said to be extrapolated, with the days it flew: 10 sidereal days, by hand.
+    short = "\n".join(cli.sweep_summary(SimpleNamespace(**{**vars(spec), "fixed": {"duration.days": 10}}),
+                                         {"metrics": metrics, "status": {"code": status}}))
+    assert "beta_max_deg 60: ΔV 62.00 ± 0.00 m/s/yr (extrapolated from 9.973 days, 10 cycles), max" in short
+    assert short.count("extrapolated") == 4 and "extrapolated" not in text
 
 
 def test_an_installed_copy_names_the_commit_it_was_built_from(tmp_path):
