@@ -1,19 +1,20 @@
 """The ``geojax`` command line: arguments in, the library's runs called, their summaries printed and files written.
 
     geojax demo [--out DIR]
-    geojax propagate SCENARIO [--days D] [--step S] [--out FILE.h5] [--plots DIR]
+    geojax propagate SCENARIO [--days D] [--step S] [--set KEY=VALUE ...] [--out FILE.h5] [--plots DIR]
     geojax simulate SCENARIO [--controller KIND] [--horizon N] [--days D] [--step S] [--seed S] [--h-rv H] [--h-att H]
-                    [--out FILE.h5] [--plots DIR] [--oem FILE [--oem-step S] [--oem-of truth|estimate]]
-                    [--maneuvers FILE.opm]
+                    [--set KEY=VALUE ...] [--out FILE.h5] [--plots DIR]
+                    [--oem FILE [--oem-step S] [--oem-of truth|estimate]] [--maneuvers FILE.opm]
     geojax bound SCENARIO [--days D] [--step S] [--slot-steps N] [--thrusters arms|gimbal|fixed4]
-                 [--acquisition-days D] [--free-end] [--out FILE.h5] [--plots DIR]
-    geojax transfer SCENARIO [--days D] [--out FILE.h5] [--plots DIR]
+                 [--acquisition-days D] [--free-end] [--set KEY=VALUE ...] [--out FILE.h5] [--plots DIR]
+    geojax transfer SCENARIO [--days D] [--set KEY=VALUE ...] [--out FILE.h5] [--plots DIR]
     geojax sweep SWEEP.toml --out FILE.h5 [--resume] [--chunk N] [--lanes N] [--ray [ADDRESS]] [--workers N]
     geojax tune TUNE.toml --out FILE.h5
     geojax plot FILE.h5 [--out DIR] [--format png|pdf|svg] [--dpi N]
     geojax scenarios [--show NAME]
 
-Every command takes -q (print only the files written) and -v (also compilation times and devices).
+Every command takes -q (print only the files written) and -v (also compilation times and devices); every one that
+writes files takes --force (replace them; refused by default, before anything runs).
 ``--days D`` means D solar days, run as round(D / sidereal day) cycles, in every station-keeping command.
 What a run writes and prints is its result's (``Result.save`` / ``summary`` / ``plot`` and the like): this module
 parses, calls and prints.
@@ -29,7 +30,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from geojax.cli_args import parser as _parser
+from geojax.cli_args import check_outputs as _check_outputs, overrides as _overrides, parser as _parser, set_values
 from geojax.loop.report import flown_days  # noqa: F401  (printed before a run; tests read it here)
 from geojax.sweep.report import summary as sweep_summary, title as sweep_title  # noqa: F401
 
@@ -38,7 +39,7 @@ EXIT_BAD_INPUT = 2
 FLAGS = {"bound.slot_steps": "--slot-steps", "bound.acquisition_days": "--acquisition-days",
          "bound.thrusters": "--thrusters", "out": "--out", "oem": "--oem", "oem_step": "--oem-step",
          "oem_of": "--oem-of", "maneuvers": "--maneuvers", "resume": "--resume", "chunk": "--chunk",
-         "workers": "--workers", "ray": "--ray"}
+         "workers": "--workers", "ray": "--ray", "force": "--force", "plots": "--plots"}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -154,32 +155,6 @@ def _detail(args):
     return print if getattr(args, "verbose", False) else (lambda *a, **k: None)
 
 
-def _overrides(args) -> dict:
-    names = {"days": "duration.days", "step": "integration.step_s", "controller": "controller.kind",
-             "horizon": "controller.horizon", "h_rv": "errors.h_rv", "h_att": "errors.h_att",
-             **{flag: f"errors.{flag}" for flag in ("sigma3_r_m", "sigma3_v_mps", "sigma3_att_deg", "sigma3_dv_pct")}}
-    return {key: getattr(args, flag) for flag, key in names.items() if getattr(args, flag, None) is not None}
-
-
-def _check_outputs(args) -> None:
-    """Output paths are checked before any computation (a run never finds out after an hour that it cannot save)."""
-    from geojax.store import check_output_file
-
-    if getattr(args, "out", None):
-        check_output_file(args.out)
-    if getattr(args, "oem", None):
-        check_output_file(args.oem, "oem")
-    for flag in ("oem_step", "oem_of"):
-        if getattr(args, flag, None) is not None and not getattr(args, "oem", None):
-            raise ValueError(f"{flag}: needs --oem FILE")
-    if getattr(args, "maneuvers", None):
-        check_output_file(args.maneuvers, "maneuvers")
-    if getattr(args, "plots", None):
-        plots = Path(args.plots)
-        if plots.exists() and not plots.is_dir():
-            raise ValueError(f"--plots {str(plots)!r}: exists and is not a folder")
-
-
 def _propagate(args) -> int:
     from geojax import scenario, uncontrolled
 
@@ -218,9 +193,9 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
     from geojax.loop.setup import controller_of, cycle_count, cycle_slots
 
     say = _say(args)
-    say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; compiling the environment, the reference run and "
-        f"the closed loop for {cycle_slots(cycle_count(sc.days))} cycles (every duration up to that many cycles runs "
-        f"the same program)...", flush=True)
+    say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; the environment, the reference run and the closed "
+        f"loop for {cycle_slots(cycle_count(sc.days))} cycles (every duration up to that many cycles runs the same "
+        f"program), compiled or loaded from the cache...", flush=True)
     _detail(args)(f"  {waiting_note()}", flush=True)
     figures = {}
 
@@ -229,8 +204,8 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
             figures["reference"] = report.reference_and_target(sc, cycle_count(sc.days))
 
     with Compilations() as log:
-        result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"closed loop ready in {s:.1f} s; "
-                                                                      f"running...", flush=True),
+        result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"closed loop ready in {s:.1f} s "
+                                                                      f"({log.made()}); running...", flush=True),
                                   meanwhile=meanwhile, ephemeris=bool(getattr(args, "oem", None)))
     say(f"  {log.summary()}")
     code = _finish(args, result, "the run is one compiled call (no host callbacks in the loop), so it reports its "
@@ -277,9 +252,9 @@ def _bound(args) -> int:
 def _transfer(args) -> int:
     from geojax import transfer
 
-    sc = transfer.load(args.scenario)
+    sc = transfer.load(args.scenario, set_values(args.set))  # its --days is the run's limit, not a scenario key
     _check_outputs(args)
-    result = transfer.run(sc, days=args.days)
+    result = transfer.run(sc, days=args.days, progress=False if args.quiet else None)
     return _finish(args, result, f"{result.wall_s:.1f} s with compilation", args.out, args.plots)
 
 
@@ -287,7 +262,7 @@ def _tune(args) -> int:
     from geojax import tune
 
     spec = tune.load(args.file)
-    _check_outputs(args)
+    _check_outputs(args, tune.tuned_scenario_path(args.out))
     say = _say(args)
     with warnings.catch_warnings():  # a short horizon is said at once, on one line, whatever --quiet says
         warnings.simplefilter("always", tune.ShortHorizonWarning)
@@ -312,9 +287,11 @@ def _tune(args) -> int:
 def _demo(args) -> int:
     from geojax import scenario, uncontrolled
 
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--out {str(out)!r}: exists and is not a folder")
+    from geojax.store import check_output_file, check_output_folder
+
+    out = check_output_folder(args.out, "out")
+    for name in ("li2022-uncontrolled.h5", "li2022-qffc.h5"):
+        check_output_file(out / name, "out", args.force)
     say = _say(args)
     sc = scenario.load("li2022")
     say("geojax demo 1/2: one year of li2022 without station keeping (Li 2022 initial state, J2 + Sun + Moon + SRP)")
@@ -338,7 +315,7 @@ def _sweep(args) -> int:
     say(f"{spec.name}: {len(spec.controllers)} controller(s) x {spec.n_points} grid point(s) x "
         f"{spec.repetitions} repetition(s) = {len(spec.controllers) * n} samples", flush=True)
     path = sweep.run_sweep(spec, args.out, resume=args.resume, chunk=args.chunk, progress=False if args.quiet else None,
-                           ray=args.ray, workers=args.workers, lanes=args.lanes)
+                           ray=args.ray, workers=args.workers, lanes=args.lanes, force=args.force)
     groups, attrs = store.read_h5(path)
     lanes = f" ({attrs['lanes_per_device']} lanes per device)" if attrs.get("lanes_per_device") else ""
     _detail(args)(f"  compiled in {float(attrs.get('compile_s', float('nan'))):.1f} s, {float(attrs['wall_s']):.1f} s "

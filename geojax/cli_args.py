@@ -1,4 +1,5 @@
-"""The arguments of the ``geojax`` command line (``geojax.cli`` runs the commands and prints)."""
+"""The arguments of the ``geojax`` command line, the scenario keys they set and the output paths they name
+(checked before a run); ``geojax.cli`` runs the commands and prints."""
 
 from __future__ import annotations
 
@@ -6,9 +7,66 @@ import argparse
 
 import geojax
 
+FORCE_HELP = ("replace the files the command writes (results, OEM, tuned scenario) where they exist (default: "
+              "refused, exit 2, before anything runs; a sweep's --resume continues its file instead); figures are "
+              "redrawn in place either way")
 DAYS_HELP = ("duration in solar days (default: the scenario's); the run is that many sidereal-day cycles, "
              "rounded (20 days: 20 cycles), the same in propagate, bound and simulate (a sweep file sets it as "
              "\"duration.days\" in [set], a tuning file as days)")
+SET_HELP = ("set a scenario key, as a sweep file's [set] does: a dotted KEY (thrusters.beta_max_deg, "
+            "errors.h_rv, name) and a TOML VALUE (60.0, true, [0.1, 0, 0], \"text\"; a bare word is a string); "
+            "repeatable; a key a flag of its own also sets (--days) is refused")
+
+
+def set_values(items: list[str]) -> dict:
+    """The ``--set KEY=VALUE`` items as ``{KEY: value}``, each VALUE read as a TOML value (a bare word that is not
+    one: a string); ``ValueError`` naming the item at fault."""
+    import tomllib
+
+    values = {}
+    for item in items:
+        key, equals, text = item.partition("=")
+        key = key.strip()
+        if not equals or not key or not text.strip():
+            raise ValueError(f"--set {item!r}: must be KEY=VALUE, e.g. thrusters.beta_max_deg=60")
+        if key in values:
+            raise ValueError(f"--set {key}: given twice")
+        try:
+            values[key] = tomllib.loads(f"value = {text}")["value"]
+        except tomllib.TOMLDecodeError:
+            values[key] = text.strip()
+    return values
+
+
+def overrides(args) -> dict:
+    """The scenario keys the command's flags and ``--set`` items set (a key set both ways is refused)."""
+    names = {"days": "duration.days", "step": "integration.step_s", "controller": "controller.kind",
+             "horizon": "controller.horizon", "h_rv": "errors.h_rv", "h_att": "errors.h_att",
+             **{flag: f"errors.{flag}" for flag in ("sigma3_r_m", "sigma3_v_mps", "sigma3_att_deg", "sigma3_dv_pct")}}
+    flags = {key: getattr(args, flag) for flag, key in names.items() if getattr(args, flag, None) is not None}
+    given = set_values(getattr(args, "set", []))
+    for key in given.keys() & flags.keys():
+        flag = next(f for f, k in names.items() if k == key)
+        raise ValueError(f"--set {key}: also given as --{flag.replace('_', '-')}; give one")
+    return {**given, **flags}
+
+
+def check_outputs(args, *files) -> None:
+    """Output paths are checked before any computation (a run never finds out after an hour that it cannot save),
+    and a results file that exists is refused without ``--force`` (a sweep's ``--resume`` continues it instead);
+    ``files``: more paths the command writes (a tuning's scenario)."""
+    from geojax.store import check_output_file, check_output_folder
+
+    replace = args.force or args.command == "sweep"  # a sweep's file and parts: run_sweep, which knows --resume
+    named = [(name, getattr(args, name, None)) for name in ("out", "oem", "maneuvers")]
+    for name, path in [*named, *(("out", f) for f in files)]:
+        if path:
+            check_output_file(path, name, replace)
+    for flag in ("oem_step", "oem_of"):
+        if getattr(args, flag, None) is not None and not getattr(args, "oem", None):
+            raise ValueError(f"{flag}: needs --oem FILE")
+    if getattr(args, "plots", None):
+        check_output_folder(args.plots)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -29,20 +87,27 @@ def parser() -> argparse.ArgumentParser:
                              "$GEOJAX_CACHE_DIR or the user's cache folder and reused by later runs; "
                              "GEOJAX_NO_CACHE=1 does the same as this flag)")
 
-    def command(name, **kw):
-        return sub.add_parser(name, parents=[common], **kw)
+    writes = argparse.ArgumentParser(add_help=False)  # every command that writes results files
+    writes.add_argument("--force", action="store_true", help=FORCE_HELP)
+
+    sets = argparse.ArgumentParser(add_help=False)  # every command that runs one scenario
+    sets.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", dest="set", help=SET_HELP)
+
+    def command(name, writing: bool = True, scenario: bool = False, **kw):
+        parents = [common, *([writes] if writing else []), *([sets] if scenario else [])]
+        return sub.add_parser(name, parents=parents, **kw)
 
     demo = command("demo", help="li2022 for one year, without control and with the QFFC: summaries, figures")
     demo.add_argument("--out", default="geojax-demo", help="folder for the figures and HDF5 files (default: geojax-demo)")
 
-    prop = command("propagate", help="uncontrolled propagation; one-cycle mean elements per sidereal day")
+    prop = command("propagate", scenario=True, help="uncontrolled propagation; one-cycle mean elements per sidereal day")
     prop.add_argument("scenario", help="a shipped scenario name (see 'geojax scenarios') or a .toml path")
     prop.add_argument("--days", type=float, help=DAYS_HELP)
     prop.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
     prop.add_argument("--out", help="write the per-cycle mean elements to this HDF5 file")
     prop.add_argument("--plots", help="folder for the figure (NAME-uncontrolled.png)")
 
-    bnd = command("bound", help="the least Delta-V that holds the scenario's box with its thrusters (a linear program), "
+    bnd = command("bound", scenario=True, help="the least Delta-V that holds the scenario's box with its thrusters (a linear program), "
                                 "re-simulated in the closed loop")
     bnd.add_argument("scenario", help="a shipped scenario name or a .toml path (its thrusters, box, forces, epoch)")
     bnd.add_argument("--days", type=float, help=DAYS_HELP)
@@ -61,7 +126,7 @@ def parser() -> argparse.ArgumentParser:
     bnd.add_argument("--out", help="write /metrics, /rounds and the per-slot /slots to this HDF5 file")
     bnd.add_argument("--plots", help="folder for the figure of the plan and the flown box (NAME-bound.png)")
 
-    sim = command("simulate", help="closed-loop station keeping (any controller); summary, metrics, status, HDF5")
+    sim = command("simulate", scenario=True, help="closed-loop station keeping (any controller); summary, metrics, status, HDF5")
     sim.add_argument("scenario", help="a scenario with a [controller] table, e.g. li2022-qffc, li2022-fompc, or a .toml path")
     sim.add_argument("--controller", help="override controller.kind (qffc, fompc, lyapunov, ...)")
     sim.add_argument("--horizon", type=int, help="FOMPC prediction horizon N in cycles, 1-10 (default: the scenario's)")
@@ -115,19 +180,19 @@ def parser() -> argparse.ArgumentParser:
     swp.add_argument("--workers", type=int, help="with --ray: worker processes (default one per GPU of a GPU node "
                      "and one per CPU node, each using its share of the node's cores)")
 
-    plot = command("plot", help="draw the figures of a results file (simulate, propagate, sweep, tune, bound, transfer)")
+    plot = command("plot", writing=False, help="draw the figures of a results file (simulate, propagate, sweep, tune, bound, transfer)")
     plot.add_argument("file", help="an HDF5 file written by geojax")
     plot.add_argument("--out", help="folder for the figures (default: next to the file)")
     plot.add_argument("--format", choices=("png", "pdf", "svg"), default="png", help="figure format (default png)")
     plot.add_argument("--dpi", type=int, default=150, help="resolution of PNG figures (default 150)")
 
-    xfer = command("transfer", help="GTO-GEO low-thrust transfer, gimbaled boom or quadrilateral layout (Ma & Kong 2023)")
+    xfer = command("transfer", scenario=True, help="GTO-GEO low-thrust transfer, gimbaled boom or quadrilateral layout (Ma & Kong 2023)")
     xfer.add_argument("scenario", help="a shipped transfer (ma2023-boom, ma2023-quadrilateral) or a .toml path")
     xfer.add_argument("--days", type=float, help="time limit in solar days (default: the scenario's); the transfer "
                       "stops earlier when it reaches GEO (not sidereal-day cycles: a transfer has no control cycle)")
     xfer.add_argument("--out", help="write /metrics and the daily /records to this HDF5 file")
     xfer.add_argument("--plots", help="folder for the figure of the orbit and mass against time (NAME.png)")
 
-    scen = command("scenarios", help="list the shipped scenarios, or print one's TOML")
+    scen = command("scenarios", writing=False, help="list the shipped scenarios, or print one's TOML")
     scen.add_argument("--show", metavar="NAME", help="print the TOML of the shipped scenario NAME")
     return top

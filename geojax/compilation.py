@@ -246,6 +246,15 @@ class Compilations:
         """The programs XLA compiled (the cache did not serve)."""
         return [p for p in self.programs if not p.cached]
 
+    def made(self) -> str:
+        """How the programs recorded so far were made ready, for a progress line: "compiled", "loaded from the
+        cache", "compiled 2 and loaded 5 from the cache", or "made ready" where none was recorded (this process
+        had them already)."""
+        fresh, cached = len(self.compiled()), sum(p.cached for p in self.programs)
+        if fresh and cached:
+            return f"compiled {fresh} and loaded {cached} from the cache"
+        return "compiled" if fresh else "loaded from the cache" if cached else "made ready"
+
     def summary(self) -> str:
         """One line: how many programs XLA compiled and in how long, how many the cache served."""
         fresh, cached = self.compiled(), [p for p in self.programs if p.cached]

@@ -25,6 +25,9 @@ def plot_file(path: str | Path, out: str | Path | None = None, fmt: str = "png",
     kind = attrs.get("kind")
     if kind == "sweep":
         axes = str(attrs["grid_axes"]).split(",")
+        if axes == ["controller"]:  # repetitions alone: the spread of each controller's samples
+            return [plots.plot_repetitions(groups, out / f"{path.stem}.{fmt}", title=sweep_report.title(attrs, axes),
+                                           dpi=dpi)]
         return [plots.plot_sweep(groups, axes, out / f"{path.stem}.{fmt}", title=sweep_report.title(attrs, axes),
                                  dpi=dpi)]
     if kind == "tune":

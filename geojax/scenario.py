@@ -142,17 +142,21 @@ def with_overrides(raw: dict, overrides: dict | None) -> dict:
     element of a list key is set as ``TABLE.KEY[i]`` (``{"attitude.srp_offset_array_m[0]": 0.2}``: the others are
     the file's, or the key's defaults), so that a sweep can vary it as an axis; a key of a sub-table as
     ``TABLE.LIST[i].KEY`` (``{"navigation.stations[0].range_sigma_m": 20.0}``) or ``TABLE.SUB.KEY``
-    (``{"navigation.gnss.sigma_m": 5.0}``)."""
+    (``{"navigation.gnss.sigma_m": 5.0}``); a top-level key by its name alone (``{"name": "mine"}``)."""
     raw = {k: dict(v) if isinstance(v, dict) else v for k, v in raw.items()}
     for dotted, value in (overrides or {}).items():
         table, _, key = str(dotted).rpartition(".")
+        if not table and key in SCHEMA[""]:  # a top-level key: the name, the description
+            raw[key] = value
+            continue
         sub = _SUB_TABLE.fullmatch(table)
         if sub:
             _set_in_sub_table(raw, dotted, sub, key, value)
             continue
         if not table or table not in SCHEMA:
             raise ValueError(f"{dotted}: not a scenario key; write it as TABLE.KEY with a table of "
-                             f"{', '.join(t for t in SCHEMA if t)} (e.g. \"duration.days\")")
+                             f"{', '.join(t for t in SCHEMA if t)} (e.g. \"duration.days\"), or one of "
+                             f"{', '.join(SCHEMA[''])}")
         if not isinstance(raw.setdefault(table, {}), dict):
             raise ValueError(f"{table}: must be a table")
         element = _ELEMENT.fullmatch(key)

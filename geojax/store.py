@@ -93,20 +93,44 @@ def read_h5(path: str | Path) -> tuple[dict[str, dict[str, np.ndarray]], dict]:
     return groups, attrs
 
 
-def check_output_file(path: str | Path, name: str = "out") -> Path:
-    """``ValueError`` unless ``path`` can be written as a results file: not a folder, its parent a folder or
-    creatable.  Checked before a run starts; the error names the setting ``name``."""
+def check_output_file(path: str | Path, name: str = "out", replace: bool = True) -> Path:
+    """``ValueError`` unless ``path`` can be written as a results file: not a folder, and a file can be created
+    in its folder (or in the nearest folder above it that exists, where the folders are made as it is written).
+    ``replace=False``: also refused if ``path`` exists (the command line's policy without ``--force``).
+    Checked before a run starts; the error names the setting ``name``."""
     path = Path(path)
     if path.is_dir():
         raise ValueError(f"{name}={str(path)!r}: is a folder; give a file name")
-    parent = path.parent
-    while not parent.exists():
-        parent = parent.parent
-    if not parent.is_dir():
-        raise ValueError(f"{name}={str(path)!r}: {str(parent)!r} is not a folder")
-    if not os.access(parent, os.W_OK):
-        raise ValueError(f"{name}={str(path)!r}: {str(parent)!r} is not writable")
+    if not replace and path.exists():
+        raise ValueError(f"{name}={str(path)!r}: exists; pass force=True to replace it or choose another file")
+    _check_writable(path.parent, path.name, f"{name}={str(path)!r}")
     return path
+
+
+def check_output_folder(path: str | Path, name: str = "plots") -> Path:
+    """``ValueError`` unless ``path`` is a folder, or can be made one, in which files can be created."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"{name}={str(path)!r}: exists and is not a folder")
+    _check_writable(path, "probe", f"{name}={str(path)!r}")
+    return path
+
+
+def _check_writable(folder: Path, stem: str, what: str) -> None:
+    """Create and remove a temporary file (``temporary``'s name, so a kill leaves nothing ``remove_stale`` keeps)
+    in ``folder`` or the nearest folder above it that exists: permissions alone do not say (root may write
+    anywhere but /proc, a read-only mount)."""
+    folder = folder.absolute()
+    while not folder.exists():
+        folder = folder.parent
+    if not folder.is_dir():
+        raise ValueError(f"{what}: {str(folder)!r} is not a folder")
+    probe = temporary(folder / stem)
+    try:
+        probe.open("w").close()
+    except OSError as err:
+        raise ValueError(f"{what}: cannot create a file in {str(folder)!r} ({err.strerror or err})") from None
+    probe.unlink(missing_ok=True)
 
 
 def temporary(path: Path, tag: str = "tmp") -> Path:

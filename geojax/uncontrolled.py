@@ -17,7 +17,8 @@ import numpy as np
 
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.control import none
-from geojax.loop.setup import params_of
+from geojax.compilation import Compilations
+from geojax.loop.setup import cycle_count, params_of
 from geojax.loop.simulate import Shared, simulate
 from geojax.progress import Progress
 from geojax.physics.propagate import DYNAMICS, CycleMeans, environment_grid, steps_per_cycle
@@ -109,8 +110,10 @@ def propagate_scenario(scenario: Scenario, progress: bool | None = None) -> Prop
     params = params_of(scenario, none.CONTROLLER)
     key = jax.random.key(0)  # the null controller draws nothing; the fix it is given is not used
     pieces = []
-    with Progress(n_cycles, "cycles", enabled=progress) as bar:
-        bar.phase(f"compiling and running the first {block} cycles")
+    # The bar counts the run's cycles (365.25 days: 366), as the file and summary do: the cycles integrated beyond
+    # them, to interpolate the end, are part of the last block.
+    with Progress(cycle_count(scenario.days), "cycles", enabled=progress) as bar, Compilations() as log:
+        bar.phase(f"compiling or loading from the cache, and running, the first {block} cycle{'s' * (block != 1)}")
         for b in range(n_blocks):
             block_epoch = scenario.epoch_tt_s + b * block * SIDEREAL_DAY_S
             env = environment_grid(block_epoch, scenario.epoch_tt_s, scenario.tt_minus_ut1_s, step_s, block, n_steps,
@@ -121,7 +124,7 @@ def propagate_scenario(scenario: Scenario, progress: bool | None = None) -> Prop
             pieces.append(jax.tree_util.tree_map(np.asarray, means))
             bar.update(min(block, n_cycles - b * block))
             if b == 0:  # the first block compiled the step: the rate and the ETA start after it
-                bar.restart(f"compiled and ran the first {block} cycles in {time.perf_counter() - start:.1f} s")
+                bar.restart(f"{log.made()} and ran the first {block} cycle{'s' * (block != 1)} in {time.perf_counter() - start:.1f} s")
     cycles = jax.tree_util.tree_map(lambda *xs: np.concatenate(xs)[:n_cycles], *pieces)
     return PropagationResult(cycles, step_s, time.perf_counter() - start, scenario)
 

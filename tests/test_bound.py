@@ -255,6 +255,7 @@ def test_cli_bound_writes_results_and_refuses_an_impossible_box(tmp_path, capsys
                           "--out", str(out)], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert "bound" in run.stdout and "re-simulated plan" in run.stdout
+    assert "; every m/s/yr extrapolated from 1.99 days):" in run.stdout  # 2 sidereal days, a short plan's rates
     data = geojax.open_results(out)
     assert float(data["status"]) == 0 and int(data["free_end"]) == 0
     assert float(data["bound_per_year_mps"]) <= float(data["resim_dv_per_year_mps"]) + 1e-6  # solver tolerance

@@ -188,7 +188,7 @@ def test_simulate_writes_step_oem_and_opm(run, tmp_path, monkeypatch, capsys):
     with h5py.File(out) as f:
         burns_total = float(f["metrics/burns_total"][()])
     assert len(read(opm).body.segment.data.maneuver_parameters) == burns_total > 0
-    assert cli.main([*argv[:-1], "--oem-step", "1800", "--oem-of", "estimate"]) == 0
+    assert cli.main([*argv[:-1], "--oem-step", "1800", "--oem-of", "estimate", "--force"]) == 0
     _, t, _, _, _ = oem_arrays(oem)
     np.testing.assert_allclose(np.diff(t), 2 * run.step_s, atol=1e-5)  # 1795 s: two steps within 1800
 

@@ -178,7 +178,8 @@ def test_quiet_prints_only_the_files_written_and_days_mean_cycles_everywhere(tmp
 def test_sweep_summary_per_grid_point_and_identical_repetitions_warned():
     from types import SimpleNamespace
 
-    spec = SimpleNamespace(controllers=("qffc", "fompc"), grid={"thrusters.beta_max_deg": [60.0, 90.0]}, repetitions=3)
+    spec = SimpleNamespace(controllers=("qffc", "fompc"), grid={"thrusters.beta_max_deg": [60.0, 90.0]}, repetitions=3,
+                           fixed={"duration.days": 365.25})
     dv = np.array([[[62.0, 62.0, 62.0], [58.0, 58.0, 58.0]],  # qffc: every repetition the same
                    [[57.0, 58.0, 59.0], [55.0, 55.5, 56.0]]])
     metrics = {"dv_per_year_mps": dv, "max_abs_dlon_deg": np.full_like(dv, 0.01), "max_abs_dlat_deg": np.full_like(dv, 0.006)}
@@ -190,6 +191,11 @@ def test_sweep_summary_per_grid_point_and_identical_repetitions_warned():
     assert "beta_max_deg 60: ΔV 62.00 ± 0.00 m/s/yr" in text and "beta_max_deg 90: ΔV 55.25 ± 0.25 m/s/yr" in text
     assert "2 held, 1 failed (1 left the longitude box)" in text
     assert "identical for qffc:" in text and "fompc:" not in lines[-1]
+    # A short sweep's yearly rate is said to be extrapolated, with the days it flew: 10 sidereal days, by hand.
+    short = "\n".join(cli.sweep_summary(SimpleNamespace(**{**vars(spec), "fixed": {"duration.days": 10}}),
+                                         {"metrics": metrics, "status": {"code": status}}))
+    assert "beta_max_deg 60: ΔV 62.00 ± 0.00 m/s/yr (extrapolated from 9.973 days, 10 cycles), max" in short
+    assert short.count("extrapolated") == 4 and "extrapolated" not in text
 
 
 def test_an_installed_copy_names_the_commit_it_was_built_from(tmp_path):
@@ -222,3 +228,57 @@ def test_a_thruster_count_the_controller_cannot_fly_exits_2(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("geojax simulate: error: thrusters.count: the qffc controller flies 2 thrusters")
     assert err.count("\n") == 1
+
+
+class _Ran(Exception):
+    """Raised by a stand-in for a run: the scenario it was given is in ``args[0]``."""
+
+
+@pytest.mark.parametrize("command, scenario, module, name", [
+    ("simulate", "li2022-qffc", "geojax.loop.rollout", "simulate"),
+    ("propagate", "li2022", "geojax.uncontrolled", "propagate_scenario"),
+    ("bound", "li2022-qffc", "geojax.bound", "bound"),
+    ("transfer", "ma2023-boom", "geojax.transfer", "run"),
+])
+def test_set_gives_the_run_its_scenario_keys_as_toml_values(command, scenario, module, name, monkeypatch):
+    import importlib
+
+    def ran(sc, *args, **kwargs):
+        raise _Ran(sc)
+
+    monkeypatch.setattr(importlib.import_module(module), name, ran)
+    table, key, value = ("thrusters", "beta_max_deg", 61.5) if command != "transfer" else ("spacecraft", "mass_kg",
+                                                                                            4321.5)
+    with pytest.raises(_Ran) as run:
+        cli.main([command, scenario, "--set", f"{table}.{key}={value}", "--set", "name=mine",
+                  "--set", 'description="a b"'])
+    sc = run.value.args[0]
+    assert sc.config[table][key] == value and sc.config["name"] == "mine" and sc.config["description"] == "a b"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--set", "beta"], "--set 'beta': must be KEY=VALUE"),
+    (["--set", "thrusters.beta_max_deg=abc"], "thrusters.beta_max_deg: must be a number, got str 'abc'"),
+    (["--set", "duration.days=2", "--days", "3"], "--set duration.days: also given as --days; give one"),
+    (["--set", "errors.h_rv=1", "--set", "errors.h_rv=2"], "--set errors.h_rv: given twice"),
+    (["--set", "bogus.x=1"], "bogus.x: not a scenario key"),
+])
+def test_bad_set_exits_2_with_one_line(argv, message, capsys):
+    assert cli.main(["simulate", "li2022-qffc", *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_set_is_written_into_the_results_file(tmp_path):
+    out = tmp_path / "p.h5"
+    assert cli.main(["propagate", "li2022", "--days", "2", "--set", "spacecraft.srp_area_m2=0", "--set",
+                     "forces.moon=false", "--out", str(out), "-q"]) == 0
+    config = geojax.scenario.tomllib.loads(geojax.store.read_attrs(out)["config_toml"])
+    assert config["spacecraft"]["srp_area_m2"] == 0 and config["forces"]["moon"] is False
+
+
+def test_load_scenario_takes_a_name_override():
+    sc = geojax.load_scenario("li2022-qffc", {"name": "mine", "thrusters.beta_max_deg": 60.0})
+    assert sc.name == "mine" and sc.config["thrusters"]["beta_max_deg"] == 60.0
+    with pytest.raises(ValueError, match="name: must be a string"):
+        geojax.load_scenario("li2022-qffc", {"name": 3})

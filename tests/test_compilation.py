@@ -244,12 +244,14 @@ def test_compilations_are_recorded_with_their_cache_hits(tmp_path):
     code = ("import jax, jax.numpy as jnp, geojax; from geojax.compilation import Compilations; "
             "f = jax.jit(lambda x: jnp.cumsum(jnp.sin(x) ** 2)); "
             "log = Compilations(min_s=0.0).__enter__(); f(jnp.arange(5000.0)).block_until_ready(); "
-            "p = [q for q in log.programs if '<lambda>' in q.name]; print(len(p), p[0].cached); print(log.summary())")
+            "p = [q for q in log.programs if '<lambda>' in q.name]; print(len(p), p[0].cached); print(log.summary()); "
+            "print(log.made())")
     env = _environment(GEOJAX_CACHE_DIR=str(tmp_path), JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="0")
     first, second = (subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                                      check=True).stdout.splitlines() for _ in range(2))
     assert first[0] == "1 False" and "compiled" in first[1]
     assert second[0] == "1 True" and "loaded" in second[1]
+    assert first[2].startswith("compiled") and second[2] == "loaded from the cache"  # what progress lines say
 
 
 def test_unreadable_cache_entries_warn_once_and_are_replaced(tmp_path):

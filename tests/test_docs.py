@@ -108,3 +108,30 @@ def test_every_link_and_named_file_resolves_inside_the_repository(page):
         if not any((base / named).resolve().is_relative_to(ROOT) and (base / named).is_file() for base in where):
             misses.append(f"file {named}")
     assert not misses, f"{page.relative_to(ROOT)}: " + "; ".join(misses)
+
+
+def test_the_momentum_page_names_every_shipped_scenario_that_carries_wheels():
+    """docs/momentum.md says which shipped scenarios turn the wheels on; the scenarios themselves say which do."""
+    from geojax import scenario
+
+    with_wheels = {name for name in scenario.available()
+                   if scenario.load(name).config.get("attitude", {}).get("wheels")}
+    page = " ".join((ROOT / "docs" / "momentum.md").read_text().split())
+    sentence = re.search(r"with `wheels = false` \(every shipped scenario but (.+?)\)", page)
+    assert sentence and set(re.findall(r"`([\w-]+)`", sentence.group(1))) == with_wheels
+
+
+def test_a_starting_points_description_says_what_it_flies():
+    """A shipped scenario without station keeping but with the recovery law says so; one with neither says it is
+    uncontrolled (a description that says "uncontrolled" of a scenario that burns would mislead)."""
+    from geojax import scenario
+
+    for name in scenario.available():
+        config = scenario.load(name).config
+        if config.get("controller", {}).get("kind", "none") != "none":
+            continue
+        description = config["description"]
+        if config["controller"].get("recovery"):
+            assert "recovery law" in description and "uncontrolled" not in description, name
+        else:
+            assert "recovery" not in description, name

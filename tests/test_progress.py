@@ -1,5 +1,6 @@
 """Progress on stderr: a bar on a terminal, sparse lines off one (issue 43, item 14), and a phase (set-up,
-compiling) shown before the rate starts (issue 40)."""
+compiling) shown before the rate starts (issue 40); what a command's progress says is true: the cycles it counts
+are the run's, and a program the compilation cache served is said to be loaded, not compiled."""
 
 import io
 
@@ -81,3 +82,21 @@ def test_a_short_run_off_a_terminal_and_a_quiet_run_print_nothing():
         bar.phase("compiling")
         bar.update(10)
     assert stream.getvalue() == ""
+
+
+def test_propagate_counts_the_runs_cycles_and_says_what_the_cache_served(tmp_path):
+    """A propagation integrates two cycles beyond the run's (to interpolate its end) but counts the run's, as its
+    file and summary do (3 days: 3 cycles, 5 integrated); a second process with the same cache folder loads the
+    program (JAX's cache-hit event, through ``compilation.Compilations``) and says so."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**{k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"},
+           "GEOJAX_CACHE_DIR": str(tmp_path / "cache")}
+    argv = [sys.executable, "-m", "geojax", "propagate", "li2022", "--days", "3"]
+    first, second = (subprocess.run(argv, env=env, capture_output=True, text=True, check=True).stderr
+                     for _ in range(2))
+    assert "3/3 cycles" in first and "5/5" not in first
+    assert "compiled and ran the first 1 cycle in" in first
+    assert "loaded from the cache and ran the first 1 cycle in" in second

@@ -150,7 +150,8 @@ def test_the_sweep_summary_counts_failed_samples_and_averages_the_held(failed_sw
     from geojax import store
 
     groups, _ = store.read_h5(failed_sweep_file)
-    spec = SimpleNamespace(grid={"thrusters.beta_max_deg": [60.0, 90.0, 120.0]}, controllers=["qffc"], repetitions=4)
+    spec = SimpleNamespace(grid={"thrusters.beta_max_deg": [60.0, 90.0, 120.0]}, controllers=["qffc"], repetitions=4,
+                           fixed={"duration.days": 365.25})
     lines = cli.sweep_summary(spec, groups)
     assert lines[1] == ("    beta_max_deg 60: ΔV 52.00 ± 1.63 m/s/yr, max |δλ| 0.0300°, max |δφ| 0.0030°; 3 held, "
                         "1 failed (1 left the longitude box)")

@@ -265,3 +265,29 @@ def test_stale_temporaries_are_removed_by_the_next_write_beside_them(tmp_path):
     (tmp_path / f".r.h5.tmp-{os.getppid()}").write_bytes(b"a live process's")  # not ours to remove
     store.write_h5(path, {"g": {"x": np.arange(3.0)}}, "x = 1", 0.0)
     assert sorted(p.name for p in tmp_path.iterdir()) == [f".r.h5.tmp-{os.getppid()}", "r.h5"]
+
+
+def test_a_sweep_of_repetitions_alone_is_the_first_grid_point_of_a_grid(straight, tmp_path, capsys):
+    """No [grid]: a Monte Carlo over the seeds alone, metrics and status [controller, repetition] and /grid holding
+    the controllers only.  Second method: its samples are those of the first point of the gridded sweep with
+    the same seed (sample j's key is fold_in(seed, j) and the first point's samples are j = 0 .. reps - 1)."""
+    import geojax
+
+    _, d = straight
+    text = SPEC.replace('[grid]\n"thrusters.beta_max_deg" = [60.0, 90.0]', '"thrusters.beta_max_deg" = 60.0')
+    assert "[grid]" not in text
+    out = tmp_path / "mc.h5"
+    assert cli.main(["sweep", str(write_spec(tmp_path, text)), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "1 grid point(s) x 5 repetition(s) = 5 samples" in printed and "    5 repetitions: ΔV" in printed
+    mc = data(out)
+    assert mc["metrics/dv_per_year_mps"].shape == mc["status/code"].shape == (1, 5)
+    assert set(k for k in mc if k.startswith("grid/")) == {"grid/controller"}
+    for name in (k for k in mc if k.startswith(("metrics/", "status/"))):
+        np.testing.assert_array_equal(mc[name], d[name][:, 0])
+    ds = geojax.open_results(out)
+    assert ds.dv_per_year_mps.dims == ("controller", "repetition")
+    assert float(geojax.results.summary_table(ds).held_mean.sel(controller="qffc")) == pytest.approx(
+        np.mean(d["metrics/dv_per_year_mps"][0, 0]), rel=1e-12)
+    assert cli.main(["plot", str(out), "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "mc.png").stat().st_size > 10_000

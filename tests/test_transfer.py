@@ -520,3 +520,21 @@ def test_the_boom_unloads_its_wheels_with_its_own_line(loop):
     n_perigee = math.sqrt(c.MU_EARTH_M3_S2 * a * (1 - ((a - r_p) / a) ** 2)) / r_p**2
     assert float(quad.wheels.rcs_dumps) == 0.0
     assert float(np.max(quad.wheels.max_abs_nms)) <= 2000.0 * n_perigee * 1.01
+
+
+def test_a_transfer_flown_in_blocks_for_its_progress_is_the_one_call(capsys):
+    """``run`` flies its records in blocks (``rollout.advance``) so that a bar can count them; second method: the
+    whole transfer in one call of ``rollout.transfer``, the same numbers to the last bits (XLA orders a block's
+    operations a little differently from the whole loop's: 4e-16 relative here)."""
+    sc = transfer.load("ma2023-boom")
+    static = transfer.static_for(sc, 1.0, 3600.0)  # 24 records of 30 steps: 24 blocks
+    final, records = jax.device_get(jax.jit(transfer.transfer, static_argnums=2)(sc.params, transfer.env_grid(sc, static),
+                                                                                 static))
+    blocked = transfer.run(sc, 1.0, record_every_s=3600.0, progress=True)
+    assert "24/24 records" in capsys.readouterr().err
+    for name, value in transfer.metrics(final, sc.params).items():
+        np.testing.assert_allclose(blocked.metrics[name], value, rtol=1e-12, atol=1e-12, err_msg=name)
+    from geojax.transfer.run import record_table
+
+    for name, value in record_table(records).items():
+        np.testing.assert_allclose(blocked.records[name], value, rtol=1e-12, atol=1e-12, err_msg=name)

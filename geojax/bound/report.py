@@ -66,12 +66,14 @@ def plot(r, folder: str | Path) -> list[Path]:
 
 
 def summary(r) -> list[str]:
-    """What ``geojax bound`` prints after the program: the bound, the plan, its re-simulation and the box."""
+    """What ``geojax bound`` prints after the program: the bound, the plan, its re-simulation and the box (its
+    yearly rates said to be extrapolated where the plan is shorter than a year)."""
     from geojax.loop.metrics import STATUS_MEANINGS
 
     after = f"; after day {r.acquisition_days:g}: {r.max_abs_box_deg:.5f} deg" if r.acquisition_days else ""
+    short = f"; every m/s/yr extrapolated from {r.days:.2f} days" if r.days < 365.0 else ""  # a year: 365.24
     return [
-        f"{r.scenario} ({r.geometry} thrusters, {r.days:.2f} days, {r.slot_s:.0f} s slots):",
+        f"{r.scenario} ({r.geometry} thrusters, {r.days:.2f} days, {r.slot_s:.0f} s slots{short}):",
         f"  bound                 {r.bound_per_year_mps:10.3f} m/s/yr  (lower bound over every direction the thrusters allow)",
         f"  optimal plan          {r.plan_per_year_mps:10.3f} m/s/yr  (the linear program's, {len(r.rounds)} linearisations)",
         f"  re-simulated plan     {r.resim['dv_per_year_mps']:10.3f} m/s/yr  ({gap_percent(r):+.3f} % over the bound), "

@@ -1,13 +1,14 @@
 """A sweep's figure: its metric against its first swept parameter, mean and spread over the repetitions that held
 (status 0), one line per controller and point of the further swept keys (named by their values), the points where
 samples failed marked and counted, the legend beside the axes (``plot_sweep``; several sweeps on one axis:
-``plot_sweeps``)."""
+``plot_sweeps``); a sweep of repetitions alone (no grid), the histogram of its samples (``plot_repetitions``)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+from matplotlib.ticker import MaxNLocator
 import numpy as np
 
 from geojax.plots.labels import _label, _quantity, decade
@@ -95,3 +96,32 @@ def _further_points(grid, keys: list[str], controllers) -> list[str]:
         named.append([f"{symbol} = {v:g}{' ' + unit if unit else ''}" if isinstance(v, (int, float))
                       else f"{symbol} = {v}" for v in values])
     return [", ".join(point) for point in itertools.product(*named)] if keys else []
+
+
+@styled
+def plot_repetitions(groups, path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
+                     dpi: int = 150) -> Path:
+    """A sweep of repetitions alone (no grid; metrics [controller, repetition]): the histogram of ``metric`` over
+    each controller's samples that held (status 0), their mean and 5th-95th percentiles marked, the failed
+    samples counted in the legend (never drawn among the held)."""
+    fig, ax = plt.subplots(figsize=(7.2, 3.4), constrained_layout=True)
+    values = np.asarray(groups["metrics"][metric], float)  # [controller, repetition]
+    status = np.asarray(groups["status"]["code"])
+    controllers = [c.decode() if isinstance(c, bytes) else str(c) for c in groups["grid"]["controller"]]
+    power = decade(values[status == 0])
+    for i, controller in enumerate(controllers):
+        held = values[i][status[i] == 0] / 10.0**power
+        failed = int(np.sum(status[i] != 0))
+        counted = f"{held.size} held" + (f", {failed} failed (status not 0)" if failed else "")
+        if held.size == 0:
+            ax.plot([], [], " ", label=f"{controller}: {counted}")
+            continue
+        _, _, bars = ax.hist(held, bins=min(30, max(5, held.size // 5)), alpha=0.5, label=f"{controller}: {counted}")
+        color = bars[0].get_facecolor()[:3]
+        low, high = np.percentile(held, [5, 95])
+        ax.axvline(np.mean(held), color=color, lw=1.5, label=f"{controller}: mean {np.mean(held):.4g}")
+        ax.axvspan(low, high, color=color, alpha=0.1, lw=0, label=f"{controller}: 5th-95th percentile")
+    ax.set(xlabel=_label(*_quantity(metric), power), ylabel="samples")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, frameon=False, fontsize="small")
+    return _save(fig, [ax], title, path, dpi)

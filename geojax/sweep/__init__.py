@@ -15,7 +15,7 @@ repetitions and optional Monte Carlo dispersions of the initial state:
     lanes = 1024               # optional: samples per device per compiled call (default: the platform's, geojax.lanes)
     [set]                      # fixed overrides, any scenario key
     "thrusters.alpha_max_deg" = 90.0
-    [grid]                     # one axis per key, in this order
+    [grid]                     # one axis per key, in this order; none: the repetitions alone
     "thrusters.beta_max_deg" = [45.0, 50.0, 60.0, 70.0, 80.0, 90.0]
     [dispersion]               # optional: 1-sigma Gaussian errors of each sample's initial state
     mee_1sigma = [0.1, 1e-6, 1e-6, 1e-6, 1e-6, 1e-5]   # p (km), f, g, h, k, L (rad)

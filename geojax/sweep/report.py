@@ -12,13 +12,14 @@ SUMMARY_ROWS = 40  # grid points listed per controller; the rest: geojax plot or
 
 def summary(spec, groups) -> list[str]:
     """One line per controller and grid point: over the repetitions that held (status 0), ΔV per year (mean ±
-    std) and the largest longitude and latitude excursions; then how many failed, by status
+    std; said to be extrapolated where the samples fly less than a year) and the largest longitude and latitude excursions; then how many failed, by status
     (``results.held_statistics``: a failed sample is counted, never averaged in); a warning where the
     repetitions of a point are identical (nothing random in them)."""
     from geojax.loop.metrics import STATUS_MEANINGS
     from geojax.results import held_statistics
 
     metrics, codes = groups["metrics"], groups["status"]["code"]
+    per_year = f"m/s/yr{extrapolated(spec)}"
     keys = list(spec.grid)
     points = list(itertools.product(*spec.grid.values()))
     lines, identical = [], []
@@ -31,7 +32,8 @@ def summary(spec, groups) -> list[str]:
         for j, point in enumerate(points[:SUMMARY_ROWS]):
             where = ", ".join(f"{k.rpartition('.')[2]} {v if isinstance(v, str) else format(v, 'g')}"
                               for k, v in zip(keys, point, strict=True))
-            lines.append(f"    {where}: {_point(dv, dlon, dlat, j, status[j], STATUS_MEANINGS)}")
+            where = where or f"{spec.repetitions} repetitions"  # a sweep without a grid: one point
+            lines.append(f"    {where}: {_point(dv, dlon, dlat, j, status[j], STATUS_MEANINGS, per_year)}")
         if len(points) > SUMMARY_ROWS:
             lines.append(f"    ... {len(points) - SUMMARY_ROWS} more grid points (geojax plot, geojax.open_results)")
         failed = int(np.sum(dv.failed))
@@ -49,7 +51,23 @@ def summary(spec, groups) -> list[str]:
     return lines
 
 
-def _point(dv, dlon, dlat, j: int, status, meanings) -> str:
+def extrapolated(spec) -> str:
+    """What a yearly rate of the sweep's samples is, where they fly less than a year: " (extrapolated from 10
+    days)" ("" for a year or more), as ``geojax simulate``'s summary says it (``loop.report.row_notes``)."""
+    from geojax.loop.metrics import YEAR_CYCLES
+    from geojax.loop.setup import cycle_count
+    from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
+    from geojax.sweep.spec import _scenario
+
+    # a grid cannot vary the duration (it fixes the compiled loop's shape): the base scenario's with [set]
+    days = spec.fixed.get("duration.days") or _scenario(spec, spec.controllers[0], {}).days
+    n_cycles = cycle_count(days)
+    if n_cycles >= YEAR_CYCLES:
+        return ""
+    return f" (extrapolated from {n_cycles * SIDEREAL_DAY_S / SECONDS_PER_DAY:.4g} days, {n_cycles} cycles)"
+
+
+def _point(dv, dlon, dlat, j: int, status, meanings, per_year: str = "m/s/yr") -> str:
     """One grid point's line: the held samples' statistics, then the failed ones by status."""
     n, failed = int(dv.samples[j]), int(dv.failed[j])
     counts = ", ".join(f"{int(np.sum(status == c))} {meanings[c]}" for c in range(1, len(meanings))
@@ -58,14 +76,15 @@ def _point(dv, dlon, dlat, j: int, status, meanings) -> str:
         return f"all {n} failed ({counts}): no statistics"
     spread = f" ± {dv.std[j]:.2f}" if n - failed > 1 else ""
     held = f"{n - failed} held" if failed else "all ok"
-    text = (f"ΔV {dv.mean[j]:.2f}{spread} m/s/yr, max |δλ| {dlon.max[j]:.4f}°, max |δφ| {dlat.max[j]:.4f}°; "
+    text = (f"ΔV {dv.mean[j]:.2f}{spread} {per_year}, max |δλ| {dlon.max[j]:.4f}°, max |δφ| {dlat.max[j]:.4f}°; "
             f"{held}")
     return text + (f", {failed} failed ({counts})" if failed else "")
 
 
 def title(attrs, axes: list[str]) -> str:
     """What a sweep figure shows: its swept keys, the sweep's name and the run's length
-    ("thrusters.beta_max_deg: fig09, 365.25 days"; "thrusters.beta_max_deg × errors.h_rv: ...")."""
+    ("thrusters.beta_max_deg: fig09, 365.25 days"; "thrusters.beta_max_deg × errors.h_rv: ..."; without a grid,
+    "repetitions alone: mc, 10 days")."""
     from geojax import scenario
 
     days = ""
@@ -74,4 +93,5 @@ def title(attrs, axes: list[str]) -> str:
         days = f", {base['duration']['days']:g} days"
     except (ValueError, KeyError, TypeError):
         pass
-    return f"{' × '.join(axes[1:])}: {attrs.get('name', 'sweep')}{days}"
+    swept = " × ".join(axes[1:]) or "repetitions alone"  # a sweep without a grid
+    return f"{swept}: {attrs.get('name', 'sweep')}{days}"

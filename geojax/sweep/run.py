@@ -23,8 +23,12 @@ from geojax.sweep.spec import Sweep, _scenario
 
 def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | None = None,
               progress: bool | None = None, ray: str | None = None, workers: int | None = None,
-              lanes: int | None = None) -> Path:
+              lanes: int | None = None, force: bool = False) -> Path:
     """Run every sample not yet saved, then write ``out`` (HDF5).  Returns its path.
+
+    An ``out`` that exists (or its unfinished parts) is refused unless ``resume`` (continue it: the same sweep
+    file) or ``force`` (start afresh: the unfinished parts are discarded, the file replaced when the new one is
+    written).
 
     ``lanes``: samples per device per compiled call, instead of the sweep file's or the platform's
     (``geojax.lanes``); one that cannot fit the device is refused before anything is compiled or written.
@@ -43,12 +47,16 @@ def run_sweep(sweep: Sweep, out: str | Path, resume: bool = False, chunk: int | 
     digest = hashlib.sha256(sweep.text.encode()).hexdigest()
     if chunk is not None and chunk < 1:
         raise ValueError(f"chunk: must be >= 1, got {chunk}")
-    if (out.exists() or parts.exists()) and not resume:
+    if force and resume:
+        raise ValueError("force: not with resume=True (resume continues a sweep, force starts it afresh)")
+    if (out.exists() or parts.exists()) and not (resume or force):
         where = str(out) if out.exists() else f"{str(parts)!r} (an unfinished sweep)"
-        raise ValueError(f"out={str(out)!r}: {where} exists; pass resume=True to continue it or choose another file")
+        raise ValueError(f"out={str(out)!r}: {where} exists; pass resume=True to continue it, force=True to replace it, or choose another file")
     store.remove_stale(out)
     store.remove_stale(parts)
-    if out.exists():
+    if force and parts.exists():
+        store.discard_folder(parts)
+    if out.exists() and resume:
         if store.read_attrs(out).get("config_toml") != sweep.text:
             raise ValueError(f"resume: {str(out)!r} holds the results of a different sweep file")
         if parts.exists():  # killed while removing its parts after the file was written

@@ -95,9 +95,9 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
     lanes = lanes_mod.checked(raw.get("lanes"))
     if not isinstance(raw.get("cycles", False), bool):
         raise ValueError(f"cycles: must be true or false, got {raw['cycles']!r}")
-    grid = raw.get("grid", {})
-    if not isinstance(grid, dict) or not grid:
-        raise ValueError("grid: must be a table with at least one parameter, e.g. \"thrusters.beta_max_deg\" = [60, 70]")
+    grid = raw.get("grid", {})  # none: a Monte Carlo over the repetitions alone, metrics [controller, repetition]
+    if not isinstance(grid, dict):
+        raise ValueError(f"grid: must be a table of parameters, e.g. \"thrusters.beta_max_deg\" = [60, 70], got {grid!r}")
     fixed = raw.get("set", {})
     if not isinstance(fixed, dict):
         raise ValueError(f"set: must be a table of scenario keys, e.g. \"duration.days\" = 30, got {fixed!r}")

@@ -161,11 +161,23 @@ def transfer(params: TransferParams, env_grid: Environment, static: Static):
     Returns (final ``Carry``, ``Record`` with leading axis n_records).  Pure; vmap over ``params``.
     """
 
+    return ended(*advance(params, initial_carry(params), env_grid, static), static)
+
+
+def advance(params: TransferParams, carry: Carry, env_grid: Environment, static: Static):
+    """Fly the records of ``env_grid`` (any number of them, leaves [records, steps_per_record, 3, ...]) from
+    ``carry``: (the carry after them, their ``Record``s).  A transfer run in blocks of records (``run``'s progress)
+    is this called once per block, then ``ended``."""
+
     def outer(carry, env_block):
         carry, records = jax.lax.scan(lambda c, env3: _step(c, env3, params, static), carry, env_block)
         return carry, jax.tree_util.tree_map(lambda x: x[-1], records)
 
-    final, records = jax.lax.scan(outer, initial_carry(params), env_grid)
+    return jax.lax.scan(outer, carry, env_grid)
+
+
+def ended(final: Carry, records, static: Static):
+    """``advance``'s result at the time limit: a transfer not done ends there (``t_end_s``)."""
     time_limit_s = static.n_records * static.steps_per_record * static.step_s
     return final._replace(t_end_s=jnp.where(final.done, final.t_end_s, time_limit_s)), records
 

@@ -11,7 +11,9 @@ import numpy as np
 
 from geojax.physics.constants import G0_MPS2, SECONDS_PER_DAY
 from geojax.physics.propagate import environment_grid
-from geojax.transfer import pointing, report
+from geojax.compilation import Compilations
+from geojax.progress import Progress
+from geojax.transfer import pointing, report, rollout
 from geojax.transfer.rollout import STATUS_MEANINGS, Static, TransferParams, transfer
 from geojax.transfer.scenario import TransferScenario
 
@@ -44,13 +46,44 @@ def env_grid(sc: TransferScenario, static: Static):
                             static.steps_per_record, sc.config["forces"]["ephemeris"])
 
 
-def run(sc: TransferScenario, days: float | None = None, record_every_s: float = SECONDS_PER_DAY) -> TransferResult:
-    """One transfer, compiled and run; metrics and records as numpy."""
+def run(sc: TransferScenario, days: float | None = None, record_every_s: float = SECONDS_PER_DAY,
+        progress: bool | None = False) -> TransferResult:
+    """One transfer, compiled and run; metrics and records as numpy.
+
+    The run is flown in equal blocks of records (``_block``), one compiled program for all (``rollout.advance``),
+    so that ``progress`` (``geojax.progress.Progress``'s ``enabled``; default none) can count the days flown;
+    the numbers are those of one call of ``rollout.transfer`` to the last bits (1e-15 relative: XLA orders a
+    block's operations a little differently from the whole loop's; ``tests/test_transfer.py``)."""
     start = time.perf_counter()
     static = static_for(sc, days, record_every_s)
-    final, records = jax.jit(transfer, static_argnums=2)(sc.params, env_grid(sc, static), static)
-    final, records = jax.device_get((final, records))
-    return TransferResult(metrics(final, sc.params), record_table(records), time.perf_counter() - start, sc)
+    grid = env_grid(sc, static)
+    block = _block(static.n_records)
+    unit = "days" if record_every_s == SECONDS_PER_DAY else "records"
+    advance = jax.jit(rollout.advance, static_argnums=3)
+    carry, pieces = rollout.initial_carry(sc.params), []
+    with Progress(static.n_records, unit, enabled=progress) as bar, Compilations() as log:
+        bar.phase("compiling or loading from the cache, and flying the first block")
+        for first in range(0, static.n_records, block):
+            carry, records = advance(sc.params, carry, jax.tree_util.tree_map(lambda x: x[first:first + block], grid),
+                                     static)
+            pieces.append(jax.device_get(records))
+            bar.update(block)
+            if first == 0:  # the first block compiled the program: the rate starts after it
+                bar.restart(f"{log.made()} and flew the first {block} {unit} in {time.perf_counter() - start:.1f} s")
+    final, records = rollout.ended(carry, jax.tree_util.tree_map(lambda *x: np.concatenate(x), *pieces), static)
+    return TransferResult(metrics(jax.device_get(final), sc.params), record_table(records),
+                          time.perf_counter() - start, sc)
+
+
+PROGRESS_BLOCKS = 20
+
+
+def _block(n_records: int) -> int:
+    """Records per block of a run with progress: the largest divisor of ``n_records`` that cuts it into at least
+    ``PROGRESS_BLOCKS`` blocks (equal blocks: one compiled program), or all of them where it is that short."""
+    if n_records <= PROGRESS_BLOCKS:
+        return 1
+    return max(d for d in range(1, n_records // PROGRESS_BLOCKS + 1) if n_records % d == 0)
 
 
 def stack(params_list) -> TransferParams:

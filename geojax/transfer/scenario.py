@@ -146,7 +146,8 @@ def available() -> list[str]:
 
 
 def load(name_or_path: str | Path, overrides: dict | None = None) -> TransferScenario:
-    """Load a shipped transfer by name or a TOML file by path; ``overrides`` maps ``TABLE.KEY`` to values."""
+    """Load a shipped transfer by name or a TOML file by path; ``overrides`` maps ``TABLE.KEY`` (or a top-level
+    key: ``name``, ``description``) to values."""
     path = Path(name_or_path)
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
@@ -163,6 +164,9 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> TransferSce
         raise ValueError(f"{name_or_path}: not valid TOML ({err})") from None
     for dotted, value in (overrides or {}).items():
         table, _, key = dotted.rpartition(".")
+        if not table and key in SCHEMA[""]:  # a top-level key: the name, the description
+            raw[key] = value
+            continue
         if table not in SCHEMA or not table:
             raise ValueError(f"{dotted}: not a transfer key; write it as TABLE.KEY")
         raw.setdefault(table, {})[key] = value
