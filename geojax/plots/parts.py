@@ -42,7 +42,7 @@ def plot_wheels(cycles: dict, capacity_nms: float, path: str | Path, title: str 
     over the cycle) and ± the capacity ``capacity_nms`` (beyond it the run fails: wheels saturated)."""
     start, end = cycle_edges_s(cycles["t_s"])
     edges = np.append(start, end[-1]) / DAY_S
-    fig, axes = plt.subplots(3, 1, figsize=(7.2, 5.6), sharex=True, constrained_layout=True)
+    fig, axes = plt.subplots(3, 1, figsize=(7.2, 5.6), constrained_layout=True)
     for ax, axis in zip(axes, "xyz"):
         peak = np.asarray(cycles[f"wheel_max_abs_{axis}_nms"], float)
         ax.stairs(peak, edges, baseline=None, color="C1", lw=0.8, label="± largest |h| within the cycle",
@@ -53,9 +53,8 @@ def plot_wheels(cycles: dict, capacity_nms: float, path: str | Path, title: str 
         for sign in (1, -1):
             ax.axhline(sign * capacity_nms, color="C3", ls="--", lw=0.9, gid=f"{'+-'[sign < 0]}capacity",
                        label=f"± capacity {capacity_nms:g} N m s" if sign > 0 else None)
-        ax.set(ylabel=f"h_{axis} (N m s)", xlim=(edges[0], edges[-1]))
+        ax.set(xlabel="days", ylabel=f"h_{axis} (N m s)", xlim=(edges[0], edges[-1]))
         ax.yaxis.set_major_locator(MaxNLocator(5, symmetric=True))
-    axes[-1].set(xlabel="days")
     for ax in axes:
         ax.xaxis.set_major_locator(MaxNLocator(6))
     axes[0].set_title("reaction wheels, body axes (x along-track, y anti-normal, z nadir)", loc="left")
@@ -70,7 +69,7 @@ def plot_navigation_error(cycles: dict, path: str | Path, title: str = "", dpi: 
     (``nav_error_{axis}_{m,mps}``, ``nav_sigma_{axis}_{m,mps}``)."""
     start, _ = cycle_edges_s(cycles["t_s"])
     days = start / DAY_S
-    fig, axes = plt.subplots(2, 3, figsize=(7.2, 4.4), sharex=True, constrained_layout=True)
+    fig, axes = plt.subplots(2, 3, figsize=(7.2, 4.4), constrained_layout=True)
     for row, (unit, scale, shown) in enumerate((("m", 1.0, "m"), ("mps", 1e3, "mm/s"))):
         for ax, (axis, name) in zip(axes[row], AXES):
             error = np.asarray(cycles[f"nav_error_{axis}_{unit}"], float) * scale
@@ -79,10 +78,9 @@ def plot_navigation_error(cycles: dict, path: str | Path, title: str = "", dpi: 
             ax.plot(days, three_sigma, "k--", lw=0.8, label="±3σ (the filter's)", gid="+3sigma")
             ax.plot(days, -three_sigma, "k--", lw=0.8, gid="-3sigma")
             ax.plot(days, error, "o-", ms=3, color="C0", label="error (estimate − truth)", gid="error")
-            ax.set(ylabel=f"{name} ({shown})")
+            ax.set(xlabel="days", ylabel=f"{name} ({shown})")
             ax.yaxis.set_major_locator(MaxNLocator(5, symmetric=True))
-    for ax in axes[1]:
-        ax.set(xlabel="days")
+    for ax in axes.ravel():
         ax.xaxis.set_major_locator(MaxNLocator(4))
     axes[0, 0].set_title("position", loc="left")
     axes[1, 0].set_title("velocity", loc="left")
@@ -107,7 +105,7 @@ def plot_consistency(cycles: dict, path: str | Path, title: str = "", dpi: int =
 
     start, end = cycle_edges_s(cycles["t_s"])
     edges = np.append(start, end[-1]) / DAY_S
-    fig, axes = plt.subplots(2, 1, figsize=(7.2, 4.8), sharex=True, constrained_layout=True)
+    fig, axes = plt.subplots(2, 1, figsize=(7.2, 4.8), constrained_layout=True)
     nees = np.asarray(cycles["nees"], float)
     low, high = chi2_bounds(NEES_DOF, 1, PROBABILITY)
     for value, gid in ((low, "low"), (high, "high")):
@@ -115,7 +113,7 @@ def plot_consistency(cycles: dict, path: str | Path, title: str = "", dpi: int =
                      label=f"χ²({NEES_DOF}) 95 %, each value" if gid == "low" else None)
     axes[0].plot(start / DAY_S, nees, "o-", ms=3, color="C0", label="NEES at the cycle start", gid="values")
     _run_mean(axes[0], float(np.mean(nees)), chi2_bounds(NEES_DOF, len(nees), PROBABILITY), f"mean of {len(nees)}")
-    axes[0].set(ylabel="NEES (6 dof)")
+    axes[0].set(xlabel="days", ylabel="NEES (6 dof)")
     dof = nis_dof(cycles)
     used = dof > 0
     nis = np.where(used, np.asarray(cycles["nis_per_dof"], float), np.nan)
