@@ -61,7 +61,8 @@ def box_half_width_deg(attrs) -> float:
 class FileRun(NamedTuple):
     """A ``simulate`` file read back as the parts' figures read a run (``states.base.Part.figures``): its /cycles
     (``cycles()``), its scenario, the ``Params`` it ran with and the parts it carried (rebuilt from the scenario
-    stored with it); the figures named after the file (``stem``) in its format at its resolution."""
+    stored with it; None where it carried none); the figures named after the file (``stem``) in its format at its
+    resolution."""
 
     table: dict
     scenario: object
@@ -81,5 +82,6 @@ class FileRun(NamedTuple):
         from geojax.loop.setup import controller_of, params_of
 
         sc = scenario.from_dict(scenario.tomllib.loads(str(attrs["config_toml"])))
-        return cls(groups["cycles"], sc, params_of(sc, controller_of([sc])), states.of_config(sc.config), stem,
-                   title, fmt, dpi)
+        models = states.of_config(sc.config)
+        params = params_of(sc, controller_of([sc])) if models else None  # nothing to draw: no parameters built
+        return cls(groups["cycles"], sc, params, models, stem, title, fmt, dpi)

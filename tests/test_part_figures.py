@@ -2,6 +2,9 @@
 the matplotlib figure before it is closed and compared with the run's records, its metrics and χ² quantiles
 computed here with SciPy; the sweep's percentile band against NumPy's percentiles of the file's held samples."""
 
+import subprocess
+import sys
+
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
@@ -172,3 +175,12 @@ def test_a_sweeps_figure_draws_the_held_samples_percentile_band_and_counts_the_f
     assert [t.get_text() for t in ax.texts] == ["1/6 failed", "1/6 failed"]
     legend = [t.get_text() for t in ax.get_legend().get_texts()]
     assert "qffc: 5–95 % (held, 6 repetitions)" in legend and "qffc: min–max (held)" in legend
+
+
+def test_the_engine_draws_no_figure_the_parts_import_their_drawing_when_asked():
+    """The parts declare their figures, yet importing them and the loop imports neither matplotlib nor the plots."""
+    code = ("import sys, geojax.states, geojax.loop.simulate; "
+            "print(any(m == 'matplotlib' or m.startswith('geojax.plots') for m in sys.modules)); "
+            "print([p.figures is not None for p in geojax.states.REGISTRY])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
+    assert out[:2] == ["False", "[True, True]"]
