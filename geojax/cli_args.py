@@ -146,7 +146,10 @@ def parser() -> argparse.ArgumentParser:
     sim.add_argument("--sigma3-dv-pct", type=float, metavar="PCT", help="magnitude (thrust level) error of each burn, "
                      "3-sigma in %% of the planned (errors.sigma3_dv_pct; a planner's burns)")
     sim.add_argument("--out", help="write /metrics and /cycles to this HDF5 file")
-    sim.add_argument("--plots", help="folder for the figures")
+    sim.add_argument("--plots", help="folder for the figures: the run's (NAME.png, NAME-station-keeping.png; a feedback "
+                                     "law's NAME-ground-track.png, NAME-thrust.png), then "
+                                     "each carried part's (NAME-wheels.png; NAME-navigation-error.png, "
+                                     "NAME-navigation-consistency.png)")
     sim.add_argument("--oem", metavar="FILE", help="write the true state at every integration step and the end as a "
                      "CCSDS OEM 2.0 (EME2000, UTC; LAGRANGE interpolation metadata; with the navigation filter its "
                      "covariance blocks; XML where FILE ends in .xml, else KVN) and a planner's burns as FILE's "

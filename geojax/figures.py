@@ -4,6 +4,7 @@ plan, a transfer's orbit, or a single run's (``loop.report.draw``: per step, per
 from __future__ import annotations
 
 from pathlib import Path
+from typing import NamedTuple
 
 
 def plot_file(path: str | Path, out: str | Path | None = None, fmt: str = "png", dpi: int = 150) -> list[Path]:
@@ -11,7 +12,7 @@ def plot_file(path: str | Path, out: str | Path | None = None, fmt: str = "png",
     file; ``ValueError`` with one line for a file that is not one or holds nothing to draw."""
     from geojax import plots, store
     from geojax.sweep import report as sweep_report
-    from geojax.loop.report import draw
+    from geojax.loop.report import draw, part_figures
 
     path = Path(path)
     if not path.is_file():
@@ -44,7 +45,10 @@ def plot_file(path: str | Path, out: str | Path | None = None, fmt: str = "png",
     if "steps" in groups or "cycles" in groups:
         drawn_box = "steps" in groups or {"reference", "target"} <= set(groups)
         box = box_half_width_deg(attrs) if drawn_box else 0.0
-        return draw(groups, box, out / path.stem, title, fmt=fmt, dpi=dpi)
+        drawn = draw(groups, box, out / path.stem, title, fmt=fmt, dpi=dpi)
+        if kind == "simulate":  # a closed loop's file holds the /cycles of the parts it carried
+            drawn += part_figures(FileRun.of(groups, attrs, path.stem, title, fmt, dpi), out)
+        return drawn
     raise ValueError(f"file {str(path)!r}: nothing geojax can plot "
                      f"(no /cycles, /steps, sweep, tuning, bound or transfer data)")
 
@@ -55,3 +59,32 @@ def box_half_width_deg(attrs) -> float:
 
     config = scenario.tomllib.loads(str(attrs["config_toml"]))
     return float(scenario.from_dict(config).config["station"]["box_half_width_deg"])
+
+
+class FileRun(NamedTuple):
+    """A ``simulate`` file read back as the parts' figures read a run (``states.base.Part.figures``): its /cycles
+    (``cycles()``), its scenario, the ``Params`` it ran with and the parts it carried (rebuilt from the scenario
+    stored with it; None where it carried none); the figures named after the file (``stem``) in its format at its
+    resolution."""
+
+    table: dict
+    scenario: object
+    params: object
+    states: tuple
+    stem: str
+    title: str
+    fmt: str = "png"
+    dpi: int = 150
+
+    def cycles(self) -> dict:
+        return self.table
+
+    @classmethod
+    def of(cls, groups: dict, attrs: dict, stem: str, title: str, fmt: str, dpi: int) -> "FileRun":
+        from geojax import scenario, states
+        from geojax.loop.setup import controller_of, params_of
+
+        sc = scenario.from_dict(scenario.tomllib.loads(str(attrs["config_toml"])))
+        models = states.of_config(sc.config)
+        params = params_of(sc, controller_of([sc])) if models else None  # nothing to draw: no parameters built
+        return cls(groups["cycles"], sc, params, models, stem, title, fmt, dpi)

@@ -12,7 +12,8 @@ the status as ``status``, the file's attributes (provenance, the scenario's TOML
 A sample whose status is not 0 (it left the box, drifted off the station, ran out of propellant, met a cycle
 without a solution) has failed: its numbers are not a station keeping's.  ``held`` masks them out of a Dataset,
 ``summary_table`` gives the failed count and the statistics over the samples that held, and both rest on
-``held_statistics``, the one computation the sweep's printed summary and its figure use too.
+``held_statistics`` (with ``held_percentiles``), the one computation the sweep's printed summary and its figure use
+too.
 """
 
 from __future__ import annotations
@@ -226,6 +227,17 @@ def held_statistics(values, status, axis: int = -1) -> HeldStatistics:
         warnings.simplefilter("ignore", RuntimeWarning)
         stats = [f(kept, axis=axis) for f in (np.nanmean, np.nanstd, np.nanmin, np.nanmax)]
     return HeldStatistics(np.full(np.sum(ok, axis=axis).shape, values.shape[axis]), np.sum(~ok, axis=axis), *stats)
+
+
+def held_percentiles(values, status, q=(5.0, 95.0), axis: int = -1) -> np.ndarray:
+    """The percentiles ``q`` (%) of ``values`` along ``axis`` over the samples whose ``status`` is 0, stacked first:
+    [len(q), shape less ``axis``] (NumPy's linear interpolation between the sorted held values); NaN where none
+    held."""
+    values, status = np.asarray(values, float), np.asarray(status)
+    kept = np.where(status == STATUS_OK, values, np.nan)
+    with warnings.catch_warnings():  # a point where every sample failed: NaN, as in ``held_statistics``
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return np.nanpercentile(kept, np.asarray(q, float), axis=axis)
 
 
 def held(ds):

@@ -7,6 +7,7 @@ from geojax.physics import constants as c
 from geojax import plots
 from geojax.control.effects import R_SYNC_M
 from geojax.physics.elements import kepler_to_cartesian, kepler_to_mee
+from geojax.plots.parts import plot_consistency, plot_navigation_error, plot_wheels
 
 
 def test_libration_matches_keplers_equation_to_second_order():
@@ -100,6 +101,21 @@ def _tuning(iterations=8, starts=4):
             "metrics": {"dv_per_year_mps": best[-1], "constraint_lon": -0.01, "constraint_lat": -0.5}}
 
 
+def _part_cycles(n=12):
+    """Per-cycle records of the wheels and the filter, magnitudes as in li2022-momentum and li2022-qffc-ranging."""
+    rng = np.random.default_rng(1)
+    table = {"t_s": (np.arange(n) + 0.5) * DAY, "nees": rng.chisquare(6, n), "measurements": np.full(n, 32.0),
+             "nis_per_dof": rng.chisquare(32, n) / 32}
+    for axis in "xyz":
+        table[f"wheel_{axis}_nms"] = rng.normal(0.0, 10.0, n)
+        table[f"wheel_max_abs_{axis}_nms"] = np.abs(table[f"wheel_{axis}_nms"]) + 5.0
+    for axis in ("radial", "along", "cross"):
+        for unit, sigma in (("m", 100.0), ("mps", 0.01)):
+            table[f"nav_sigma_{axis}_{unit}"] = np.full(n, sigma)
+            table[f"nav_error_{axis}_{unit}"] = rng.normal(0.0, sigma, n)
+    return table
+
+
 FIGURES = {
     "cycles": lambda path, dpi: [plots.plot_cycles(_cycles(), path, title="cycles", dpi=dpi)],
     "station_keeping": lambda path, dpi: [plots.plot_station_keeping(_cycles(), _reference(), TARGET, path, "sk",
@@ -108,6 +124,9 @@ FIGURES = {
     "feedback": lambda path, dpi: plots.plot_feedback(_steps(), 0.05, path.with_suffix(""), "katz", dpi=dpi,
                                                       fmt=path.suffix[1:]),
     "tuning": lambda path, dpi: [plots.plot_tuning(_tuning(), path, title="tune", dpi=dpi)],
+    "wheels": lambda path, dpi: [plot_wheels(_part_cycles(), 50.0, path, title="wheels", dpi=dpi)],
+    "navigation_error": lambda path, dpi: [plot_navigation_error(_part_cycles(), path, dpi=dpi)],
+    "consistency": lambda path, dpi: [plot_consistency(_part_cycles(), path, dpi=dpi)],
 }
 MAGIC = {"pdf": b"%PDF", "png": b"\x89PNG"}
 
@@ -208,8 +227,9 @@ def test_decade_brings_small_values_near_one_and_leaves_ordinary_ones():
 
 
 def test_a_sweep_figure_marks_the_grid_and_draws_only_what_its_legend_names(tmp_path, monkeypatch):
-    """Ticks at the grid's values (they fell between them), controllers as written, the min-max band in the
-    legend with its repetitions, the failed point too; the title as the command line writes it."""
+    """Ticks at the grid's values (they fell between them), controllers as written, the 5-95 % band in the
+    legend with its repetitions and the min-max one, the failed point too; the title as the command line writes
+    it."""
     from geojax import cli
 
     kept = []
@@ -221,7 +241,8 @@ def test_a_sweep_figure_marks_the_grid_and_draws_only_what_its_legend_names(tmp_
     assert list(ax.get_xticks()) == [60.0, 70.0, 80.0, 90.0]
     assert [t.get_text() for t in ax.get_legend().get_texts()] == [
         "qffc: mean (held)", "fompc: mean (held)", "fompc: failed (status not 0): mean, count",
-        "qffc: min–max (held, 3 repetitions)", "fompc: min–max (held, 3 repetitions)"]
+        "qffc: 5–95 % (held, 3 repetitions)", "qffc: min–max (held)", "fompc: 5–95 % (held, 3 repetitions)",
+        "fompc: min–max (held)"]
     attrs = {"name": "fig09", "base_scenario_toml": '[duration]\ndays = 365.25\n'}
     assert cli.sweep_title(attrs, ["controller", "thrusters.beta_max_deg"]) == "thrusters.beta_max_deg: fig09, 365.25 days"
 

@@ -20,6 +20,7 @@ import numpy as np
 from geojax.control import none
 from geojax.loop.metrics import STATUS_MEANINGS, STATUS_TEXT, YEAR_CYCLES, step_table
 from geojax import compilation, traced
+from geojax import states as parts
 from geojax.loop.setup import (controller_of, cycle_count, environment_cycles, params_of, program_identity,
                                uncontrolled_boundaries)
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
@@ -125,9 +126,19 @@ def row_notes(values: dict, n_cycles: int, result) -> dict[str, str]:
 def plot(result, folder: str | Path, reference=None) -> list[Path]:
     """The run's figures in ``folder``, named after the scenario: from its steps (a feedback law's), the ground
     track and thrust (``NAME-ground-track.png``, ``NAME-thrust.png``), else its cycles and station keeping
-    (``NAME.png``, ``NAME-station-keeping.png``).  ``reference``: as for ``groups``."""
+    (``NAME.png``, ``NAME-station-keeping.png``); then each carried part's (``part_figures``).  ``reference``: as
+    for ``groups``."""
     sc = scenario_of(result)
-    return draw(groups(result, reference), sc.config["station"]["box_half_width_deg"], Path(folder) / sc.name, run_title(sc))
+    drawn = draw(groups(result, reference), sc.config["station"]["box_half_width_deg"], Path(folder) / sc.name,
+                 run_title(sc))
+    return drawn + part_figures(result, folder)
+
+
+def part_figures(run, folder: str | Path) -> list[Path]:
+    """The figures every part the run carried declares (``states.base.Part.figures``), in the loop's order:
+    ``run`` a single run's ``Result`` or a results file read back (``geojax.figures.FileRun``)."""
+    return [path for part in parts.parts_of(run.states) if part.figures is not None
+            for path in part.figures(run, Path(folder))]
 
 
 def run_title(sc: Scenario) -> str:

@@ -1,7 +1,8 @@
 """A sweep's figure: its metric against its first swept parameter, mean and spread over the repetitions that held
-(status 0), one line per controller and point of the further swept keys (named by their values), the points where
-samples failed marked and counted, the legend beside the axes (``plot_sweep``; several sweeps on one axis:
-``plot_sweeps``); a sweep of repetitions alone (no grid), the histogram of its samples (``plot_repetitions``)."""
+(status 0: the 5–95 % percentile band within the min–max one), one line per controller and point of the further
+swept keys (named by their values), the points where samples failed marked and counted apart, the legend beside the
+axes (``plot_sweep``; several sweeps on one axis: ``plot_sweeps``); a sweep of repetitions alone (no grid), the
+histogram of its samples (``plot_repetitions``)."""
 
 from __future__ import annotations
 
@@ -13,16 +14,19 @@ import numpy as np
 
 from geojax.plots.labels import _label, _quantity, decade
 from geojax.plots.style import _save, styled
-from geojax.results import held_statistics
+from geojax.results import held_percentiles, held_statistics
+
+SPREAD_PCT = (5.0, 95.0)  # the percentile band of the repetitions that held
 
 
 @styled
 def plot_sweep(groups, axes_names: list[str], path: str | Path, metric: str = "dv_per_year_mps", title: str = "",
                label: str = "", dpi: int = 150) -> Path:
-    """A sweep's metric against its first swept parameter: mean and spread (min-max) over the repetitions
-    that held (status 0), one line per controller (and per value of any further axis); a point where samples
-    failed is marked with a cross at their mean and labelled with their count ("3/20 failed").  ``groups`` are
-    the groups of a ``geojax sweep`` file."""
+    """A sweep's metric against its first swept parameter: mean and spread over the repetitions that held
+    (status 0: the 5th to 95th percentile, ``SPREAD_PCT``, in a band within the lighter min–max one), one line
+    per controller (and per value of any further axis); the failed samples are left out of the mean and the bands
+    and counted apart: a point where samples failed is marked with a cross at their mean and labelled with their
+    count ("3/20 failed").  ``groups`` are the groups of a ``geojax sweep`` file."""
     return plot_sweeps([(label, groups)], axes_names, path, metric, title, dpi=dpi)
 
 
@@ -60,12 +64,17 @@ def plot_sweeps(runs, axes_names: list[str], path: str | Path, metric: str = "dv
             for j in range(v.shape[1]):
                 name = " ".join(filter(None, [prefix, controller])) + (f", {further[j]}" if further else "")
                 stats = held_statistics(v[:, j], s[:, j])
+                low, high = held_percentiles(v[:, j], s[:, j], SPREAD_PCT)
                 bad = stats.failed > 0
                 line, = ax.plot(x, stats.mean, "o-", ms=3.5, label=f"{name}: mean (held)")
                 if v.shape[-1] > 1:
-                    ax.fill_between(x, stats.min, stats.max, color=line.get_color(), alpha=0.2, lw=0)
-                    bands.append(Patch(color=line.get_color(), alpha=0.2, lw=0,
-                                       label=f"{name}: min–max (held, {v.shape[-1]} repetitions)"))
+                    spread = f"{SPREAD_PCT[0]:g}–{SPREAD_PCT[1]:g} %"
+                    ax.fill_between(x, low, high, color=line.get_color(), alpha=0.3, lw=0, gid=f"{name}: {spread}")
+                    ax.fill_between(x, stats.min, stats.max, color=line.get_color(), alpha=0.1, lw=0,
+                                    gid=f"{name}: min–max")
+                    bands += [Patch(color=line.get_color(), alpha=0.3, lw=0,
+                                    label=f"{name}: {spread} (held, {v.shape[-1]} repetitions)"),
+                              Patch(color=line.get_color(), alpha=0.1, lw=0, label=f"{name}: min–max (held)")]
                 if bad.any():
                     failed_mean = np.nanmean(np.where(s[bad, j] != 0, v[bad, j], np.nan), axis=-1)
                     ax.plot(x[bad], failed_mean, "x", color=line.get_color(), ms=8, mew=1.5,
