@@ -108,7 +108,7 @@ def _compiled_rollouts(sc, n: int, keys=None):
     """``simulate_batch``'s compiled executable for ``n`` copies of ``sc`` and its arguments."""
     import jax
 
-    from geojax.loop import rollout
+    from geojax.runner import rollout
 
     batch = rollout.prepare([sc])
     params = rollout.prepare_params(sc, n)
@@ -149,7 +149,7 @@ def measure_engine(controller: str, samples: int, days: float) -> dict:
     import jax.numpy as jnp
 
     from geojax import scenario
-    from geojax.loop.rollout import prepare_params, simulate_batch
+    from geojax.runner.rollout import prepare_params, simulate_batch
 
     sc = scenario.load(f"li2022-{controller}", {"duration.days": days, "errors.h_rv": 1.0, "errors.h_att": 1.0,
                                                 "thrusters.beta_max_deg": 70.0})
@@ -171,7 +171,7 @@ def measure_host_keys(n: int, profile: bool = False) -> dict:
     ``profile``: and where they go (one more call under ``cProfile``: the functions of geojax with the most
     cumulative time)."""
     from geojax import scenario
-    from geojax.loop.rollout import keys_of, prepare_params, simulate_batch
+    from geojax.runner.rollout import keys_of, prepare_params, simulate_batch
 
     sc = scenario.load("li2022-qffc", {"controller.kind": "none", "duration.days": 1})
     params = prepare_params(sc, n)

@@ -51,7 +51,7 @@ def loop_program(name: str, changes: dict, lanes: int, days: float):
     import jax
 
     from geojax import scenario
-    from geojax.loop import rollout
+    from geojax.runner import rollout
 
     sc = scenario.load(name, {"duration.days": days, "errors.h_rv": 1.0, **changes})
     batch = rollout.prepare([sc])

@@ -151,8 +151,8 @@ def _closed_loop(days: float, batch: int = 256) -> dict:
     import jax.numpy as jnp
 
     from geojax import scenario
-    from geojax.loop.rollout import rollout_fn
-    from geojax.loop.setup import prepare
+    from geojax.runner.rollout import rollout_fn
+    from geojax.runner.setup import prepare
 
     compiled = {}
     for controller in ("qffc", "fompc"):

@@ -30,7 +30,7 @@ def state_bytes() -> dict:
     import numpy as np
 
     from geojax import scenario
-    from geojax.loop.setup import prepare
+    from geojax.runner.setup import prepare
     from geojax.loop.simulate import position_velocity
     from geojax.states import navigation
 

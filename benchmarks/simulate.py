@@ -62,8 +62,8 @@ def measure(controller: str, days: float, batch: int, name: str | None = None, r
     import numpy as np
 
     from geojax import scenario
-    from geojax.loop.rollout import rollout_fn
-    from geojax.loop.setup import prepare
+    from geojax.runner.rollout import rollout_fn
+    from geojax.runner.setup import prepare
     from geojax.parallel import replicate, shard_batch
     from geojax.physics import constants as c
 

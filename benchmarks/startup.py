@@ -113,7 +113,7 @@ def batch_child() -> None:
         lambda event, s, fun_name="", **kw: compiled.append((fun_name, s)) if event.endswith(
             "backend_compile_duration") else None)
     from geojax import scenario
-    from geojax.loop.rollout import simulate_batch
+    from geojax.runner.rollout import simulate_batch
 
     rows = []
     for days, n in ((10, 1), (30, 1), (20, 1), (10, 3), (20, 4)):

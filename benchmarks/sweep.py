@@ -9,7 +9,7 @@ For every batch size B, a fresh process runs a sweep of B repetitions with
 the batch sharded over one XLA CPU device per core) and reports its wall time,
 compilation included, and its peak resident memory.  The baseline runs the same
 samples (the same keys) one after another in a Python loop over the compiled
-single rollout (``loop.rollout.rollout_fn``, compiled once and reused), as a user
+single rollout (``runner.rollout.rollout_fn``, compiled once and reused), as a user
 without ``vmap`` would; it runs ``--loop`` samples (all of them if B is smaller)
 and its rate is per sample, so it does not depend on B.  Both in one run.
 Results: ``benchmarks/results/sweep.json`` and ``.md``.
@@ -116,8 +116,8 @@ def measure_loop(controller: str, days: float, n: int) -> dict:
     import jax
 
     from geojax import scenario
-    from geojax.loop.rollout import rollout_fn
-    from geojax.loop.setup import prepare, unstack
+    from geojax.runner.rollout import rollout_fn
+    from geojax.runner.setup import prepare, unstack
 
     sc = scenario.load(f"li2022-{controller}", {"duration.days": days, "errors.h_rv": 1.0, "errors.h_att": 1.0})
     batch = prepare([sc])

@@ -34,7 +34,7 @@ __version__ = "0.2.0"
 from geojax.control.base import Controller, Estimate  # noqa: E402
 from geojax.physics.dynamics import SpacecraftState, Thrust  # noqa: E402
 from geojax.loop.metrics import STATUS_MEANINGS  # noqa: E402
-from geojax.loop.rollout import Result, prepare_params, simulate, simulate_batch  # noqa: E402
+from geojax.runner.rollout import Result, prepare_params, simulate, simulate_batch  # noqa: E402
 from geojax.loop.simulate import CycleContext, StepEnvironment  # noqa: E402
 from geojax.params import LOG, Field, Params  # noqa: E402
 from geojax.scenario import Scenario  # noqa: E402

@@ -31,7 +31,7 @@ import warnings
 from pathlib import Path
 
 from geojax.cli_args import check_outputs as _check_outputs, overrides as _overrides, parser as _parser, set_values
-from geojax.loop.report import flown_days  # noqa: F401  (printed before a run; tests read it here)
+from geojax.runner.report import flown_days  # noqa: F401  (printed before a run; tests read it here)
 from geojax.sweep.report import summary as sweep_summary, title as sweep_title  # noqa: F401
 
 EXIT_BAD_INPUT = 2
@@ -185,12 +185,12 @@ def _simulate(args) -> int:
 
 
 def _run_simulation(sc, seed: int, out, plots, args) -> int:
-    from geojax.loop import rollout
+    from geojax.runner import rollout
 
     from geojax.compilation import Compilations, waiting_note
     from geojax.control.base import keeps_steps
-    from geojax.loop import report
-    from geojax.loop.setup import controller_of, cycle_count, cycle_slots
+    from geojax.runner import report
+    from geojax.runner.setup import controller_of, cycle_count, cycle_slots
 
     say = _say(args)
     say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; the environment, the reference run and the closed "
@@ -221,7 +221,7 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
 def _finish(args, result, detail: str, out, plots, reference=None) -> int:
     """Print the run's summary (and with ``-v`` the devices and ``detail``), then write its file (``--out``) and
     figures (``--plots``), each named as it is written (``reference``: a closed loop's uncontrolled run, if computed
-    already, ``loop.report.groups``)."""
+    already, ``runner.report.groups``)."""
     from geojax import store
 
     for line in result.summary():

@@ -1,5 +1,5 @@
 """The figures of a results file, by what it holds (``geojax plot``): a sweep's, a tuning's convergence, a bound's
-plan, a transfer's orbit, or a single run's (``loop.report.draw``: per step, per cycle, the station keeping)."""
+plan, a transfer's orbit, or a single run's (``runner.report.draw``: per step, per cycle, the station keeping)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ def plot_file(path: str | Path, out: str | Path | None = None, fmt: str = "png",
     file; ``ValueError`` with one line for a file that is not one or holds nothing to draw."""
     from geojax import plots, store
     from geojax.sweep import report as sweep_report
-    from geojax.loop.report import draw, part_figures
+    from geojax.runner.report import draw, part_figures
 
     path = Path(path)
     if not path.is_file():
@@ -82,7 +82,7 @@ class FileRun(NamedTuple):
     @classmethod
     def of(cls, groups: dict, attrs: dict, stem: str, title: str, fmt: str, dpi: int) -> "FileRun":
         from geojax import scenario, states
-        from geojax.loop.setup import controller_of, params_of
+        from geojax.runner.setup import controller_of, params_of
 
         sc = scenario.from_dict(scenario.tomllib.loads(str(attrs["config_toml"])))
         models = states.of_config(sc.config)

@@ -1,4 +1,4 @@
-"""How many samples one compiled call runs per device (DESIGN.md, "Scale": the device decides the batch).
+"""How many samples one compiled call runs per device (docs/design.md, "Scale": the device decides the batch).
 
 On a CPU, a device is about one core and the best width is the one measured
 there per controller (``Controller.lanes_cpu``): wider batches gain little and

@@ -1,4 +1,4 @@
-"""Spreading a batch over the local devices with ``jax.sharding`` (DESIGN.md, "Scale").
+"""Spreading a batch over the local devices with ``jax.sharding`` (docs/design.md, "Scale").
 
 On a CPU, XLA runs one device on about one core.  To use every core, start
 Python with ``XLA_FLAGS=--xla_force_host_platform_device_count=N`` (N = cores)

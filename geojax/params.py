@@ -1,4 +1,4 @@
-"""Parameters, declared once (DESIGN.md "Parameters are declared once").
+"""Parameters, declared once (docs/design.md "Parameters are declared once").
 
 A ``Field`` is one key of a scenario table: its TOML type, default and bounds
 (checked at load, the only place validation happens), and, for a key that

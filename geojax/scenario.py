@@ -34,6 +34,7 @@ from geojax.scenario_schema import (EPHEMERIS_UTC_RANGE, NOMINAL_3SIGMA_ATT_DEG,
 from geojax.scenario_schema import SCHEMA as CORE_SCHEMA
 from geojax.scenario_toml import to_toml
 from geojax import states as parts
+from geojax.control import recovery
 
 try:
     import tomllib
@@ -41,7 +42,7 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
 # Every table of a scenario: the loop's own (``scenario_schema``), then each registered part's (``geojax.states``).
-SCHEMA = {**CORE_SCHEMA, **parts.tables()}
+SCHEMA = {**CORE_SCHEMA, "controller": {**CORE_SCHEMA["controller"], "recovery": recovery.FIELD}, **parts.tables()}
 
 __all__ = ["SCHEMA", "Scenario", "ScenarioFile", "available", "controller_fields", "from_dict", "load", "read_text",
            "read_toml_file", "started_at", "to_toml", "with_overrides"]

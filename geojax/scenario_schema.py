@@ -84,13 +84,9 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "layout": Field(str, None, choices=("arms", "gimbal", "fixed4", "axes")),
         "cant_deg": Field(_NUMBER, 45.0, lower=0.0, lower_inclusive=True, upper=90.0),
     },
-    # The [controller] table: `kind` here, the other keys from the controller's module (control.REGISTRY).
-    "controller": {"kind": Field(str, "none"),
-                   # geojax.control.recovery: static (one compiled loop with it, one without), any kind
-                   "recovery": Field(bool, False, static=True,
-                                     doc="fly a stated re-acquisition law back to the box while out of it or after "
-                                         "a cycle without a solution (status still records the failure; "
-                                         "dv_recovery_mps reports its delta-V apart)")},
+    # The [controller] table: `kind` here, `recovery` from geojax.control.recovery, the other keys from the
+    # controller's module (control.REGISTRY); geojax.scenario joins them.
+    "controller": {"kind": Field(str, "none")},
     # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors per component (0.3 m, 5e-5 m/s, 0.05 deg),
     # or the 3-sigma errors themselves (sigma3_*: they set the multipliers, ``geojax.scenario.absolute_errors``).
     "errors": {

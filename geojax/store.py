@@ -1,4 +1,4 @@
-"""HDF5 results (DESIGN.md, "Contracts").
+"""HDF5 results (docs/design.md, "Contracts").
 
 Every file carries the attributes ``geojax_version``, ``jax_version``, ``jaxlib_version``,
 ``source_revision`` (the git commit of the source, ``+dirty`` with uncommitted changes: read from git in a

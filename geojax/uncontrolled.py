@@ -18,7 +18,7 @@ import numpy as np
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.control import none
 from geojax.compilation import Compilations
-from geojax.loop.setup import cycle_count, params_of
+from geojax.runner.setup import cycle_count, params_of
 from geojax.loop.simulate import Shared, simulate
 from geojax.progress import Progress
 from geojax.physics.propagate import DYNAMICS, CycleMeans, environment_grid, steps_per_cycle
@@ -39,7 +39,7 @@ class PropagationResult(NamedTuple):
 
     def table(self) -> dict[str, np.ndarray]:
         """The ``/cycles`` datasets: the first ``cycle_count(days)`` cycle means in edge units."""
-        from geojax.loop.setup import cycle_count
+        from geojax.runner.setup import cycle_count
 
         return cycles_table(self.cycles, cycle_count(self._scenario().days))
 
@@ -55,7 +55,7 @@ class PropagationResult(NamedTuple):
 
     def summary(self) -> list[str]:
         """The lines ``geojax propagate`` prints: the run, and what it did to the mean elements over its days."""
-        from geojax.loop.setup import cycle_count
+        from geojax.runner.setup import cycle_count
 
         sc = self._scenario()
         drift = drift_summary(self.cycles, sc.days)
@@ -69,7 +69,7 @@ class PropagationResult(NamedTuple):
 
     def plot(self, folder, title: str | None = None) -> list[Path]:
         """The mean elements per cycle, ``FOLDER/NAME-uncontrolled.png``; returns its path in a list."""
-        from geojax.loop.report import draw
+        from geojax.runner.report import draw
 
         sc = self._scenario()
         title = f"{sc.name}, no control, {sc.days:g} days" if title is None else title
@@ -85,7 +85,7 @@ class PropagationResult(NamedTuple):
 def propagated_cycles(days: float) -> int:
     """Cycles propagated for a run of ``days`` solar days.
 
-    A run of ``days`` is ``loop.setup.cycle_count(days)`` cycles (365.25 days -> 366), in ``propagate`` as
+    A run of ``days`` is ``runner.setup.cycle_count(days)`` cycles (365.25 days -> 366), in ``propagate`` as
     in ``simulate``; that many are written and drawn.  Cycle means refer to mid-cycle times, so the first
     and last means are ``n - 1`` cycles apart; the propagation goes on to n = ceil(days / sidereal day) + 1
     (365.25 days -> 368) so that span covers ``days`` and the change over exactly ``days`` is read off by

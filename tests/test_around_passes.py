@@ -135,7 +135,7 @@ def test_the_planner_flies_its_whole_burns_around_long_passes(kind):
     the planner the passes cut the burns (the Delta-V delivered falls short of the plan's V_1 + V_2); with
     ``controller.around_passes`` every cycle delivers its plan (to 1e-3) and no burn's window meets a pass.  The QFFC
     and the FOMPC (its flown cycle moved, at the annealing's north-south fraction)."""
-    from geojax.loop import rollout
+    from geojax.runner import rollout
 
     base = {"duration.days": 4, "navigation.burns_during_passes": False, "navigation.burn_magnitude_sigma_pct": 0.0,
             "navigation.burn_pointing_sigma_deg": 0.0, "navigation.stations[0].pass_s": 14400.0,

@@ -17,7 +17,7 @@ from geojax.bound.directions import arm_direction, arms, axes, fixed4, geometry_
 from geojax.bound.linear import SlotModel, linearize
 from geojax.bound.run import _uncontrolled
 from geojax.control.effects import V_SYNC_MPS
-from geojax.loop.setup import prepare, unstack
+from geojax.runner.setup import prepare, unstack
 
 V_MPS = 3074.7  # GEO speed: Delta-V per unit inclination change
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from geojax import cli, scenario
-from geojax.loop import rollout
+from geojax.runner import rollout
 from geojax.physics.constants import JD_J2000, SECONDS_PER_DAY
 from geojax.physics.frames import rsw_basis
 from geojax.physics.time import tt_seconds_from_utc

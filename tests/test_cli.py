@@ -235,7 +235,7 @@ class _Ran(Exception):
 
 
 @pytest.mark.parametrize("command, scenario, module, name", [
-    ("simulate", "li2022-qffc", "geojax.loop.rollout", "simulate"),
+    ("simulate", "li2022-qffc", "geojax.runner.rollout", "simulate"),
     ("propagate", "li2022", "geojax.uncontrolled", "propagate_scenario"),
     ("bound", "li2022-qffc", "geojax.bound", "bound"),
     ("transfer", "ma2023-boom", "geojax.transfer", "run"),

@@ -1,7 +1,7 @@
 """Compiled and traced programs kept between runs, and durations that reuse one compiled loop.
 
 Checks (second methods, never a stored number): a run whose loop is compiled for more cycles than it flies
-(``loop.setup.cycle_slots``, a traced trip count) against the same run compiled for exactly its cycles (the scan
+(``runner.setup.cycle_slots``, a traced trip count) against the same run compiled for exactly its cycles (the scan
 every sweep and tuning runs), bit for bit; a shorter run against the first cycles of a longer one that runs the
 same compiled program; a run through the kept traced program (``geojax.traced``) and from a warm cache against
 a run with the cache off; a lane-padded batch against its samples; the cache's failures (a folder that cannot
@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 
 from geojax import compilation, scenario, traced
-from geojax.loop import rollout
-from geojax.loop.setup import cycle_slots, prepare, reference, reference_shape
+from geojax.runner import rollout
+from geojax.runner.setup import cycle_slots, prepare, reference, reference_shape
 
 DAYS = 4
 
@@ -150,7 +150,7 @@ def test_one_sample_compiled_for_start_up_is_the_batch_sample_to_rounding(qffc, 
     relative (the programs' own rounding, ~1e-13).  A controller that solves a program each cycle keeps LLVM's
     optimization for its closed loop (``Controller.one_sample_opt_level``)."""
     from geojax.control import qffc as qffc_law
-    from geojax.loop.setup import controller_of
+    from geojax.runner.setup import controller_of
 
     assert rollout.compiler_options(1) == compilation.ONE_SAMPLE_OPTIONS and rollout.compiler_options(2) is None
     assert compilation.ONE_SAMPLE_OPTIONS["xla_backend_optimization_level"] == 0
@@ -172,7 +172,7 @@ def test_the_command_lines_uncontrolled_run_computed_while_compiling_is_the_file
     """``geojax simulate --out`` computes the file's uncontrolled ``/reference`` while the closed loop compiles
     (``simulate(meanwhile=...)``): the same datasets as ``reference_and_target`` called on its own afterwards."""
     from geojax import cli, store
-    from geojax.loop.report import reference_and_target
+    from geojax.runner.report import reference_and_target
 
     out = tmp_path / "run.h5"
     assert cli.main(["simulate", "li2022-qffc", "--days", "3", "--out", str(out), "-q"]) == 0
@@ -188,7 +188,7 @@ def test_the_cache_serves_the_same_numbers_as_no_cache(tmp_path, qffc, padded):
     """A cold cache (the program traced, kept, compiled), a warm one in the same folder (loaded), and the cache
     off (plain ``jit``): the same bits.  Each run in its own process, as a user's runs are."""
     code = ("import sys, numpy as np, geojax; from geojax import scenario, compilation; "
-            "from geojax.loop import rollout; "
+            "from geojax.runner import rollout; "
             f"sc = scenario.load('li2022-qffc', {{'duration.days': {DAYS}, 'errors.h_rv': 1.0, 'errors.h_att': 1.0}}); "
             "r = rollout.simulate_batch([sc, sc], seeds=[0, 1]); "
             "kept = sorted(p.name for p in compilation.cache_dir().glob('*-geojax-traced')) "

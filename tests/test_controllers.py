@@ -15,7 +15,7 @@ from geojax.physics.dynamics import Thrust
 from geojax.physics.elements import wrap_angle
 from geojax.physics.frames import rotate_z
 from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_OK
-from geojax.loop.rollout import simulate
+from geojax.runner.rollout import simulate
 from geojax.params import LOG, Field
 
 

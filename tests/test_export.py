@@ -17,7 +17,7 @@ from geojax import cli, scenario
 from geojax.control.predictor import boundary_elements
 from geojax.export import trajectory
 from geojax.export.oem import Covariance, Metadata, covariance_keys, write_oem
-from geojax.loop import rollout
+from geojax.runner import rollout
 from geojax.physics.constants import JD_J2000, SECONDS_PER_DAY
 from geojax.physics.elements import cartesian_to_mee
 from geojax.physics.propagate import DYNAMICS

@@ -11,8 +11,8 @@ from geojax.physics import constants as c
 from geojax import scenario, tune
 from geojax.control import lyapunov
 from geojax.physics.frames import rotate_z
-from geojax.loop.rollout import simulate
-from geojax.loop.setup import prepare, unstack
+from geojax.runner.rollout import simulate
+from geojax.runner.setup import prepare, unstack
 from geojax.loop.simulate import position_velocity
 from geojax.loop.simulate import simulate as closed_loop
 

@@ -10,7 +10,7 @@ import pytest
 from geojax.physics import constants as c
 from geojax import scenario
 from geojax.control import none
-from geojax.loop.setup import params_of, uncontrolled_boundaries
+from geojax.runner.setup import params_of, uncontrolled_boundaries
 from geojax.physics.propagate import MEE
 from geojax.control import fompc
 from geojax.physics.propagate import environment_grid, steps_per_cycle

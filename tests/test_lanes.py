@@ -16,7 +16,7 @@ import pytest
 
 from geojax import cli, lanes, store, sweep
 from geojax.control import qffc
-from geojax.loop.rollout import keys_of
+from geojax.runner.rollout import keys_of
 
 SPEC = """
 name = "wide"
@@ -54,8 +54,8 @@ def test_the_memory_model_covers_what_xla_allocates():
     """The model's bytes per lane (margin taken off) against ``memory_analysis`` of the compiled QFFC batch on
     the CPU (temporaries, arguments, outputs): at least what XLA plans, and not wildly more."""
     from geojax import scenario
-    from geojax.loop.rollout import rollout_fn
-    from geojax.loop.setup import prepare
+    from geojax.runner.rollout import rollout_fn
+    from geojax.runner.setup import prepare
 
     width, days = 64, 12
     batch = prepare([scenario.load("li2022-qffc", {"duration.days": days})])
@@ -90,7 +90,7 @@ def test_the_width_follows_the_platform_and_the_memory():
 
 def test_controllers_declare_their_widths():
     from geojax import scenario
-    from geojax.loop.setup import controller_of
+    from geojax.runner.setup import controller_of
 
     made = {name: controller_of([scenario.load(f"li2022-{name}")]) for name in ("qffc", "fompc", "mpc")}
     assert {name: c.lanes_cpu for name, c in made.items()} == {"qffc": 128, "fompc": 32, "mpc": 8}
@@ -140,8 +140,8 @@ def test_the_states_stated_bytes_and_columns_are_their_records(name, changes):
     sweep keeps of them (``loop.metrics.state_columns``)."""
     from geojax import scenario
     from geojax.loop.metrics import state_columns
-    from geojax.loop.rollout import loop
-    from geojax.loop.setup import prepare
+    from geojax.runner.rollout import loop
+    from geojax.runner.setup import prepare
 
     batch = prepare([scenario.load(name, {"duration.days": 2, **changes})])
     params = jax.tree_util.tree_map(lambda x: x[0], batch.params)
@@ -167,7 +167,7 @@ def test_every_metric_is_the_same_at_every_lane_width(name, overrides, n, days):
     values before it adds them, in the cycles' order). Independent check: the same records, three compiled
     widths."""
     from geojax import scenario, simulate_batch
-    from geojax.loop import rollout
+    from geojax.runner import rollout
 
     sc = [scenario.load(name, {"duration.days": days, **overrides})] * n
     result = simulate_batch(sc, seeds=np.arange(n))

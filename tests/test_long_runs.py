@@ -1,4 +1,4 @@
-"""Runs of several years: the predictor's reference (``control.predictor``, ``loop.setup.reference``), re-started
+"""Runs of several years: the predictor's reference (``control.predictor``, ``runner.setup.reference``), re-started
 from the station, stays near the controlled orbit and predicts a controlled satellite's natural drift; the
 Delta-V of each year and the steady state (``loop.metrics.yearly_dv``)."""
 
@@ -12,7 +12,7 @@ import pytest
 from geojax import scenario
 from geojax.control.predictor import station_mee
 from geojax.loop.metrics import SECONDS_PER_YEAR, yearly_dv
-from geojax.loop.setup import REFERENCE_SEGMENT_CYCLES, prepare, unstack
+from geojax.runner.setup import REFERENCE_SEGMENT_CYCLES, prepare, unstack
 from geojax.loop.simulate import propagate
 from geojax.physics.dynamics import SpacecraftState
 from geojax.physics.constants import SIDEREAL_DAY_S

@@ -15,7 +15,7 @@ import random
 import pytest
 
 from geojax import cli, scenario, sweep, tune
-from geojax.loop import rollout
+from geojax.runner import rollout
 from geojax.scenario import tomllib
 
 SWEEP = """

@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from geojax import cli, scenario
-from geojax.loop import setup
+from geojax.runner import setup
 from geojax.loop.metrics import STATUS_MEANINGS
-from geojax.loop.rollout import rollout_fn, simulate
+from geojax.runner.rollout import rollout_fn, simulate
 from geojax.loop.simulate import simulate as closed_loop
 from geojax.physics import constants as c
 from geojax.physics.ephemeris import sun_position_eci_m
@@ -46,8 +46,8 @@ SNIPPET = r"""
 import sys, jax, numpy as np
 import geojax
 from geojax import scenario
-from geojax.loop import setup
-from geojax.loop.rollout import rollout_fn, simulate
+from geojax.runner import setup
+from geojax.runner.rollout import rollout_fn, simulate
 
 def flat(tree, prefix, out):
     if hasattr(tree, "_fields"):
@@ -445,7 +445,7 @@ def test_dumping_holds_the_wheels_that_saturate_without_it():
     5 % of the run's Delta-V across the plan, and the Delta-V changes by under 1 %."""
     on = scenario.load("li2022-momentum", {"duration.days": 6})
     off = scenario.load("li2022-momentum", {"duration.days": 6, "attitude.dump_angle_max_deg": 0.0})
-    from geojax.loop.rollout import simulate_batch
+    from geojax.runner.rollout import simulate_batch
     result = simulate_batch([on, off])
     m = {k: np.asarray(v) for k, v in result.metrics.items()}
     assert list(result.status) == [0, STATUS_WHEELS_SATURATED]
@@ -464,7 +464,7 @@ def test_a_year_of_li2022_momentum_keeps_box_and_wheels_in_every_draw_and_satura
     off on the same draws in one batch.  On: every draw keeps the box and its wheels under capacity (status 0).
     Off: every draw saturates its 50 N m s wheels within days (status 6), while its orbit is the dumping-free one.
     The Delta-V spent on momentum (on less off, draw by draw) is under 5 % of the station keeping's."""
-    from geojax.loop.rollout import simulate_batch
+    from geojax.runner.rollout import simulate_batch
     errors = {"duration.days": 365.25, "errors.h_rv": 1.0, "errors.h_att": 1.0}
     on = scenario.load("li2022-momentum", errors)
     off = scenario.load("li2022-momentum", {**errors, "attitude.dump_angle_max_deg": 0.0})
@@ -509,7 +509,7 @@ def test_the_controller_is_told_the_measured_wheel_momentum():
     """``Estimate.states["wheels"]`` at a cycle start is the wheels' momentum there (the cycle record's start)
     plus the cycle's measurement error: exactly it at sigma 0; at 2 N m s per axis, errors of that spread (20
     cycles x 3 axes: the sample standard deviation within 25 %, 2.7 of its standard errors).  One batch."""
-    from geojax.loop.rollout import simulate_batch
+    from geojax.runner.rollout import simulate_batch
     scenarios = [_wheels(days=20, srp_offset_array_m=[0.1, 0.0, 0.0], wheel_momentum_sigma_nms=sigma)
                  for sigma in (0.0, 2.0)]
     result = simulate_batch(scenarios, controller=TOLD)

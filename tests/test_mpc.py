@@ -13,9 +13,9 @@ from geojax.control import lp, mpc, qffc
 from geojax.control.qffc import BurnPair
 from geojax.control.effects import V_SYNC_MPS
 from geojax.loop.metrics import SECONDS_PER_YEAR, STATUS_OK
-from geojax.loop.report import reference_and_target
-from geojax.loop.rollout import simulate
-from geojax.loop.setup import prepare
+from geojax.runner.report import reference_and_target
+from geojax.runner.rollout import simulate
+from geojax.runner.setup import prepare
 from geojax.params import station_target
 from geojax.physics.propulsion import arm_limits
 

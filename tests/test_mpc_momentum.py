@@ -9,7 +9,7 @@ import pytest
 from geojax import scenario
 from geojax.control import lp, mpc, mpc_momentum
 from geojax.loop.metrics import STATUS_OK
-from geojax.loop.rollout import simulate, simulate_batch
+from geojax.runner.rollout import simulate, simulate_batch
 from test_mpc import dense, highs, planning_of
 
 

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from geojax import cli, scenario
-from geojax.loop import rollout
-from geojax.loop.setup import prepare
+from geojax.runner import rollout
+from geojax.runner.setup import prepare
 from geojax.loop.simulate import position_velocity
 from geojax.navigation.measurements import MODELS
 from geojax.physics.constants import OMEGA_EARTH_RAD_S
@@ -329,7 +329,7 @@ def test_issue_42_year_holds_the_box_and_64_samples_are_consistent():
 def test_gradients_flow_through_the_filter():
     """Second method: d(Delta-V)/d(thrust) through a 3-day li2022-qffc-ranging rollout (the filter, its gated
     updates and the execution errors in the loop) by reverse mode, against a central difference (h = 1e-4 N)."""
-    from geojax.loop.rollout import rollout_fn
+    from geojax.runner.rollout import rollout_fn
 
     setup = prepare([scenario.load("li2022-qffc-ranging", {"duration.days": 3})])
     one = rollout_fn(setup)

@@ -26,7 +26,7 @@ UNWRITABLE = Path("/proc/geojax-out.h5")  # a folder no one can create a file in
 def nothing_runs(monkeypatch):
     """Every run the commands call fails the test if called: a refusal must come before it."""
     from geojax import bound, transfer, tune, uncontrolled
-    from geojax.loop import rollout
+    from geojax.runner import rollout
     from geojax.sweep import run
 
     def ran(*args, **kwargs):

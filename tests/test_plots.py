@@ -322,7 +322,7 @@ def test_demo_labels_say_each_unit_once_insets_have_tick_values_and_thrust_names
 
 def test_run_titles_name_the_controller_once():
     from geojax import scenario
-    from geojax.loop.report import run_title
+    from geojax.runner.report import run_title
 
     assert run_title(scenario.load("li2022-qffc")) == "li2022-qffc"
     assert run_title(scenario.load("katz2025-constant")) == "katz2025-constant"

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from geojax import scenario
-from geojax.loop.rollout import simulate
+from geojax.runner.rollout import simulate
 from geojax.states import momentum
 from geojax.states.base import RESERVED_STREAMS, StateModel, check_streams, stream_id
 

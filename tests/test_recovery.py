@@ -16,7 +16,7 @@ import geojax
 from geojax import scenario
 from geojax.control import recovery
 from geojax.loop.metrics import STATUS_LEFT_LON_BOX
-from geojax.loop.setup import controller_of
+from geojax.runner.setup import controller_of
 from geojax.physics.constants import MU_EARTH_M3_S2, OMEGA_EARTH_RAD_S, SECONDS_PER_DAY
 
 L0_RAD = 0.289893  # li2022-qffc's initial true longitude

@@ -10,7 +10,7 @@ import pytest
 import geojax
 from geojax import cli, transfer
 from geojax.bound import bound
-from geojax.loop.rollout import Result
+from geojax.runner.rollout import Result
 from geojax.uncontrolled import propagate_scenario
 
 # Measured, not computed: they differ from run to run.

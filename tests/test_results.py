@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from geojax import cli, open_results, scenario, sweep, tune
-from geojax.loop.setup import prepare, unstack
+from geojax.runner.setup import prepare, unstack
 
 SWEEP = """
 name = "labels"

@@ -7,7 +7,7 @@ import pytest
 
 from geojax.physics import constants as c
 from geojax import scenario
-from geojax.loop.rollout import prepare_params, simulate, simulate_batch
+from geojax.runner.rollout import prepare_params, simulate, simulate_batch
 from geojax.physics.propagate import environment_grid
 
 DAYS = 20

@@ -12,7 +12,7 @@ import types
 from pathlib import Path
 
 from geojax import scenario
-from geojax.loop.setup import STATIC_KEYS, program_identity
+from geojax.runner.setup import STATIC_KEYS, program_identity
 
 ROOT = Path(__file__).resolve().parents[1]
 ARGUMENTS = ("duration.days", "epoch.utc", "epoch.ut1_minus_utc_s")  # reach the programs as arrays and shapes

@@ -10,7 +10,7 @@ import pytest
 
 import geojax
 from geojax import cli, scenario, store, sweep
-from geojax.loop.rollout import simulate
+from geojax.runner.rollout import simulate
 from geojax.physics.frames import earth_rotation_angle_rad
 
 pytestmark = pytest.mark.slow  # sweeps over epochs, each a closed loop per start: the slow tier

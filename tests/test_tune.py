@@ -170,7 +170,7 @@ def test_a_tuned_scenario_that_fails_its_load_checks_is_named():
     thrust 100 times below ye2022-ex1's cannot beat the largest daily drift within t_max (Ye 2022 eq. (41)),
     so ``geojax simulate`` would refuse the tuned TOML; ``tuned_scenario_fault`` names why (read back from the
     TOML written), and finds nothing at the scenario's own thrust."""
-    from geojax.loop.setup import prepare
+    from geojax.runner.setup import prepare
 
     spec = tune.from_dict({"scenario": "ye2022-ex1", "parameters": ["thrusters.thrust_n"], "days": 2.0})
     base = jax.tree_util.tree_map(lambda x: x[0], prepare([spec.scenario]).params)
@@ -197,7 +197,7 @@ def test_the_dump_gain_is_tuned_with_the_wheels_capacity_as_a_constraint(tmp_pat
     """Issue 41: where the scenario carries the wheels, the tuning has a third constraint, (max |h| / capacity)² - 1,
     the same as a plain simulation's largest wheel momentum gives (a second path: ``simulate``); the dumping law's
     gain is tunable (``attitude.dump_gain_per_s``, log scale); the file and the summary name the wheels."""
-    from geojax.loop.rollout import simulate
+    from geojax.runner.rollout import simulate
     from geojax.tune.write import summary
 
     spec = tune.from_dict({"scenario": "li2022-momentum", "parameters": ["attitude.dump_gain_per_s"], "days": 3.0,

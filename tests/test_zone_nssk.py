@@ -12,8 +12,8 @@ from geojax import cli, scenario
 from geojax.control import REGISTRY
 from geojax.control import zone_nssk as z
 from geojax.control.effects import V_SYNC_MPS
-from geojax.loop.report import reference_and_target
-from geojax.loop.rollout import simulate
+from geojax.runner.report import reference_and_target
+from geojax.runner.rollout import simulate
 from geojax.physics.constants import MU_EARTH_M3_S2, SIDEREAL_DAY_S
 from geojax.physics.dynamics import mee_gauss_rates
 from geojax.physics.ephemeris import moon_position_eci_m, sun_position_eci_m

@@ -46,7 +46,7 @@ import scipy.sparse as sp
 
 from geojax.bound.linear import SlotModel, linearize
 from geojax.bound.run import BOX_MARGIN, _uncontrolled
-from geojax.loop.setup import prepare, unstack
+from geojax.runner.setup import prepare, unstack
 
 TINY_S = 1e-6  # firing shorter than this (s) is no firing
 # Effect-based rounds after the first: cost per second of change from the last durations (per second of firing:

@@ -39,7 +39,7 @@ from geojax.bound.linear import SlotModel, linearize
 from geojax.control.base import Controller, no_plan, stateless_init
 from geojax.control.burns import sunlit_fraction
 from geojax.loop.metrics import SECONDS_PER_YEAR
-from geojax.loop.setup import prepare, unstack
+from geojax.runner.setup import prepare, unstack
 from geojax.physics.constants import G0_MPS2
 from geojax.physics.dynamics import Thrust
 from geojax.scenario import Scenario, from_dict, to_toml
@@ -241,7 +241,7 @@ def replay(u_rsw_mps, fuel_mps, slot_steps: int, slot_s: float, concurrent: int 
 
 
 def _resimulate(uncontrolled: Scenario, u, fuel, slot_steps, slot_s, geometry: Geometry):
-    from geojax.loop.rollout import simulate
+    from geojax.runner.rollout import simulate
 
     concurrent = 1 if geometry.one_at_a_time else len(geometry.generators)
     return simulate(uncontrolled, 0, controller=replay(u, fuel, slot_steps, slot_s, concurrent), keep_steps=False)

@@ -1,4 +1,4 @@
-"""Station-keeping controllers (DESIGN.md layer 4): one module per controller, on the protocol of ``control.base``.
+"""Station-keeping controllers (docs/design.md: controllers and parts): one module per controller, on the protocol of ``control.base``.
 
 ``REGISTRY`` maps a scenario's ``controller.kind`` to its module; each module
 defines ``FIELDS`` (its ``[controller]`` keys), ``make(tables) -> Controller``

@@ -1,4 +1,4 @@
-"""The controller protocol (DESIGN.md layer 4): data plus pure functions, in the optax manner.
+"""The controller protocol (docs/design.md: controllers and parts): data plus pure functions, in the optax manner.
 
 A controller is a ``Controller(init, plan, thrust)`` of pure functions that the
 one closed loop (``geojax.loop.simulate``) calls:

@@ -1,6 +1,6 @@
 """State predictor (Li 2022, Sec. 4.1, eqs. (24)-(27)) and the mean-element estimate it starts from.
 
-Uncontrolled propagations (``geojax.loop.setup.reference``: the closed loop
+Uncontrolled propagations (``geojax.runner.setup.reference``: the closed loop
 with the null controller), done once per scenario and shared by a batch, give
 at every cycle boundary the osculating elements and the mean elements
 (eq. (9)).  From them:
@@ -20,7 +20,7 @@ uncontrolled run from the initial state does not: its inclination grows by
 the inclination drift by ~4 deg/yr x i, so the drift it predicts in a run's
 third year is no longer the controlled satellite's.  The reference is therefore
 re-started from the station's nominal state (``station_mee``) every
-``loop.setup.REFERENCE_SEGMENT_CYCLES`` cycles; each cycle reads the segment it
+``runner.setup.REFERENCE_SEGMENT_CYCLES`` cycles; each cycle reads the segment it
 falls in (``Reference``).
 
 Boundary means are the average of the two cycle means around a boundary

@@ -52,7 +52,7 @@ from geojax.physics.dynamics import Thrust
 from geojax.physics.elements import wrap_angle
 from geojax.physics.trig import sincos
 from geojax.reductions import sum_over_cycles
-from geojax.scenario_schema import SCHEMA
+from geojax.params import Field
 
 # The re-acquisition law's stated constants (see the module docstring).
 TAU_CYCLES = 4.0  # the longitude offset's time constant, cycles
@@ -60,7 +60,11 @@ DRIFT_MAX_DEG_DAY = 0.5  # the fastest return drift
 ARC_EFFICIENCY = 2 * math.sqrt(2) / math.pi  # mean |cos| over the +-45 deg arcs about a node
 ARC_COS = math.cos(math.radians(45.0))
 
-FIELD = SCHEMA["controller"]["recovery"]
+# The ``controller.recovery`` key (``geojax.scenario`` joins it to the ``[controller]`` table): static, one
+# compiled loop with it and one without, for any kind.
+FIELD = Field(bool, False, static=True,
+              doc="fly a stated re-acquisition law back to the box while out of it or after a cycle without a "
+                  "solution (status still records the failure; dv_recovery_mps reports its delta-V apart)")
 
 
 class Command(NamedTuple):

@@ -35,7 +35,7 @@ def save_maneuvers(result, path: str | Path, *, frame: str = "EME2000", time_sys
     manoeuvres are in RTN).  ``ValueError`` for a controller without burns (a feedback law thrusts per step)."""
     from geojax import __version__
     from geojax.export import trajectory
-    from geojax.loop.report import scenario_of
+    from geojax.runner.report import scenario_of
     from geojax.physics.ephemeris import precession_from_j2000
     from geojax.physics.propagate import DYNAMICS
 

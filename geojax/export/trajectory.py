@@ -100,7 +100,7 @@ def save_oem(result, path: str | Path, *, oem_step_s: float | None = None, of: s
     or TT; ``object_name`` / ``object_id``: default the scenario's name.  Returns the paths written.
     """
     from geojax import __version__
-    from geojax.loop.report import scenario_of
+    from geojax.runner.report import scenario_of
 
     if frame not in FRAMES:
         raise ValueError(f"frame: must be one of {', '.join(FRAMES)}, got {frame!r}")
@@ -147,7 +147,7 @@ def save_oem(result, path: str | Path, *, oem_step_s: float | None = None, of: s
 
 def oem_states(result, oem_step_s: float | None = None, of: str = "truth") -> States:
     """The ``States`` ``save_oem`` writes (geojax ECI, SI): see the module's docstring."""
-    from geojax.loop.report import scenario_of
+    from geojax.runner.report import scenario_of
 
     sc = scenario_of(result)
     eph = result.ephemeris
@@ -225,7 +225,7 @@ def _fix_noise(key, n_cycles: int):
 def cycle_states(result) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(t_tt_s [n + 1], r_eci_m [n + 1, 3], v_eci_mps [n + 1, 3]): the true state at each of the n cycle starts
     (from the ``boundary`` records) and at the end (``result.final``), geojax ECI."""
-    from geojax.loop.report import scenario_of
+    from geojax.runner.report import scenario_of
 
     sc = scenario_of(result)
     boundary = np.asarray(result.records.cycles.boundary, dtype=float)
@@ -260,7 +260,7 @@ def mee_of_boundary(boundary, earth_angle_rad, iterations: int = 8) -> np.ndarra
 
 def run_burns(result) -> Burns | None:
     """The burns a planner fired (``Burns``), in time order; None for a controller without burn records."""
-    from geojax.loop.report import scenario_of
+    from geojax.runner.report import scenario_of
 
     rec = result.records.cycles.controller
     if not {"fired_s", "start_s", "directions_rsw"} <= set(rec):

@@ -1,4 +1,4 @@
-"""Metrics and status of a rollout, in JAX so a batch computes them inside ``vmap`` (DESIGN.md "Contracts").
+"""Metrics and status of a rollout, in JAX so a batch computes them inside ``vmap`` (docs/design.md "Contracts").
 
 One function, ``summarize``, for every controller: units are in the names,
 Delta-V per year is scaled here and nowhere else, and the status code is

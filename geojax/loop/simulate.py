@@ -1,4 +1,4 @@
-"""One closed loop for every controller (DESIGN.md layer 5).
+"""One closed loop for every controller (docs/design.md: the engine).
 
 ``simulate`` is an outer ``lax.scan`` over control cycles (one sidereal day
 each, ``jax.checkpoint``ed, so reverse-mode memory grows with cycles, not
@@ -118,7 +118,7 @@ class Shared(NamedTuple):
 
     env: Environment  # leaves [n_cycles, n_steps, 3, ...]
     reference: Reference | None  # for n_cycles or more, reference_cycles boundaries or more; None if unused
-    # [] int: run the first n_active cycles of ``env`` only (the loop compiled for more, ``loop.setup.cycle_slots``,
+    # [] int: run the first n_active cycles of ``env`` only (the loop compiled for more, ``runner.setup.cycle_slots``,
     # so that other durations reuse it); None: all of them
     n_active: jnp.ndarray | None = None
 

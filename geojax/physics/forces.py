@@ -11,7 +11,7 @@ whose switches (1.0 on, 0.0 off) and coefficients are all array leaves, so a
 sweep can vary any of them without recompiling and a gradient can flow into
 any coefficient.  ``Environment`` holds what is the same for every sample of a
 batch at one instant (Sun and Moon positions, Earth rotation angle); it is
-computed once per scenario (DESIGN.md, "Ephemerides are batch-invariant").
+computed once per scenario (docs/design.md, "Ephemerides are batch-invariant").
 """
 
 from __future__ import annotations

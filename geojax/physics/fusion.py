@@ -1,4 +1,4 @@
-"""Fusion boundaries for XLA's CPU compiler (DESIGN.md, "A step is a few fused kernels").
+"""Fusion boundaries for XLA's CPU compiler (docs/design.md, "A step is a few fused kernels").
 
 XLA's CPU fusion copies an elementwise producer into every consumer fusion that
 reads it, however expensive the producer: in the MEE step, cos L and sin L were

@@ -151,7 +151,7 @@ def figure_path(run, folder: str | Path, what: str) -> Path:
 
 
 def _title_dpi(run) -> tuple[str, int]:
-    from geojax.loop.report import run_title
+    from geojax.runner.report import run_title
 
     return getattr(run, "title", None) or run_title(run.scenario), getattr(run, "dpi", 150)
 

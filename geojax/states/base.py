@@ -1,4 +1,4 @@
-"""The protocol of the loop's further states (DESIGN.md layer 5): data plus pure functions, as controllers are.
+"""The protocol of the loop's further states (docs/design.md: the engine): data plus pure functions, as controllers are.
 
 Beyond the orbit and the mass, the closed loop (``geojax.loop.simulate``) carries further states of the
 spacecraft -- the wheels' momentum (``states.momentum``), later a navigation filter's estimate and covariance --
@@ -159,7 +159,9 @@ class Part(NamedTuple):
     statuses: tuple = ()  # meanings of the failure codes its model sets (``StateModel.status`` among them)
     descriptions: dict = {}  # {metric or column name: one line} for results files, summaries and docs
     constraints: tuple = ()  # ``Constraint`` s a tuning keeps (``geojax.tune``)
-    figures: Callable | None = None  # (result, folder) -> [paths of the figures it drew]
+    # (result, folder) -> [paths of the figures it drew], or its import path ("geojax.plots.parts:wheel_figures"),
+    # resolved by the runner when a run's figures are drawn: a part's module need not import the figures' code
+    figures: Callable | str | None = None
     # the model where it does not depend on the table (a user's own), or the one whose metrics and columns serve
     # every table (a registered part's)
     model: StateModel | None = None

@@ -420,14 +420,6 @@ DESCRIPTIONS = {
 }
 
 
-def figures(result, folder) -> list:
-    """The wheels' figure of a run: the momentum per cycle against the capacity (``plots.parts.wheel_figures``;
-    imported here, not with the module: the engine draws no figure)."""
-    from geojax.plots.parts import wheel_figures
-
-    return wheel_figures(result, folder)
-
-
 def within_capacity(params, metrics: dict):
     """The tuner's constraint of the wheels: (largest |h| / capacity)^2 - 1, <= 0 within the capacity."""
     return (metrics["max_wheel_momentum_nms"] / params.states[NAME]["wheel_capacity_nms"]) ** 2 - 1.0
@@ -467,4 +459,4 @@ def validate(config: dict) -> None:
 
 PART = Part(NAME, table="attitude", fields=FIELDS, select=lambda table: MODEL if table["wheels"] else None,
             validate=validate, statuses=(SATURATED,), descriptions=DESCRIPTIONS, constraints=(Constraint("wheels", within_capacity, SATURATED),),
-            figures=figures, model=MODEL)
+            figures="geojax.plots.parts:wheel_figures", model=MODEL)

@@ -619,16 +619,7 @@ DESCRIPTIONS = {
 }
 
 
-def figures(result, folder) -> list:
-    """The filter's figures of a run: its error against ±3 sigma per RSW axis, its NEES and NIS against their chi^2
-    intervals (``plots.parts.navigation_figures``; imported here, not with the module: the engine draws no
-    figure)."""
-    from geojax.plots.parts import navigation_figures
-
-    return navigation_figures(result, folder)
-
-
 PART = Part(NAME, table="navigation", fields=KEYS,
             select=lambda table: model(layout_of(table)) if table["model"] == "ekf" else None,
-            leaves=leaves_of, validate=check_with, descriptions=DESCRIPTIONS, figures=figures,
+            leaves=leaves_of, validate=check_with, descriptions=DESCRIPTIONS, figures="geojax.plots.parts:navigation_figures",
             model=MODEL)  # its metrics and columns, which do not depend on the layout

@@ -1,4 +1,4 @@
-"""Monte Carlo sweeps: a grid over scenario parameters x repetitions x controllers (DESIGN.md "Contracts", "Scale").
+"""Monte Carlo sweeps: a grid over scenario parameters x repetitions x controllers (docs/design.md "Contracts", "Scale").
 
 A sweep file names a base scenario, fixed overrides, a grid of values for
 any scenario keys given by dotted paths (``thrusters.beta_max_deg``,

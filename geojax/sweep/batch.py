@@ -13,9 +13,9 @@ from geojax import lanes as lanes_mod
 from geojax.sweep import epochs as epoch_axis
 from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.loop.metrics import CYCLE_NAMES, cycle_series
-from geojax.loop.rollout import rollout_fn
+from geojax.runner.rollout import rollout_fn
 from geojax.control import REGISTRY
-from geojax.loop.setup import (Batch, controller_of, cycle_count, disperse, prepare, program_identity,
+from geojax.runner.setup import (Batch, controller_of, cycle_count, disperse, prepare, program_identity,
                                reference_per_sample)
 from geojax.params import static_settings
 from geojax.states import of_config as states_of

@@ -1,4 +1,4 @@
-"""Sweeps beyond one machine: each chunk a Ray task on a worker that compiled once (DESIGN.md, "Scale").
+"""Sweeps beyond one machine: each chunk a Ray task on a worker that compiled once (docs/design.md, "Scale").
 
 ``geojax sweep SWEEP.toml --out FILE.h5 --ray [ADDRESS]`` (``sweep.run_sweep(..., ray=ADDRESS)``) plans the
 chunks exactly as a local sweep does and hands them to Ray.  The workers are Ray actors, by default one

@@ -11,7 +11,7 @@ two epochs), the same station, the same [set] keys.  So the axis answers "what d
 Y", which is what a lifetime budget or the 18.6-year lunar node cycle asks; a plain ``[set] "epoch.utc"``
 keeps the scenario's inertial elements, as a scenario file does.
 
-Design: the Sun and Moon stay batch-invariant (DESIGN.md, "Ephemerides are batch-invariant").  The points of
+Design: the Sun and Moon stay batch-invariant (docs/design.md, "Ephemerides are batch-invariant").  The points of
 one epoch form a group that shares its environment grid (Sun, Moon, Earth angle at every RK4 stage), its
 predictor reference and its Earth angle at the start (the dispersion's ECEF offsets); a compiled call never
 mixes two epochs, and the one compiled program takes those arrays as arguments, so it is compiled once and
@@ -32,7 +32,7 @@ import datetime as dt
 import numpy as np
 
 KEY = "epoch.utc"
-# What depends on the epoch and so may differ between the groups, though not within one (loop.setup.STATIC_KEYS).
+# What depends on the epoch and so may differ between the groups, though not within one (runner.setup.STATIC_KEYS).
 STATIC_KEYS = ("epoch.utc", "epoch.ut1_minus_utc_s")
 
 

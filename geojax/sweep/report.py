@@ -53,9 +53,9 @@ def summary(spec, groups) -> list[str]:
 
 def extrapolated(spec) -> str:
     """What a yearly rate of the sweep's samples is, where they fly less than a year: " (extrapolated from 10
-    days)" ("" for a year or more), as ``geojax simulate``'s summary says it (``loop.report.row_notes``)."""
+    days)" ("" for a year or more), as ``geojax simulate``'s summary says it (``runner.report.row_notes``)."""
     from geojax.loop.metrics import YEAR_CYCLES
-    from geojax.loop.setup import cycle_count
+    from geojax.runner.setup import cycle_count
     from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
     from geojax.sweep.spec import _scenario
 

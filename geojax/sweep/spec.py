@@ -124,8 +124,8 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
 
 def prepare_check(sweep: Sweep, controller: str) -> None:
     """Load every grid point's scenario (the ranges and checks of ``geojax.scenario``) and check that they
-    differ only in array leaves (``loop.setup``), naming the grid key at fault."""
-    from geojax.loop.setup import _check_static, controller_of
+    differ only in array leaves (``runner.setup``), naming the grid key at fault."""
+    from geojax.runner.setup import _check_static, controller_of
 
     points = list(_points(sweep))
     scenarios = [_scenario(sweep, controller, p) for p in points]

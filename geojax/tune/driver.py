@@ -20,7 +20,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.loop.setup import controller_of
+from geojax.runner.setup import controller_of
 from geojax.params import Params
 from geojax.tune import adam, sqp
 from geojax.tune.objective import Problem

@@ -23,8 +23,8 @@ from geojax import scenario as scenario_mod
 from geojax.control.base import SURROGATE_TEMPERATURE, Controller
 from geojax import states as parts
 from geojax.loop.metrics import STATUS_LEFT_LAT_BOX, STATUS_LEFT_LON_BOX, STATUS_NONFINITE
-from geojax.loop.rollout import rollout_fn
-from geojax.loop.setup import prepare, unstack
+from geojax.runner.rollout import rollout_fn
+from geojax.runner.setup import prepare, unstack
 from geojax.parallel import shard_batch
 from geojax.params import Params
 from geojax.tune.space import from_theta, tuned

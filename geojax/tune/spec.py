@@ -23,7 +23,7 @@ from pathlib import Path
 
 from geojax import scenario as scenario_mod
 from geojax.control.base import Controller
-from geojax.loop.setup import controller_of, cycle_count
+from geojax.runner.setup import controller_of, cycle_count
 from geojax.params import REQUIRED, Field, check_table
 from geojax.tune.space import resolve, tunable, tuned
 

@@ -42,7 +42,7 @@ from geojax import plots
 from geojax.control import qffc
 from geojax.control.effects import V_SYNC_MPS, remaining_fraction
 from geojax.control.predictor import estimate_mean, predict_next
-from geojax.loop.setup import controller_of, prepare
+from geojax.runner.setup import controller_of, prepare
 from geojax.physics.elements import wrap_angle
 
 HERE = Path(__file__).resolve().parent

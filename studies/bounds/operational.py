@@ -33,7 +33,7 @@ from geojax.bound import bound, replay  # noqa: E402
 from geojax.bound import operational as op  # noqa: E402
 from geojax.bound.directions import geometry_of  # noqa: E402
 from geojax.bound.run import BOX_MARGIN, _uncontrolled  # noqa: E402
-from geojax.loop.rollout import simulate  # noqa: E402
+from geojax.runner.rollout import simulate  # noqa: E402
 from geojax.papers import GAZZINO2016  # noqa: E402
 
 HERE = Path(__file__).resolve().parent

@@ -25,7 +25,7 @@ from types import SimpleNamespace  # noqa: E402
 
 import geojax  # noqa: E402
 from geojax import plots, scenario  # noqa: E402
-from geojax.loop.report import reference_and_target  # noqa: E402
+from geojax.runner.report import reference_and_target  # noqa: E402
 from geojax.papers import LI2022 as PAPER  # noqa: E402  (Sec. 5.1 and Table 2, normal limits)
 from geojax.physics.propulsion import PRESETS_DEG  # noqa: E402
 

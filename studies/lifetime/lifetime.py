@@ -11,7 +11,7 @@
    mission is draw r of each year: every year's errors are independent), then the propellant by the rocket
    equation, m_p = m_0 (1 - exp(-Delta-V / (Isp g0))), with the scenario's m_0 and Isp; percentiles over the draws.
    Why a sum of fresh years is the mission's figure: each year is a run of its own from the station, and the
-   predictor's reference is re-started from the station every 30 cycles (``loop.setup.REFERENCE_SEGMENT_CYCLES``),
+   predictor's reference is re-started from the station every 30 cycles (``runner.setup.REFERENCE_SEGMENT_CYCLES``),
    so a long run's year k costs what a fresh run of year k costs (issue 32 item 1: the third year within 0.1 %
    for the QFFC and the FOMPC, the tenth of a QFFC run within 0.03 %); the satellite's state at a year's start
    is the box's, whatever came before, and the thrusters do not care about the mass but through the burn
@@ -53,7 +53,7 @@ from geojax import scenario, sweep  # noqa: E402
 from geojax.control.effects import V_SYNC_MPS  # noqa: E402
 from geojax.sweep.epochs import as_years  # noqa: E402
 from geojax.loop.metrics import YEAR_CYCLES  # noqa: E402
-from geojax.loop.rollout import simulate  # noqa: E402
+from geojax.runner.rollout import simulate  # noqa: E402
 from geojax.physics.constants import G0_MPS2, SECONDS_PER_DAY, SIDEREAL_DAY_S  # noqa: E402
 from geojax.physics.time import julian_centuries_tt  # noqa: E402
 

@@ -7,7 +7,7 @@
 The predictor (``control.predictor``, Li 2022 eqs. (24)-(27)) takes the natural drift of the mean elements
 and the short-period offsets from an uncontrolled reference shared by the batch.  Run once from the initial
 state, that reference drifts away from the station (its inclination grows ~0.9 deg a year), and a long run
-costs more every year.  ``loop.setup`` now re-starts it from the station's nominal state every
+costs more every year.  ``runner.setup`` now re-starts it from the station's nominal state every
 ``REFERENCE_SEGMENT_CYCLES`` cycles.  For each controller (li2022-<controller>, no orbit or attitude errors,
 seed 0) and each segment length (0: never re-started, the reference of before issue 32) this script measures
 
@@ -27,7 +27,7 @@ seed 0) and each segment length (0: never re-started, the reference of before is
   independent uncontrolled propagation (Cartesian dynamics) started from the controlled orbit's true state,
   every 10th cycle: RMS of |predicted - propagated| / RMS |propagated|, per year.
 
-The segment length of ``loop.setup.REFERENCE_SEGMENT_CYCLES`` was chosen with
+The segment length of ``runner.setup.REFERENCE_SEGMENT_CYCLES`` was chosen with
 ``--controllers qffc --segments 10,30,91,366 --long-controllers "" --name segment_length``.
 
 Writes ``predictor_reference.md`` and ``.json`` (``--controllers`` over ``--years``; ``--name``), and
@@ -50,8 +50,8 @@ import numpy as np
 from geojax import scenario
 from geojax.control.effects import V_SYNC_MPS
 from geojax.loop.metrics import YEAR_CYCLES
-from geojax.loop.rollout import rollout_fn
-from geojax.loop.setup import prepare, unstack
+from geojax.runner.rollout import rollout_fn
+from geojax.runner.setup import prepare, unstack
 from geojax.loop.simulate import propagate
 from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.physics.dynamics import SpacecraftState

@@ -31,7 +31,7 @@ import numpy as np
 import geojax
 from geojax import scenario
 from geojax.loop.metrics import STATUS_MEANINGS
-from geojax.loop.rollout import simulate_batch
+from geojax.runner.rollout import simulate_batch
 from geojax.states import momentum
 
 HERE = Path(__file__).resolve().parent

@@ -32,7 +32,7 @@ import numpy as np
 import geojax
 from geojax import scenario
 from geojax.loop.metrics import STATUS_MEANINGS
-from geojax.loop.rollout import simulate, simulate_batch
+from geojax.runner.rollout import simulate, simulate_batch
 from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 

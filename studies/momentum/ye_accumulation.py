@@ -38,7 +38,7 @@ import numpy as np
 import geojax
 from geojax import scenario
 from geojax.loop.metrics import STATUS_MEANINGS
-from geojax.loop.rollout import simulate_batch
+from geojax.runner.rollout import simulate_batch
 from geojax.physics import constants as c
 from geojax.physics.ephemeris import sun_position_eci_m
 

@@ -26,8 +26,8 @@ import numpy as np
 import geojax
 from geojax import scenario
 from geojax.loop.metrics import STATUS_MEANINGS
-from geojax.loop.rollout import simulate_batch
-from geojax.loop.setup import cycle_count
+from geojax.runner.rollout import simulate_batch
+from geojax.runner.setup import cycle_count
 from geojax.navigation.ekf import chi2_bounds
 
 HERE = Path(__file__).resolve().parent

@@ -26,7 +26,7 @@ import numpy as np
 import geojax
 from geojax import scenario
 from geojax.loop.metrics import STATUS_MEANINGS
-from geojax.loop.rollout import simulate_batch
+from geojax.runner.rollout import simulate_batch
 
 HERE = Path(__file__).resolve().parent
 PASSES_S = (7200.0, 14400.0)

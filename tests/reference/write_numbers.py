@@ -17,8 +17,8 @@ import numpy as np
 
 import geojax
 from geojax import scenario
-from geojax.loop import setup
-from geojax.loop.rollout import rollout_fn, simulate
+from geojax.runner import setup
+from geojax.runner.rollout import rollout_fn, simulate
 
 HERE = Path(__file__).resolve().parent
 DAYS = 4

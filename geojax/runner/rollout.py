@@ -22,11 +22,11 @@ from geojax.control.base import Controller, keeps_steps
 from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
 from geojax.export import maneuvers, recorder, trajectory
-from geojax.loop import report
+from geojax.runner import report
 from geojax import compilation, traced
 from geojax import states as parts
 from geojax.parallel import Background
-from geojax.loop.setup import Batch, controller_of, padded, prepare, program_identity, reference, unstack
+from geojax.runner.setup import Batch, controller_of, padded, prepare, program_identity, reference, unstack
 from geojax.params import static_settings
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
@@ -77,8 +77,8 @@ def rollout(params: Params, key, shared: Shared, reference_env=None, *, controll
             dynamics: Dynamics, keep_steps: bool = False, states: tuple = ()):
     """One sample's closed loop and its metrics: ``(final state, records, metrics)``; pure, vmappable.
 
-    ``reference_env`` (the reference's ``loop.setup.Segments``) makes the sample run its own uncontrolled
-    reference (``loop.setup.reference``) instead of ``shared.reference``; ``controller``, ``step_s``,
+    ``reference_env`` (the reference's ``runner.setup.Segments``) makes the sample run its own uncontrolled
+    reference (``runner.setup.reference``) instead of ``shared.reference``; ``controller``, ``step_s``,
     ``dynamics``, ``keep_steps`` and ``states`` (the further states carried, ``geojax.states``) are static.
     """
     final, records = loop(params, key, shared, reference_env, controller=controller, step_s=step_s,
@@ -92,7 +92,7 @@ def loop(params: Params, key, shared: Shared, reference_env=None, *, controller:
     ``shared.env`` (the run's first ``shared.n_active``, zeros beyond)."""
     if reference_env is not None:
         own = reference(params, reference_env, step_s, dynamics, controller.reference_cycles)
-        slots = shared.env.earth_angle_rad.shape[0]  # the loop's cycle slots (``loop.setup.prepare(pad=True)``)
+        slots = shared.env.earth_angle_rad.shape[0]  # the loop's cycle slots (``runner.setup.prepare(pad=True)``)
         if own.osc.shape[0] < slots:
             own = padded(own, slots)
         shared = shared._replace(reference=own)

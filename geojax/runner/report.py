@@ -11,6 +11,7 @@ default: it has no reference run) the per-step ``/steps`` (``loop.metrics.step_t
 
 from __future__ import annotations
 
+import importlib
 import math
 from pathlib import Path
 
@@ -21,7 +22,7 @@ from geojax.control import none
 from geojax.loop.metrics import STATUS_MEANINGS, STATUS_TEXT, YEAR_CYCLES, step_table
 from geojax import compilation, traced
 from geojax import states as parts
-from geojax.loop.setup import (controller_of, cycle_count, environment_cycles, params_of, program_identity,
+from geojax.runner.setup import (controller_of, cycle_count, environment_cycles, params_of, program_identity,
                                uncontrolled_boundaries)
 from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.propagate import DYNAMICS, environment_grid, for_one_sample, steps_per_cycle
@@ -138,7 +139,15 @@ def part_figures(run, folder: str | Path) -> list[Path]:
     """The figures every part the run carried declares (``states.base.Part.figures``), in the loop's order:
     ``run`` a single run's ``Result`` or a results file read back (``geojax.figures.FileRun``)."""
     return [path for part in parts.parts_of(run.states) if part.figures is not None
-            for path in part.figures(run, Path(folder))]
+            for path in _resolved(part.figures)(run, Path(folder))]
+
+
+def _resolved(figures):
+    """A part's figures function, imported where the part names it by its path (``"module:function"``)."""
+    if callable(figures):
+        return figures
+    module, _, name = figures.partition(":")
+    return getattr(importlib.import_module(module), name)
 
 
 def run_title(sc: Scenario) -> str:
