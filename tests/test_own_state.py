@@ -47,3 +47,25 @@ def test_its_failure_is_a_status_code_of_its_own(tmp_path):
     r = example.result
     assert r.status_meanings[int(r.status)] == "thruster past its qualified hours"
     assert int(r.status) == len(r.status_meanings) - 1 > 6  # after the loop's and the shipped parts' codes
+
+
+def test_a_part_of_ones_own_declares_its_figures(tmp_path):
+    """A user's ``Part`` (its model, its descriptions, its figures) passed to ``simulate``: ``Result.plot`` draws
+    its figure beside the run's, from the records the part made."""
+    import geojax
+
+    (tmp_path / "module").mkdir()
+    example = _docs_example(tmp_path / "module", replace=(('"duration.days": 10', '"duration.days": 3'),))
+
+    def figure(result, folder):
+        path = folder / "wear.txt"
+        path.write_text(str(float(result.records.cycles.states["wear"]["firing_s"][-1])))
+        return [path]
+
+    part = geojax.Part("wear", model=example.WEAR, figures=figure)
+    sc = geojax.load_scenario("li2022-qffc", {"duration.days": 3})
+    r = geojax.simulate(sc, seed=0, states=(part,))
+    drawn = r.plot(tmp_path / "figs")
+    assert tmp_path / "figs" / "wear.txt" in drawn
+    assert np.isclose(float((tmp_path / "figs" / "wear.txt").read_text()), r.metrics["wear_firing_hours"] * 3600.0,
+                      rtol=1e-14)

@@ -138,7 +138,8 @@ def plot(result, folder: str | Path, reference=None) -> list[Path]:
 def part_figures(run, folder: str | Path) -> list[Path]:
     """The figures every part the run carried declares (``states.base.Part.figures``), in the loop's order:
     ``run`` a single run's ``Result`` or a results file read back (``geojax.figures.FileRun``)."""
-    return [path for part in parts.parts_of(run.states) if part.figures is not None
+    carried = getattr(run, "parts", ()) or parts.parts_of(run.states)
+    return [path for part in carried if part.figures is not None
             for path in _resolved(part.figures)(run, Path(folder))]
 
 

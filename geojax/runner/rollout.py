@@ -56,6 +56,7 @@ class Result(NamedTuple):
     scenario: Scenario | None = None  # a single rollout's
     seed: int | None = None  # a single rollout's, None where it was given a key
     states: tuple = ()  # the models of the parts the loop carried (``geojax.states``)
+    parts: tuple = ()  # their ``Part`` s (a user's own as given): their figures and descriptions
     ephemeris: recorder.Ephemeris | None = None  # per step, where asked for (``simulate(..., ephemeris=True)``)
 
     @property
@@ -226,7 +227,8 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     kept = None if kept is None else recorder.Ephemeris(*(None if x is None else to_host(x, n, batch.n_cycles)
                                                           for x in kept))
     return Result(metrics, status, records, to_numpy(final), jax.tree_util.tree_map(np.asarray, params),
-                  batch.step_s, time.perf_counter() - start, compile_s, run_s, states=batch.states, ephemeris=kept)
+                  batch.step_s, time.perf_counter() - start, compile_s, run_s, states=batch.states,
+                  parts=parts.parts_of(batch.states, states), ephemeris=kept)
 
 
 def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, own_states: bool, ephemeris, batch: Batch):

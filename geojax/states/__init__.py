@@ -6,12 +6,13 @@ the parts' scenario tables, the models a scenario turns on, their ``Params`` lea
 from __future__ import annotations
 
 from geojax.params import table_leaves
-from geojax.states import momentum, navigation
+from geojax.states import momentum, navigation, wear
 from geojax.states.base import Part, StateModel, part_of
 
 REGISTRY: tuple[Part, ...] = (
     momentum.PART,  # the reaction wheels' momentum ([attitude] wheels = true)
     navigation.PART,  # the orbit-determination filter ([navigation] model = "ekf")
+    wear.PART,  # the thrusters' firing hours and starts ([wear] enabled = true)
 )
 # The loop's own status codes; the parts' follow in the registry's order, then a user's own parts' in theirs.
 CORE_STATUSES = ("ok", "cycles without a solution", "left the longitude box", "left the latitude box",
@@ -72,17 +73,26 @@ def leaves_of(config: dict, extra: tuple = ()) -> dict:
 
 
 def validate(config: dict) -> None:
-    """Each registered part's checks across a validated scenario (in place: a part may complete its table)."""
+    """Each registered part's checks across a validated scenario (in place: a part may complete its table): where
+    its ``switch`` is off, every other key of its table keeps its default; then its own ``validate``."""
     for p in REGISTRY:
+        table = config.get(p.table, {})
+        if p.switch is not None and not table[p.switch]:
+            for key, field in p.fields.items():
+                if key != p.switch and table[key] != field.default:
+                    raise ValueError(f"{p.table}.{key}: read only where {p.table}.{p.switch} = true, got "
+                                     f"{table[key]!r}; set {p.table}.{p.switch} = true or leave it out")
         if p.validate is not None:
             table = p.validate(config)
             if table is not None:
                 config[p.table] = table
 
 
-def parts_of(models: tuple) -> tuple[Part, ...]:
-    """The ``Part`` of each model the loop carries (a registered part by its name, else the model's defaults)."""
+def parts_of(models: tuple, extra: tuple = ()) -> tuple[Part, ...]:
+    """The ``Part`` of each model the loop carries: a user's own given in ``extra`` (``Part`` s or ``StateModel`` s),
+    else a registered part, by its name, else the model's defaults."""
     known = {p.name: p for p in REGISTRY}
+    known.update({part_of(e).name: part_of(e) for e in extra})
     return tuple(known.get(m.name, part_of(m)) for m in models)
 
 

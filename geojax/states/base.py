@@ -154,6 +154,9 @@ class Part(NamedTuple):
     table: str | None = None  # its scenario table ("attitude"); None: no keys
     fields: dict = {}  # {key: params.Field} of its table
     select: Callable | None = None  # validated table -> its StateModel, or None where the table turns it off
+    # the true/false key of its table that turns it on: where it is false, every other key of the table must keep
+    # its default (a key that would not be read is refused at load, naming it)
+    switch: str | None = None
     leaves: Callable | None = None  # validated table -> {leaf: array} (default: the fields' SI leaves)
     validate: Callable | None = None  # (validated config) -> its table completed (or None: unchanged), at load
     statuses: tuple = ()  # meanings of the failure codes its model sets (``StateModel.status`` among them)

@@ -426,17 +426,13 @@ def within_capacity(params, metrics: dict):
 
 
 def validate(config: dict) -> None:
-    """Checks across the ``[attitude]`` table at load (``ValueError`` naming the key): every key but ``wheels``
-    is read only where ``attitude.wheels = true``; the inertia tensor is physical (positive definite, each
+    """Checks across the ``[attitude]`` table at load (``ValueError`` naming the key), where the wheels are
+    carried: the inertia tensor is physical (positive definite, each
     principal moment at most the sum of the other two); an SRP offset needs SRP (``forces.srp`` and
     ``spacecraft.srp_area_m2`` > 0); a dumping tilt needs a thrust arm."""
     table = config["attitude"]
     if not table["wheels"]:
-        for key, field in FIELDS.items():
-            if key != "wheels" and table[key] != field.default:
-                raise ValueError(f"attitude.{key}: read only where attitude.wheels = true, got {table[key]!r}; "
-                                 f"set attitude.wheels = true or leave it out")
-        return
+        return  # every other key at its default (``Part.switch``)
     inertia = np.asarray(inertia_matrix(np.asarray(table["inertia_kg_m2"])))
     moments = np.linalg.eigvalsh(inertia)
     if moments[0] <= 0 or moments[2] > moments[0] + moments[1] * (1 + 1e-12):
@@ -458,5 +454,6 @@ def validate(config: dict) -> None:
 
 
 PART = Part(NAME, table="attitude", fields=FIELDS, select=lambda table: MODEL if table["wheels"] else None,
+            switch="wheels",
             validate=validate, statuses=(SATURATED,), descriptions=DESCRIPTIONS, constraints=(Constraint("wheels", within_capacity, SATURATED),),
             figures="geojax.plots.parts:wheel_figures", model=MODEL)
