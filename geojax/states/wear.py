@@ -22,8 +22,8 @@ WORN = "thrusters past their qualified life"
 FIELDS = {
     "enabled": Field(bool, False, static=True, doc="count the thrusters' firing hours and starts (on/off cycles)"),
     "qualified_hours": Field(NUMBER, 9000.0, lower=0.0, upper=1e7, si="qualified_hours", unit="h",
-                             doc="firing hours the thrusters are qualified for (set your thruster's; the default is a placeholder); beyond them the sample's status "
-                                 "says so"),
+                             doc="firing hours the thrusters are qualified for (set your thruster's; the default "
+                                 "is a placeholder); beyond them the sample's status says so"),
     "qualified_starts": Field(NUMBER, 10000.0, lower=0.0, upper=1e9, si="qualified_starts", unit="",
                               doc="starts (on/off cycles) the thrusters are qualified for"),
 }
