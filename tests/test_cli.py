@@ -221,7 +221,7 @@ def test_an_installed_copy_names_the_commit_it_was_built_from(tmp_path):
 
 
 def test_a_thruster_count_the_controller_cannot_fly_exits_2(tmp_path, capsys):
-    """Issue 43, item 7: ``thrusters.count = 1`` on the QFFC (two arms) is refused in one line, exit 2."""
+    """``thrusters.count = 1`` on the QFFC (two arms) is refused in one line, exit 2."""
     path = tmp_path / "one.toml"
     path.write_text(geojax.scenario.read_text("li2022-qffc").replace("count = 2", "count = 1"))
     assert cli.main(["simulate", str(path), "--days", "1"]) == 2

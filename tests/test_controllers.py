@@ -126,7 +126,7 @@ def test_shape_setting_keys_cannot_be_swept(tmp_path):
 
 
 def test_the_thrusters_stop_when_the_propellant_is_gone():
-    """Issue 19, defect 5 (the mass went negative at Isp 1e-3 s).  Conservation: with 0.5 kg of propellant the
+    """The mass never goes below the dry mass, even at Isp 1e-3 s.  Conservation: with 0.5 kg of propellant the
     QFFC spends it, the thrusters stop at the dry mass (overshoot below one step's flow), the sample gets
     status 5, and the Delta-V delivered is the rocket equation's for the mass used."""
     from geojax.physics.constants import G0_MPS2
@@ -213,8 +213,8 @@ LAW = geojax.Controller(stateless_init, no_plan, coast)  # no keys of its own
 
 
 def test_a_controller_without_keys_runs_when_passed_in_python():
-    """Issue 43, item 12: ``fields={}`` failed with "controller.kind: must be one of ... got 'custom'", a name the
-    user never typed.  A coasting controller of one's own flies the uncontrolled orbit: no propellant used."""
+    """A controller of one's own with ``fields={}`` runs (no error naming a controller kind the user never
+    typed): a coasting one flies the uncontrolled orbit, no propellant used."""
     ns = {}
     exec(OWN_MODULE, ns)
     sc = scenario.load("li2022", {"duration.days": 1}, controller=ns["LAW"])
@@ -224,8 +224,8 @@ def test_a_controller_without_keys_runs_when_passed_in_python():
 
 @pytest.mark.slow
 def test_the_command_imports_ones_own_module_from_the_current_folder(tmp_path):
-    """Issue 43, item 12: ``geojax sweep`` found ``my_laws:LAW`` only with ``PYTHONPATH=.``.  The real console
-    script, run in the folder of ``my_laws.py`` with the sweep file elsewhere, imports it."""
+    """``geojax sweep`` finds ``my_laws:LAW`` without ``PYTHONPATH=.``: the real console script, run in the
+    folder of ``my_laws.py`` with the sweep file elsewhere, imports it."""
     import os
     import subprocess
     from pathlib import Path

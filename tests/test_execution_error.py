@@ -1,11 +1,10 @@
-"""Burn magnitude execution errors (``errors.sigma3_dv_pct``, ``control.burns.magnitude_scale``; issue 42 item 3).
+"""Burn magnitude execution errors (``errors.sigma3_dv_pct``, ``control.burns.magnitude_scale``).
 
 Checked against the documented draw, re-derived here from JAX's generator (not through geojax's function): each
 cycle's delivered Delta-V (the integrated thrust, ``/cycles/dv_mps``) equals the burns' planned magnitudes
 each times 1 + sigma3 / 3 x normal(fold_in(fold_in(key, cycle), 2))[burn], within the mass's change over a
-cycle; and the key is refused by a law that flies no planned burns.  At 0 % every number is unchanged: the
-bit-for-bit comparison with main before the key (``test_momentum.test_no_state_is_bit_for_bit_mains_numbers``)
-runs with the key at its default.
+cycle; and the key is refused by a law that flies no planned burns.  At 0 % every number is unchanged: the stored
+reference numbers (``tests/test_reference_numbers.py``) are run with the key at its default.
 """
 
 import jax

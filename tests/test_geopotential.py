@@ -162,7 +162,7 @@ def test_drift_atlas_equilibria_are_the_published_ones(degree):
 
 def test_degree_two_east_west_budget_errors_are_the_published_ones():
     # Published: a degree-2 field is off by about 19 % of the yearly east-west Delta-V at 96 deg E and by
-    # 24-31 % at 0 deg and 75 deg W (issue 33's sources).  The budget here: |a_east| of the field alone over a
+    # 24-31 % at 0 deg and 75 deg W (docs/studies.md, the force model's rows).  The budget here: |a_east| of the field alone over a
     # year (studies/force_model/drift_atlas.py), degree 2 against 20.
     spec = importlib.util.spec_from_file_location(
         "drift_atlas", Path(__file__).resolve().parents[1] / "studies" / "force_model" / "drift_atlas.py")

@@ -1,4 +1,4 @@
-"""Ctrl-C in the middle of a real ``geojax sweep`` and ``geojax tune`` (issue 43, item 13): SIGINT sent to the
+"""Ctrl-C in the middle of a real ``geojax sweep`` and ``geojax tune``: SIGINT sent to the
 console script once its first piece of work is saved.  Both end with status 130 and no abort text, say what is
 saved and how to go on (a sweep interrupted while it compiles too); the sweep's ``--resume`` finishes with the file an uninterrupted run writes.
 

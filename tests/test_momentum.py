@@ -1,17 +1,12 @@
 """The wheels' momentum (``geojax.states.momentum``) and the loop's extension point (``geojax.states.base``).
 
-Independent checks: the bit-for-bit numbers of main's code where no state is carried (a second checkout run in
-a subprocess); the SRP-offset torque's momentum against a separate quadrature of the SRP force (issue 41's
-check, within 2 %); the gravity-gradient momentum against the closed-form solutions of the body-frame equation;
-the conservation of the total angular momentum without torque (with the closed-form rotation in body axes);
-bad input refused with one line naming the key.
+Independent checks (the numbers where no state is carried are ``tests/test_reference_numbers.py``'s): the SRP-offset
+torque's momentum against a separate quadrature of the SRP force (within 2 %); the gravity-gradient momentum against
+the closed-form solutions of the body-frame equation; the conservation of the total angular momentum without torque
+(with the closed-form rotation in body axes); bad input refused with one line naming the key.
 """
 
 import json
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import jax
 import jax.numpy as jnp
@@ -21,7 +16,7 @@ import pytest
 from geojax import cli, scenario
 from geojax.runner import setup
 from geojax.loop.metrics import STATUS_MEANINGS
-from geojax.runner.rollout import rollout_fn, simulate
+from geojax.runner.rollout import simulate
 from geojax.loop.simulate import simulate as closed_loop
 from geojax.physics import constants as c
 from geojax.physics.ephemeris import sun_position_eci_m
@@ -33,77 +28,8 @@ from geojax.states.base import StateModel, ThrustContext
 
 STATUS_WHEELS_SATURATED = STATUS_MEANINGS.index(momentum.SATURATED)
 
-ROOT = Path(__file__).resolve().parents[1]
-# main just before the further states existed (5657130 added them): the numbers every run without them must keep
-BASELINE_COMMIT = "5657130^"
 DAYS = 4
 N_RATE = 2 * np.pi / c.SIDEREAL_DAY_S  # GEO mean motion, rad/s
-
-# Runs the same short rollouts with whatever geojax is on PYTHONPATH and writes every metric, the status and
-# every cycle record (but the further states', absent on main) to an .npz: the padded loop (``simulate``) for the
-# QFFC with errors and the plain scan (``rollout_fn``, what sweeps and tunings run) for Katz's continuous law.
-SNIPPET = r"""
-import sys, jax, numpy as np
-import geojax
-from geojax import scenario
-from geojax.runner import setup
-from geojax.runner.rollout import rollout_fn, simulate
-
-def flat(tree, prefix, out):
-    if hasattr(tree, "_fields"):
-        for k in tree._fields:
-            if k != "states":
-                flat(getattr(tree, k), f"{prefix}.{k}", out)
-    elif isinstance(tree, dict):
-        for k, v in tree.items():
-            flat(v, f"{prefix}.{k}", out)
-    elif tree is not None:
-        out[prefix] = np.asarray(tree)
-    return out
-
-out = {}
-sc = scenario.load("li2022-qffc", {"duration.days": DAYS, "errors.h_rv": 1.0, "errors.h_att": 1.0})
-r = simulate(sc, seed=3)
-flat(r.records, "qffc.records", out)
-flat(r.metrics, "qffc.metrics", out)
-out["qffc.status"] = np.asarray(r.status)
-batch = setup.prepare([scenario.load("katz2025-continuous", {"duration.days": DAYS})])
-params = jax.tree_util.tree_map(lambda x: x[0], batch.params)
-_, records, metrics = jax.jit(rollout_fn(batch))(params, jax.random.key(5))
-flat(records, "katz.records", out)
-flat(metrics, "katz.metrics", out)
-np.savez(sys.argv[1], **out)
-""".replace("DAYS", str(DAYS))
-
-
-def _run_snippet(pythonpath, path):
-    env = {**os.environ, "PYTHONPATH": str(pythonpath)}
-    subprocess.run([sys.executable, "-c", SNIPPET, str(path)], env=env, check=True, timeout=900)
-    with np.load(path) as data:
-        return {k: data[k] for k in data.files}
-
-
-def _baseline_checkout(folder: Path) -> Path:
-    """``geojax/`` of ``BASELINE_COMMIT`` extracted into ``folder`` (skips where the clone has no history)."""
-    if not (ROOT / ".git").exists():
-        pytest.skip("not a git checkout: no baseline commit to compare against")
-    archive = subprocess.run(["git", "-C", str(ROOT), "archive", BASELINE_COMMIT, "geojax"], capture_output=True)
-    if archive.returncode != 0:
-        pytest.skip(f"baseline {BASELINE_COMMIT} not in this clone: {archive.stderr.decode().strip()}")
-    subprocess.run(["tar", "-x", "-C", str(folder)], input=archive.stdout, check=True)
-    return folder
-
-
-def test_no_state_is_bit_for_bit_mains_numbers(tmp_path):
-    """Without ``attitude.wheels`` every record, metric and status is main's before the states existed, bit for
-    bit (padded and plain loops): the same snippet run on this checkout and on ``BASELINE_COMMIT``'s geojax."""
-    ours = _run_snippet(ROOT, tmp_path / "ours.npz")
-    (tmp_path / "baseline").mkdir()
-    mains = _run_snippet(_baseline_checkout(tmp_path / "baseline"), tmp_path / "main.npz")
-    assert sorted(ours) == sorted(mains)
-    differ = [k for k in mains if not np.array_equal(ours[k], mains[k], equal_nan=True)]
-    assert not differ, differ
-    assert any(k.startswith("qffc.records.cycles.controller") for k in ours)
 
 
 def _wheels(days=DAYS, **attitude):
@@ -113,7 +39,7 @@ def _wheels(days=DAYS, **attitude):
 
 
 def test_srp_offset_along_the_array_axis_grows_momentum_at_d_times_the_perpendicular_force():
-    """Issue 41's check.  An SRP force F acting at d along the orbit normal n_hat on a nadir-pointing body, no
+    """An SRP force F acting at d along the orbit normal n_hat on a nadir-pointing body, no
     dumping: the inertial angular momentum grows by tau = d n_hat x F, whose secular part is d |F_perp| per second
     (F_perp: F less its component along n_hat).  Expected: a separate quadrature (60 s trapezoid) of d n_hat x F
     over the run, F = -P (1 + eta) A (1 AU / rho)^2 rho_hat from the Sun's position and the station's circular
@@ -160,7 +86,7 @@ def _srp_quadrature(sc, d_m, run_s):
 
 @pytest.mark.slow
 def test_the_cli_run_of_li2022_momentum_without_dumping_stores_the_quadratures_momentum(tmp_path):
-    """Issue 41's check as a user runs it: ``geojax scenarios --show li2022-momentum`` edited to dumping off
+    """The SRP offset's momentum as a user runs it: ``geojax scenarios --show li2022-momentum`` edited to dumping off
     (``dump_angle_max_deg = 0``), ``geojax simulate FILE --days 4``: the momentum its file records (the net change
     of the wheels' momentum per day; the QFFC's burns fire through the centre of mass, so the SRP offset alone
     drives it) within 2 % of the independent quadrature of d n_hat x F."""
@@ -460,7 +386,7 @@ def test_dumping_holds_the_wheels_that_saturate_without_it():
 
 @pytest.mark.slow
 def test_a_year_of_li2022_momentum_keeps_box_and_wheels_in_every_draw_and_saturates_without_dumping():
-    """Issue 41's year check: li2022-momentum, 16 draws of Li's nominal errors (H_rv = H_att = 1), dumping on and
+    """A year of li2022-momentum, 16 draws of Li's nominal errors (H_rv = H_att = 1), dumping on and
     off on the same draws in one batch.  On: every draw keeps the box and its wheels under capacity (status 0).
     Off: every draw saturates its 50 N m s wheels within days (status 6), while its orbit is the dumping-free one.
     The Delta-V spent on momentum (on less off, draw by draw) is under 5 % of the station keeping's."""

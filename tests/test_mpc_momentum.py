@@ -1,5 +1,5 @@
 """The MPC over orbit and wheel momentum (``control.mpc_momentum``): its program against HiGHS and against its own
-dense matrix, its linearised torque against the wheels' model in the loop, the year the issue asks for, bad input."""
+dense matrix, its linearised torque against the wheels' model in the loop, a year of station and wheels kept, bad input."""
 
 import jax
 import jax.numpy as jnp
@@ -103,8 +103,8 @@ def test_plan_predicts_the_wheels_the_loop_integrates():
 
 
 @pytest.mark.slow
-def test_issue_41_year_keeps_box_and_wheels_within_three_percent_of_the_mpc():
-    """Issue 41: the momentum MPC keeps the box and the wheels for a year on li2022-momentum's satellite (0.1 m SRP
+def test_a_year_keeps_box_and_wheels_within_three_percent_of_the_mpc():
+    """The momentum MPC keeps the box and the wheels for a year on li2022-momentum's satellite (0.1 m SRP
     offset, 50 N m s wheels) at a Delta-V within 3 % of the MPC without momentum constraints on the torque-free
     satellite (li2022-mpc), the same draws of Li's nominal errors (2 each)."""
     errors = {"errors.h_rv": 1.0, "errors.h_att": 1.0}

@@ -1,4 +1,4 @@
-"""The orbit-determination filter in the closed loop (``geojax.states.navigation``, issue 42).
+"""The orbit-determination filter in the closed loop (``geojax.states.navigation``).
 
 Each test names its independent check: the state transition matrix written out against ``jax.jacfwd`` of the
 filter's own MEE step (a second method), the filter's covariance in the loop against a batch least-squares
@@ -23,6 +23,8 @@ from geojax.loop.simulate import position_velocity
 from geojax.navigation.measurements import MODELS
 from geojax.physics.constants import OMEGA_EARTH_RAD_S
 from geojax.physics.frames import rsw_basis
+from geojax.navigation import leaves, prediction, updates
+from geojax.navigation.execution import executed, reset_execution
 from geojax.states import navigation as nav
 
 from test_navigation import _kepler
@@ -60,8 +62,8 @@ def _burning() -> Burning:
 def _predicted(b: Burning, rv, execution, state):
     """r, v [6] one step on by the filter's direct prediction (RK4 of the MEE equations, the loop's forces)."""
     mu = b.params.forces.mu_m3_s2
-    x = nav.elements_of(rv, b.params.initial.orbit, mu)
-    return nav.rv_of(nav.predict(x, execution, 5000.0, state, b.env3, b.params.forces, b.step_s), mu)
+    x = prediction.elements_of(rv, b.params.initial.orbit, mu)
+    return prediction.rv_of(prediction.predict(x, execution, 5000.0, state, b.env3, b.params.forces, b.step_s), mu)
 
 
 @pytest.mark.slow  # the suite's budget: the error-state test below checks the matrix's effect in the default tier
@@ -73,7 +75,7 @@ def test_transition_matrix_against_jacfwd_of_the_filter_step():
     b = _burning()
     expected = jax.jacfwd(lambda y: jnp.concatenate([_predicted(b, y[:6], y[6:], b.state), y[6:]]))(
         jnp.concatenate([b.truth, jnp.zeros(4)]))
-    got = nav.transition(b.truth, 5000.0, b.state, b.step_s, b.params.forces.mu_m3_s2)
+    got = prediction.transition(b.truth, 5000.0, b.state, b.step_s, b.params.forces.mu_m3_s2)
     for rows, cols in ((slice(0, 3), slice(0, 3)), (slice(0, 3), slice(3, 6)), (slice(3, 6), slice(0, 3)),
                        (slice(3, 6), slice(3, 6)), (slice(0, 6), slice(6, 10))):
         block, want = np.asarray(got[rows, cols]), np.asarray(expected[rows, cols])
@@ -98,18 +100,18 @@ def test_error_state_prediction_is_the_direct_prediction():
     estimate = b.truth + jnp.array([600.0, -700.0, 387.3, 0.06, 0.05, -0.058])
     truth_end = _predicted(b, b.truth, truth_e, state)
     direct = _predicted(b, estimate, estimate_e, state)
-    direction_flown, thrust_flown = nav.executed(state.planned_direction_rsw, 0.5, truth_e[0], truth_e[1:])
+    direction_flown, thrust_flown = executed(state.planned_direction_rsw, 0.5, truth_e[0], truth_e[1:])
     ctx = StepContext(jnp.asarray(0.0), b.step_s, b.env3, b.truth[:3], b.truth[3:], truth_end[:3], truth_end[3:],
                       jnp.asarray(5000.0), Thrust(direction_flown, thrust_flown, 2250.0, 0.7), b.params.forces)
-    f = nav.transition(b.truth, 5000.0, state, b.step_s, b.params.forces.mu_m3_s2)
-    got = nav.error_state_prediction(nav.layout_of(b.sc.config["navigation"]), f, state._replace(x=estimate), ctx,
-                                     b.truth)
+    f = prediction.transition(b.truth, 5000.0, state, b.step_s, b.params.forces.mu_m3_s2)
+    got = prediction.error_state_prediction(leaves.layout_of(b.sc.config["navigation"]), f,
+                                            state._replace(x=estimate), ctx, b.truth)
     assert np.max(np.abs(np.asarray(got - direct)[:3])) < 5e-3
     assert np.max(np.abs(np.asarray(got - direct)[3:])) < 5e-6
 
 
 def test_filter_in_the_loop_reaches_the_cramer_rao_bound():
-    """Issue 42's check (independent method): an uncontrolled satellite under point-mass gravity, ranged by
+    """Independent method: an uncontrolled satellite under point-mass gravity, ranged by
     li2022-qffc-ranging's two stations at every step end for three days (continuous passes, 5 m), no execution
     errors or process noise.  The filter's 1-sigma in R, S, W at the fourth cycle start (recorded by the loop)
     against the batch least-squares bound of the same measurements: the information P0^-1 + sum (H_k Phi_k)^T
@@ -133,7 +135,7 @@ def test_filter_in_the_loop_reaches_the_cramer_rao_bound():
     angle0 = float(setup.shared.env.earth_angle_rad[0, 0, 0])
     step_s = setup.step_s
     times = step_s * jnp.arange(1, 3 * 96 + 1)
-    stations = nav.stations_of(params.states[nav.NAME])
+    stations = leaves.stations_of(params.states[nav.NAME])
 
     def ranges(x, t):
         angle = angle0 + OMEGA_EARTH_RAD_S * t
@@ -197,7 +199,7 @@ def test_the_scenario_written_back_as_toml_loads_as_itself():
                                  "'angles', got 'lidar'"),
 ])
 def test_bad_navigation_input_exits_2_with_one_line_and_writes_nothing(edit, message, tmp_path, capsys):
-    """The command line's contract for issue 42's bad input: the shipped scenario with one key of its first
+    """The command line's contract for bad navigation input: the shipped scenario with one key of its first
     station broken; exit 2, one line naming the key, nothing written."""
     assert cli.main(["scenarios", "--show", "li2022-qffc-ranging"]) == 0
     text = capsys.readouterr().out
@@ -244,26 +246,26 @@ def test_an_estimated_bias_is_updated_as_the_scalar_kalman_filter_says():
                                                "navigation.estimate_biases": True,
                                                **{f"navigation.stations[{i}].range_bias_sigma_m": sigma_b
                                                   for i in range(2)}})
-    layout = nav.layout_of(sc.config["navigation"])
-    assert nav.n_biases(layout) == 2
+    layout = leaves.layout_of(sc.config["navigation"])
+    assert leaves.n_biases(layout) == 2
     params = jax.tree_util.tree_map(lambda x: x[0], prepare([sc]).params)
     mu = params.forces.mu_m3_s2
     state = nav.init(layout, params, b.truth[:3], b.truth[3:], None, params.forces)
     assert state.p.shape == (12, 12)
     np.testing.assert_array_equal(np.asarray(state.p[10:, 10:]), np.diag([sigma_b**2] * 2))
-    f = nav.transition(b.truth, 5000.0, state._replace(**{k: getattr(b.state, k) for k in (
+    f = prediction.transition(b.truth, 5000.0, state._replace(**{k: getattr(b.state, k) for k in (
         "planned_direction_rsw", "planned_thrust_n", "planned_on_fraction", "isp_s")}), b.step_s, mu)
     np.testing.assert_array_equal(np.asarray(f[10:]), np.eye(12)[10:])
     np.testing.assert_array_equal(np.asarray(f[:10, 10:]), np.zeros((10, 2)))
     correlated = state.p.at[0, 10].set(30.0).at[10, 0].set(30.0).at[6, 0].set(1.0).at[0, 6].set(1.0)
-    reset = np.asarray(nav._reset_execution(correlated, jnp.full(4, 0.1)))
+    reset = np.asarray(reset_execution(correlated, jnp.full(4, 0.1)))
     assert reset[0, 10] == reset[10, 0] == 30.0 and reset[6, 0] == reset[0, 6] == 0.0 and reset[6, 6] == 0.1**2
 
     p = jnp.zeros((12, 12)).at[10:, 10:].set(jnp.diag(jnp.full(2, sigma_b**2)))  # only the biases unknown
     filtered = (b.truth, jnp.zeros(4), p, jnp.asarray(0.0), jnp.asarray(0.0), jnp.asarray(0.0), jnp.zeros(2))
     bias = jnp.array([17.0, -9.0])
-    out = nav._updates(layout, mu, filtered, jnp.array([1.0, 0.0]), params.states[nav.NAME], b.truth,
-                       b.env3.earth_angle_rad[2], bias, jax.random.key(4))
+    out = updates.measurement_updates(layout, mu, filtered, jnp.array([1.0, 0.0]), params.states[nav.NAME],
+                                      b.truth, b.env3.earth_angle_rad[2], bias, jax.random.key(4))
     _, _, p_after, nis_sum, _, used, estimate = (np.asarray(v) for v in out)
     big_b, big_r = sigma_b**2, sigma_r**2
     assert used == 1.0
@@ -304,8 +306,8 @@ def test_estimating_the_biases_makes_the_filter_consistent_under_them():
 
 
 @pytest.mark.slow
-def test_issue_42_year_holds_the_box_and_64_samples_are_consistent():
-    """Issue 42's check: li2022-qffc-ranging for a year, 64 draws: every draw holds the box; the NEES averaged
+def test_a_year_holds_the_box_and_64_samples_are_consistent():
+    """li2022-qffc-ranging for a year, 64 draws: every draw holds the box; the NEES averaged
     over the decision times, its mean over the draws, inside the 95 % interval of 64 chi^2(6) values (a time
     average varies less than one value: the looser test); the NIS per degree of freedom over every update of every
     draw inside the 95 % interval of chi^2 with their summed degrees of freedom (the innovations of a consistent

@@ -1,5 +1,5 @@
-"""Progress on stderr: a bar on a terminal, sparse lines off one (issue 43, item 14), and a phase (set-up,
-compiling) shown before the rate starts (issue 40); what a command's progress says is true: the cycles it counts
+"""Progress on stderr: a bar on a terminal, sparse lines off one, and a phase (set-up,
+compiling) shown before the rate starts; what a command's progress says is true: the cycles it counts
 are the run's, and a program the compilation cache served is said to be loaded, not compiled."""
 
 import io

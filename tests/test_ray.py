@@ -22,7 +22,12 @@ import h5py
 import numpy as np
 import pytest
 
-from ray.cluster_utils import Cluster  # the README's test command installs geojax[ray]
+# Every process here on the loopback address: the test cluster's nodes bind to 127.0.0.1 (``two_nodes``), and
+# Ray, which on Linux turns a loopback address given to ``ray.init`` into the machine's own IP, keeps it when told
+# that this is one host (read when ``ray`` is imported; the commands a test starts inherit it).
+os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
+
+from ray.cluster_utils import Cluster  # noqa: E402  (the README's test command installs geojax[ray])
 
 from geojax import cli, store, sweep
 from geojax.sweep import cluster
@@ -56,8 +61,9 @@ def assert_same(path, expected, what):
 
 @pytest.fixture(scope="module")
 def two_nodes():
-    nodes = Cluster(initialize_head=True, head_node_args={"num_cpus": 1})
-    nodes.add_node(num_cpus=1)
+    # Both nodes on the loopback address, as ``--ray``'s own local start does.
+    nodes = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "node_ip_address": "127.0.0.1"})
+    nodes.add_node(num_cpus=1, node_ip_address="127.0.0.1")
     nodes.wait_for_nodes()
     yield nodes.address
     nodes.shutdown()
@@ -202,7 +208,7 @@ def test_workers_without_ray_is_refused(local, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_a_local_start_finishes_beside_a_killed_cluster(tmp_path):
-    """Issue 43, item 17: after a Ray head was killed (SIGKILL, its GCS server and raylet too), ``--ray`` hung
+    """After a Ray head was killed (SIGKILL, its GCS server and raylet too), ``--ray`` hung
     ten minutes on "Failed to connect to GCS": ``ray.init()`` joined the dead cluster Ray had recorded.  Now
     ``--ray`` starts an instance of its own and the sweep finishes.  Ray's temporary folder is this test's
     own (``RAY_TMPDIR``, short: Ray's socket paths must fit 107 characters), so no other Ray run on the

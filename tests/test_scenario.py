@@ -111,7 +111,7 @@ def _unread_cases():
 
 @pytest.mark.parametrize("name, kind, key, value", list(_unread_cases()))
 def test_a_key_the_controller_does_not_read_is_refused(name, kind, key, value):
-    """Issue 43, item 7: every key is honoured or refused.  A key a controller's rollout never reads, set to
+    """Every key is honoured or refused.  A key a controller's rollout never reads, set to
     anything but its default, is refused in one line naming it and the controller."""
     with pytest.raises(ValueError) as err:
         scenario.load(name, {key: value})
@@ -120,7 +120,7 @@ def test_a_key_the_controller_does_not_read_is_refused(name, kind, key, value):
 
 
 def test_every_controller_declares_what_it_flies_and_the_count_must_match():
-    """Issue 43, item 7 (``thrusters.count = 1`` was accepted and the QFFC flew two burns per cycle): each
+    """``thrusters.count`` is checked against what the controller flies: each
     registered controller that flies thrusters says how many (the arms' planners 2, a gimbal or a manipulator
     1), a different count is refused, and an unset count takes the controller's."""
     from geojax.control import REGISTRY

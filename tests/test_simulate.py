@@ -24,7 +24,7 @@ def loop():
 def test_twenty_days_stay_in_the_box(loop):
     _, _, cycles, records = loop
     m = cycles.means
-    # Li 2022 Sec. 5.1 holds the mean longitude within +-0.013 deg; the +-0.02 deg of issue 3 is the bound.
+    # Li 2022 Sec. 5.1 holds the mean longitude within +-0.013 deg; the bound here is +-0.02 deg.
     assert np.max(np.abs(np.degrees(m.lon_rad) - 96.0)) < 0.02
     assert np.max(np.hypot(m.ex - 0.0, m.ey - 1e-4)) < 5e-5
     # The inclination vector starts 2e-5 off target (eq. (43) vs (44)) and is brought in.

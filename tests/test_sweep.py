@@ -177,10 +177,10 @@ seed = 3
 
 @pytest.mark.slow
 def test_fompc_results_do_not_depend_on_the_device_count_or_the_width(tmp_path):
-    """Issue 19, defect 4: with the batch sharded by a plain ``jit``, XLA's SPMD pipeline fused the FOMPC's
+    """With the batch sharded by a plain ``jit``, XLA's SPMD pipeline fused the FOMPC's
     annealing differently on two devices and sample (0, 1) moved by 1.4e-14 m/s/yr from cycle 17 on.  Each
     device now runs the one-device program on its share (``parallel.per_device``): bit for bit.  And 128
-    lanes instead of the FOMPC's 32 (issue 31): a step compiled for the batch's width moved the cycle means'
+    lanes instead of the FOMPC's 32: a step compiled for the batch's width moved the cycle means'
     e_x by 8e-15; it is compiled for the controller's CPU width whatever the batch."""
     spec_path = write_spec(tmp_path, FOMPC_SPEC.replace('seed = 3', 'seed = 3\ncycles = true'), "fompc.toml")
     one = sweep.run_sweep(sweep.load(spec_path), tmp_path / "one.h5", progress=False)
@@ -207,8 +207,8 @@ def test_fompc_results_do_not_depend_on_the_device_count_or_the_width(tmp_path):
 
 
 def test_a_stray_parts_folder_is_refused_in_one_line(tmp_path, capsys):
-    """Issue 19, defect 2: a parts folder that is not a geojax sweep's (no sweep.sha256) used to crash
-    ``--resume`` with FileNotFoundError; it is left alone and named."""
+    """A parts folder that is not a geojax sweep's (no sweep.sha256) does not crash ``--resume``: it is left
+    alone and named."""
     out = tmp_path / "x.h5"
     parts = out.with_name(out.name + ".parts")
     parts.mkdir()
@@ -236,7 +236,7 @@ def test_resume_onto_a_file_that_is_not_ours_is_refused_in_one_line(tmp_path, ca
 
 
 def test_a_kill_after_the_final_write_or_during_clean_up_resumes_to_the_finished_file(straight, tmp_path):
-    """Issue 19, defects 2 and 3: the parts folder is renamed before it is deleted, so a kill during the
+    """The parts folder is renamed before it is deleted, so a kill during the
     clean-up leaves it whole (or a hidden ``.trash-PID`` folder), never a folder without ``sweep.sha256``;
     ``--resume`` then returns the finished file and removes what the killed run left, its half-written
     ``.NAME.tmp-PID`` included."""

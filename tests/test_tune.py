@@ -194,7 +194,7 @@ def test_printed_constraints_are_read_back_as_excursions_in_degrees():
 
 @pytest.mark.slow
 def test_the_dump_gain_is_tuned_with_the_wheels_capacity_as_a_constraint(tmp_path):
-    """Issue 41: where the scenario carries the wheels, the tuning has a third constraint, (max |h| / capacity)² - 1,
+    """Where the scenario carries the wheels, the tuning has a third constraint, (max |h| / capacity)² - 1,
     the same as a plain simulation's largest wheel momentum gives (a second path: ``simulate``); the dumping law's
     gain is tunable (``attitude.dump_gain_per_s``, log scale); the file and the summary name the wheels."""
     from geojax.runner.rollout import simulate

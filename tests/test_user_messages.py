@@ -1,4 +1,4 @@
-"""What a user reads when a long run is resumed, interrupted or rounded (issue 35's new-user findings)."""
+"""What a user reads when a long run is resumed, interrupted or rounded."""
 
 import io
 import time

@@ -28,12 +28,12 @@ keeping the steps) and the controller's own records.  Per-step records are
 kept only on request (``keep_steps``).
 
 Beyond the orbit and the mass the loop carries the spacecraft's further states (``geojax.states``: the wheels'
-momentum), one extension point: ``states`` is a static tuple of ``StateModel`` s whose states ride in the carry (a
-dict by name), updated after each orbit step (``StateModel.step``) and at each cycle start (``StateModel.cycle``),
-and which may change the thrust flown over a step (``StateModel.thrust``: the wheels' dumping tilt) or what the
-controller is told at a cycle start (``StateModel.estimate``: the measured wheel momentum, later a filter's state in
-place of the fix), with records in ``CycleRecord.states`` and ``StepRecord.states``. With none, every dict is empty:
-no leaf, the same program and numbers.
+momentum, the navigation filter), one extension point: ``states`` is a static tuple of ``StateModel`` s whose states
+ride in the carry (a dict by name), updated after each orbit step (``StateModel.step``) and at each cycle start
+(``StateModel.cycle``), and which may change the thrust flown over a step (``StateModel.thrust``: the wheels'
+dumping tilt) or what the controller is told at a cycle start (``StateModel.estimate``: the measured wheel momentum,
+the navigation filter's estimate in place of the fix), with records in ``CycleRecord.states`` and
+``StepRecord.states``. With none, every dict is empty: no leaf, the same program and numbers.
 """
 
 from __future__ import annotations
@@ -188,12 +188,10 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
                                         ctx.t_s + j * step_s, step_s, mu)
             return (new, sums, extra), (lon, tan_lat, accel_ecef, extra_steps)
 
-        # (A carry of six separate scalars instead of the orbit array [6] was measured slower: 3.2-5.2 against
-        # 1.6-1.8 us per RHS unbatched, 146-153 against 124-128 ns at batch 1024.  The mean elements' sums are
-        # carried rather than the step states stacked: 44.6 against 41.1 ns per RHS at 512 lanes.)
-        # The sums start at a zero computed from the orbit (0 x p = +0 for MEE, +-0 for a Cartesian x: the same
-        # sums): under vmap a zero that carries the sample axis, so that vmap batches the step once, not once to
-        # find that the sums become batched and again (a two-sample QFFC loop traced in 2.1-2.3 s instead of 2.9).
+        # The orbit is carried as one array [6] and the mean elements' sums as the loop steps (docs/speed.md,
+        # "Cycle means").  The sums start at a zero computed from the orbit (0 x p = +0 for MEE, +-0 for a
+        # Cartesian x: the same sums): under vmap a zero that carries the sample axis, so that vmap batches the
+        # step once, not once to find that the sums become batched and again.
         zero = 0.0 * state.orbit[0]
         (final, (fghk_sum, a_sum), extra_end), (lon, tan_lat, accel, extra_steps) = jax.lax.scan(
             jax.checkpoint(step), (state, (jnp.zeros(4, state.orbit.dtype) + zero, zero), extra),

@@ -183,7 +183,7 @@ def _shared(env, ref, n_cycles: int, n_slots: int | None) -> Shared:
     cycles_env = jax.tree_util.tree_map(lambda x: x[:n_cycles], env)
     if n_slots is None:
         return Shared(cycles_env, ref)
-    # The environment and the reference are computed for the run's cycles as they always were (small programs;
+    # The environment and the reference are computed for the run's cycles (small programs;
     # their values at other lengths differ in the last bit, XLA's vector and scalar loops), then repeated into
     # the slots the loop skips.
     return Shared(*padded((cycles_env, ref), n_slots), jnp.asarray(n_cycles, jnp.int32))

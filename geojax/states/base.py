@@ -1,10 +1,10 @@
 """The protocol of the loop's further states (docs/design.md: the engine): data plus pure functions, as controllers are.
 
-Beyond the orbit and the mass, the closed loop (``geojax.loop.simulate``) carries further states of the
-spacecraft -- the wheels' momentum (``states.momentum``), later a navigation filter's estimate and covariance --
-through one extension point: a tuple of ``StateModel`` s, static (chosen from the scenario,
-``states.of_config``), whose states ride in the loop's carry and whose records in ``CycleRecord.states`` and
-``StepRecord.states``, dicts keyed by the model's ``name``.  A model is pure functions in the optax manner:
+Beyond the orbit and the mass, the closed loop (``geojax.loop.simulate``) carries further states of the spacecraft
+-- the wheels' momentum (``states.momentum``), the navigation filter's estimate and covariance
+(``states.navigation``) -- through one extension point: a tuple of ``StateModel`` s, static (chosen from the
+scenario, ``states.of_config``), whose states ride in the loop's carry and whose records in ``CycleRecord.states``
+and ``StepRecord.states``, dicts keyed by the model's ``name``. A model is pure functions in the optax manner:
 
 * ``init(params, r_eci_m, v_eci_mps, env, force_model) -> state``: once, from the true initial position and
   velocity and the environment at that instant (``Environment``, one instant);
@@ -28,11 +28,7 @@ through one extension point: a tuple of ``StateModel`` s, static (chosen from th
 * ``columns(cycle_records) -> {name: numpy array}`` (optional): its per-cycle series in edge units (``/cycles``).
 
 With no model (every scenario that asks for none) the carry and the records hold empty dicts: no leaf, the same
-program, every number as without the extension point (``tests/test_momentum.py`` checks it against main's code).
-
-How a navigation filter fits: its state is the estimate and covariance; ``step`` the time update with the
-thrust flown and the measurement updates at the step's times (their noise from a key its ``cycle`` keeps),
-and its ``estimate`` hook gives the controller the filter's state in place of the fix.
+program, every number as without the extension point (``tests/test_reference_numbers.py`` holds them).
 """
 
 from __future__ import annotations

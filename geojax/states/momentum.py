@@ -1,78 +1,10 @@
-"""The reaction wheels' momentum of a nadir-pointing body, a state of the loop.
+"""The reaction wheels' momentum of a nadir-pointing body, a part of the loop (``attitude.wheels = true``).
 
-The body points at nadir (``physics.attitude.nadir_frame``); its inner attitude loop holds that attitude with
-three reaction wheels along the body axes, and the attitude errors are neglected at the station-keeping time
-scale (Caverly, Di Cairano & Weiss, IEEE TCST 2021, doi:10.1109/TCST.2020.3014601).  The wheels' momentum h_w
-(body axes, N m s) is what the wheels store to hold it.
-
-The equation.  The total angular momentum of body and wheels, in body axes, is H = I omega + h_w, with I the
-body's inertia tensor (wheels included) and omega the body's rate relative to inertial space.  Euler's law holds
-in an inertial frame: dH/dt|_inertial = tau_ext, the external torque.  Seen from the body frame, which turns at
-omega, dH/dt|_inertial = dH/dt|_body + omega x H.  The attitude loop holds the nadir attitude, so omega = (0, -n,
-0), the orbit rate about the orbit normal (``physics.attitude.body_rate_rad_s``), and I omega is constant in body
-axes: d(I omega)/dt|_body = 0.  Hence
-
-    dh_w/dt|_body = tau_ext - omega x (I omega + h_w).
-
-How it is integrated.  The same equation read in the inertial frame is dH/dt = tau_ext: H in ECI is the
-integral of the torque, and the wheels' momentum is h_w = C(t) H_eci - I omega, C(t) the ECI -> body rotation.
-The loop carries H_eci, adds each step's torque impulse by the trapezoid rule over the step's two ends (the
-torques turn at the orbit rate: relative error (n h)^2 / 12 per step, 3.6e-4 at 900 s), and turns it into body
-axes at every step's end.  The gyroscopic term omega x H is then exact (no truncation error: without torque |H|
-is conserved to rounding, ``tests/test_momentum.py``).  The torques (ECI):
-
-* solar radiation pressure at a centre-of-pressure offset d from the centre of mass: tau = d x F_srp, F_srp the
-  force the orbit feels (``physics.attitude.srp_force_eci_n``); d = C^T d_body + A^T d_array, given in body axes
-  (``attitude.srp_offset_body_m``) and in the Sun-tracking array's frame (``attitude.srp_offset_array_m``: along
-  its axis, the orbit normal; across it; along its normal, ``physics.attitude.array_frame``);
-* the gravity gradient of the inertia tensor (``attitude.inertia_kg_m2``, products of inertia included):
-  tau_b = 3 mu / r^5 (r_b x I r_b).  At nadir, r_b = (0, 0, -r) and tau_b = 3 n^2 (-I_yz, I_xz, 0): zero for
-  principal body axes (the default tensor), constant for a product of inertia.
-
-* the thrusters: every controller aims its thrust line through the centre of mass of the run's start (Li 2022,
-  Sec. 2: "the torque-free direction that passes through the center of mass"), each nozzle at
-  ``attitude.thrust_arm_m`` from it on that line (r_n = -L u_hat, u_hat the thrust's unit direction), or, with an
-  arm's reach (``attitude.thrust_reach_m`` > 0), where the arm from its base (``attitude.thrust_base_north_m``,
-  ``thrust_base_south_m``) puts the nozzle on that line, burn by burn (``nozzle_distance_m``).  Two
-  torques follow.  The centre of mass moves as propellant is used (``attitude.tank_offset_body_m``: the
-  propellant's centre p less the starting centre of mass; the centre of mass is then at
-  dc = -(m0 - m) / m p), so a line through the old centre leaves tau = -dc x F (the SRP offset moves by -dc
-  too).  And a dumping tilt (below) turns the line about the nozzle.
-
-Dumping (``thrust``, the model's hook on the thrust flown, before the orbit's step). During a burn the line of
-action is tilted by delta about the nozzle, u' = cos(delta) u_hat + s, s perpendicular to u_hat with |s| =
-sin(delta): the torque r_n x F u' = -L F (u_hat x s), any torque perpendicular to u_hat up to L F sin(delta_max)
-(``attitude.dump_angle_max_deg``). No tilt can reach the momentum along the line itself, and the planners fire two
-burns an orbit whose lines are nearly parallel in inertial space (Li's QFFC: 9.8 deg apart at the median cycle of a
-year, under 2.3 deg in a tenth of them; the thrusters sit on one face and the burns are half an orbit apart), so a
-burn that simply empties what it can (the one-burn least squares, h -> (h . u) u) leaves the momentum along the
-common line to grow: 60 N m s over Li's year with 12 N m s a day of SRP momentum, against 43 N m s under the
-two-burn law (``studies/momentum/results/li_dumping.md``). The law therefore allocates over two burns
-(``remainder_nms``): each burn leaves the momentum r that the next burn, along the previous burn's line u_o (the
-same thruster at the same node an orbit ago), can empty, r . u_o = 0 (with r . u = h . u, the least such r),
-amplified by 1 / sin(theta) for lines theta apart and bounded to ``attitude.dump_transient_fraction`` of the
-capacity (the rest is the margin for the torques until the next burn). The burn asks the torque that takes the
-measured momentum h_m (h_w plus a per-cycle Gaussian error of ``attitude.wheel_momentum_sigma_nms`` per axis) toward
-r at the rate k_dump (``attitude.dump_gain_per_s``), held over the step's firing time T as its exact zero-order
-hold, tau* = -(1 - exp(-k_dump T)) (h_m - r) / T: at most all of it, so stable at any gain (k_dump h held over a 900
-s step overshoots beyond 2 / 900 s); tau* is perpendicular to u by construction, s = (u x tau*) / (L F), scaled back
-to sin(delta_max) where longer. The cost is the planner's: the thrust along the planned direction falls to F
-cos(delta) (at most 0.4 % at 5 deg) and F sin(delta) goes across it; the next cycle's plan, which sees the orbit
-flown, makes both up (the paired run without dumping measures the Delta-V; ``dump_cross_dv_mps`` is the across
-part). The body axes are the RSW axes permuted (x = S, y = -W, z = -R), so the hook works on the controller's RSW
-direction directly.
-
-The default inertia tensor (``DEFAULT_INERTIA_KG_M2``) is an estimate for a satellite of Li 2022's class (5000
-kg, 200 m^2 of SRP area), no manufacturer publishing one: a 4600 kg bus as a uniform box 2.5 m (x) x 2.5 m (y) x
-3.5 m (z), and two 200 kg wings of 20 m x 5 m (100 m^2 each) on the y axis (the array axis), their centres 12.75
-m from the centre of mass, as thin plates turning about y (their width's share of Ixx and Izz averaged over the
-turn): Ixx = 7091.7 + 78358.3 + 416.7, Iyy = 7091.7 + 833.3, Izz = 4791.7 + 78358.3 + 416.7 kg m^2, principal.
-The default capacity, 50 N m s per wheel, is the wheels of the li2022-momentum scenario.  The default thrust arm,
-2.5 m: the anti-nadir face of that 3.5 m bus 1.75 m from its centre plus 0.75 m of arm reach (Li 2022 gives no
-arm dimensions).  The default dump gain, 0.01 /s, takes a 900 s step of burn all the way (1 - exp(-9)); the
-default transient fraction, 3/4, leaves a quarter of the capacity (12.5 N m s of 50) for a day's SRP momentum of
-li2022-momentum (12 N m s); both are choices, measured in ``studies/momentum/li_dumping.py``.
-"""
+The solar-pressure, gravity-gradient and thruster torques drive it, and the station-keeping burns unload it, each
+tilting its thrust line off the centre of mass (the two-burn dumping law, ``thrust``).  The loop carries the total
+angular momentum in ECI and turns it into the wheels' body axes at every step's end, so the gyroscopic term is
+exact.  The equation, its integration, the torques, the dumping law and the defaults' sources: docs/momentum.md
+("The derivation")."""
 
 from __future__ import annotations
 
@@ -90,7 +22,7 @@ from geojax.params import LOG, NUMBER, Field, degrees
 from geojax.states.base import Constraint, Part, StateModel, StepContext, ThrustContext
 
 NAME = "wheels"
-# (Ixx, Iyy, Izz, Ixy, Ixz, Iyz), kg m^2: the estimate of the module docstring.
+# (Ixx, Iyy, Izz, Ixy, Ixz, Iyz), kg m^2: an estimate for Li 2022's class (docs/momentum.md, "The defaults").
 DEFAULT_INERTIA_KG_M2 = (85866.7, 7925.0, 83566.7, 0.0, 0.0, 0.0)
 DEFAULT_CAPACITY_NMS = 50.0
 DEFAULT_THRUST_ARM_M = 2.5
@@ -216,10 +148,10 @@ def cycle(params, state: Wheels, start) -> Wheels:
 
 
 def thrust(params, state: Wheels, flown: Thrust, ctx: ThrustContext):
-    """The dumping law on the thrust flown over a step (the module docstring): ``(state, thrust)``, the thrust
-    with its line tilted within ``attitude.dump_angle_max_deg`` and the state noting the thrust's torque (tilt and
-    centre-of-mass shift, body axes) and the force across the plan for ``step``.  No tilt at a 0 deg limit, the
-    direction then exactly the controller's."""
+    """The dumping law on the thrust flown over a step (docs/momentum.md, "The derivation"): ``(state, thrust)``,
+    the thrust with its line tilted within ``attitude.dump_angle_max_deg`` and the state noting the thrust's torque
+    (tilt and centre-of-mass shift, body axes) and the force across the plan for ``step``.  No tilt at a 0 deg
+    limit, the direction then exactly the controller's."""
     a = params.states[NAME]
     d = flown.direction_rsw
     u_b = jnp.stack([d[1], -d[2], -d[0]])  # body = (S, -W, -R)
@@ -274,9 +206,9 @@ def nozzle_distance_m(attitude: dict, u_hat, w_component):
 
 
 def law_tilt(attitude: dict, state: Wheels, u_hat, u_other_body, firing_s, lever_nm):
-    """[3] the dumping law's tilt s of a line along ``u_hat`` (body axes; the module docstring), before the limit:
-    the torque that takes the measured momentum toward the two-burn remainder over the step's firing time
-    ``firing_s``, divided by the lever L F (``lever_nm``)."""
+    """[3] the dumping law's tilt s of a line along ``u_hat`` (body axes; docs/momentum.md, "The derivation"),
+    before the limit: the torque that takes the measured momentum toward the two-burn remainder over the step's
+    firing time ``firing_s``, divided by the lever L F (``lever_nm``)."""
     h_m = state.h_body_nms + state.error_nms
     left = remainder_nms(h_m, u_hat, u_other_body, attitude["dump_transient_fraction"] * attitude["wheel_capacity_nms"])
     # the change held over the step's firing time T (zero-order hold): a fraction 1 - exp(-k T) of the way to
