@@ -38,7 +38,8 @@ def test_propagate_writes_the_hdf5_contract(tmp_path, capsys):
         (["propagate", "li2022", "--days", "-1"], "duration.days: must be > 0"),
         (["plot", "missing.h5"], "file 'missing.h5': no such file"),
         (["simulate", "li2022-fompc", "--horizon", "0"], "controller.horizon: must be >= 1"),
-        (["simulate", "li2022", "--days", "2"], "controller.kind: li2022 has no controller"),
+        (["simulate", "li2022", "--days", "2", "--oem", "x.oem", "--oem-step", "10"],
+         "--oem-step: must be at least the integration step"),
     ],
 )
 def test_bad_input_exits_2_with_one_line(argv, message, capsys):
