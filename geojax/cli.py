@@ -2,6 +2,7 @@
 
     geojax demo [--out DIR]
     geojax propagate SCENARIO [--days D] [--step S] [--set KEY=VALUE ...] [--out FILE.h5] [--plots DIR]
+                     [--oem FILE [--oem-step S]] [--maneuvers FILE.opm]
     geojax simulate SCENARIO [--controller KIND] [--horizon N] [--days D] [--step S] [--seed S] [--h-rv H] [--h-att H]
                     [--set KEY=VALUE ...] [--out FILE.h5] [--plots DIR]
                     [--oem FILE [--oem-step S] [--oem-of truth|estimate]] [--maneuvers FILE.opm]

@@ -106,6 +106,13 @@ def parser() -> argparse.ArgumentParser:
     prop.add_argument("--step", type=float, help="integration step in s, rounded to a whole number per sidereal day")
     prop.add_argument("--out", help="write the per-cycle mean elements to this HDF5 file")
     prop.add_argument("--plots", help="folder for the figure (NAME-uncontrolled.png)")
+    prop.add_argument("--oem", metavar="FILE", help="write the free drift's true state at every integration step and "
+                      "the end as a CCSDS OEM 2.0, as simulate --oem does (from the closed loop with the null "
+                      "controller, the same steps: one more run)")
+    prop.add_argument("--oem-step", type=float, metavar="SECONDS", help="with --oem: the states' spacing, as the "
+                      "largest whole number of integration steps within SECONDS (default: every step)")
+    prop.add_argument("--maneuvers", metavar="FILE", help="write the CCSDS OPM 2.0 simulate --maneuvers writes: the "
+                      "initial state and no maneuver block (the free drift fires nothing)")
 
     bnd = command("bound", scenario=True, help="the least Delta-V that holds the scenario's box with its thrusters (a linear program), "
                                 "re-simulated in the closed loop")
@@ -127,7 +134,8 @@ def parser() -> argparse.ArgumentParser:
     bnd.add_argument("--plots", help="folder for the figure of the plan and the flown box (NAME-bound.png)")
 
     sim = command("simulate", scenario=True, help="closed-loop station keeping (any controller); summary, metrics, status, HDF5")
-    sim.add_argument("scenario", help="a scenario with a [controller] table, e.g. li2022-qffc, li2022-fompc, or a .toml path")
+    sim.add_argument("scenario", help="a scenario, e.g. li2022-qffc, li2022-fompc, or a .toml path; one without a "
+                     "controller (kind none, e.g. li2022 or geo) runs uncontrolled, with every file a controlled run has")
     sim.add_argument("--controller", help="override controller.kind (qffc, fompc, lyapunov, ...)")
     sim.add_argument("--horizon", type=int, help="FOMPC prediction horizon N in cycles, 1-10 (default: the scenario's)")
     sim.add_argument("--days", type=float, help=DAYS_HELP)
@@ -158,9 +166,11 @@ def parser() -> argparse.ArgumentParser:
                      "largest whole number of integration steps within SECONDS (default: every step)")
     sim.add_argument("--oem-of", choices=("truth", "estimate"), help="with --oem: the true ephemeris (default) or the "
                      "estimated one: the navigation filter's, or without one the Gaussian fix at each cycle start")
-    sim.add_argument("--maneuvers", metavar="FILE", help="write a planner's burns as a CCSDS OPM 2.0 (KVN): the initial "
-                     "state and one maneuver block per burn flown (MAN_EPOCH_IGNITION, MAN_DURATION, "
-                     "MAN_DELTA_MASS, MAN_REF_FRAME = RTN, MAN_DV_1..3), the planned Delta-V in each block's COMMENT")
+    sim.add_argument("--maneuvers", metavar="FILE", help="write the burns flown as a CCSDS OPM 2.0 (KVN): the initial "
+                     "state and one maneuver block per burn (MAN_EPOCH_IGNITION, MAN_DURATION, MAN_DELTA_MASS, "
+                     "MAN_REF_FRAME = RTN, MAN_DV_1..3); a planner's planned Delta-V in each block's COMMENT; a "
+                     "feedback law's (the recovery law's) burns are its runs of steps firing the same thrust; "
+                     "none without a controller")
 
     tune = command("tune", help="tune controller gains by gradients through the rollout (Katz 2025)")
     tune.add_argument("file", help="a tuning file (TOML; its keys: geojax.tune.spec)")

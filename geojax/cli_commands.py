@@ -8,6 +8,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from geojax import cli_files
 from geojax.cli_args import check_outputs as _check_outputs, overrides as _overrides, set_values
 from geojax.runner.report import flown_days
 from geojax.sweep.report import summary as sweep_summary
@@ -28,9 +29,14 @@ def _propagate(args) -> int:
 
     sc = scenario.load(args.scenario, _overrides(args))
     _check_outputs(args)
+    cli_files.check(args, sc)
+    drift = uncontrolled.without_control(sc) if args.oem or args.maneuvers else None  # refused before the run
     result = uncontrolled.propagate_scenario(sc, progress=False if args.quiet else None)
-    return _finish(args, result, f"propagated {len(result.cycles.t_s)} cycles to interpolate the change over "
+    code = _finish(args, result, f"propagated {len(result.cycles.t_s)} cycles to interpolate the change over "
                                  f"exactly {sc.days:g} days", args.out, args.plots)
+    if args.oem or args.maneuvers:
+        cli_files.write(args, uncontrolled.free_drift(drift))
+    return code
 
 
 def _simulate(args) -> int:
@@ -39,16 +45,8 @@ def _simulate(args) -> int:
     if args.seed < 0:
         raise ValueError(f"--seed: must be an integer >= 0, got {args.seed}")
     sc = scenario.load(args.scenario, _overrides(args))
-    if sc.controller == "none":
-        raise ValueError(f"controller.kind: {sc.name} has no controller; give --controller or use 'geojax propagate'")
     _check_outputs(args)
-    if args.oem_step is not None:
-        from geojax.physics.constants import SIDEREAL_DAY_S
-        from geojax.physics.propagate import steps_per_cycle
-
-        step_s = SIDEREAL_DAY_S / steps_per_cycle(sc.step_s)
-        if not args.oem_step >= step_s:  # NaN too
-            raise ValueError(f"oem_step: must be at least the integration step, {step_s:.6g} s, got {args.oem_step:g}")
+    cli_files.check(args, sc)
     return _run_simulation(sc, args.seed, args.out, args.plots, args)
 
 
@@ -74,15 +72,11 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
     with Compilations() as log:
         result = rollout.simulate(sc, seed, on_compiled=lambda s: say(f"closed loop ready in {s:.1f} s "
                                                                       f"({log.made()}); running...", flush=True),
-                                  meanwhile=meanwhile, ephemeris=bool(getattr(args, "oem", None)))
+                                  meanwhile=meanwhile, ephemeris=cli_files.needs_ephemeris(args, sc))
     say(f"  {log.summary()}")
     code = _finish(args, result, "the run is one compiled call (no host callbacks in the loop), so it reports its "
                                  "times instead of a progress bar", out, plots, figures.get("reference"))
-    if getattr(args, "oem", None):
-        print("wrote " + " and ".join(map(str, result.save_oem(args.oem, oem_step_s=args.oem_step,
-                                                               of=args.oem_of or "truth"))))
-    if getattr(args, "maneuvers", None):
-        print(f"wrote {result.save_maneuvers(args.maneuvers)}")
+    cli_files.write(args, result)
     return code
 
 

@@ -55,9 +55,14 @@ DESCRIPTIONS = {
     **{f"duty_{axis}": f"fraction of the steps whose thrust has an ECEF {axis} component (Katz 2025's duty of "
                        f"per-axis thrusters; for thrust in any other direction, the firing fraction)"
        for axis in "xyz"},
-    "dv_ns_per_year_mps": "north-south (out-of-plane, RSW W) component of the delta-V per year (a planner's burns)",
-    "dv_ew_per_year_mps": "east-west (in-plane, RSW R and S) component of the delta-V per year (a planner's burns); "
-                          "with dv_ns_per_year_mps it adds up to more than dv_per_year_mps where burns combine both",
+    "dv_radial_per_year_mps": "radial (RTN R) component of the delta-V per year (a planner's burns, |R| of each "
+                              "burn's delta-V): with the robotic arms, the geometry's cosine loss (thrust lines aimed "
+                              "through the centre of mass from anti-nadir arms)",
+    "dv_ew_per_year_mps": "along-track (RTN T) component of the delta-V per year (a planner's burns, |T| of each "
+                          "burn's delta-V): the east-west control of drift and eccentricity",
+    "dv_ns_per_year_mps": "cross-track (RTN N) component of the delta-V per year (a planner's burns, |N| of each "
+                          "burn's delta-V): the north-south control of inclination; the three components add up to "
+                          "more than dv_per_year_mps where a burn is not along one axis",
     "cpu_s_per_orbit": "wall seconds per cycle of the compiled closed loop and its metrics alone (no set-up, no "
                        "compilation; with them where a result carries no run time of its own)",
     "burns_total": "burns fired in the run",

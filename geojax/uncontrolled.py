@@ -76,10 +76,37 @@ class PropagationResult(NamedTuple):
         return draw({"cycles": self.table()}, sc.config["station"]["box_half_width_deg"],
                     Path(folder) / f"{sc.name}-uncontrolled", title)
 
+    def save_oem(self, path, **options) -> list[Path]:
+        """The free drift's OEM (``free_drift``'s ``Result.save_oem``, its options), as ``geojax propagate --oem``."""
+        return free_drift(self._scenario()).save_oem(path, **options)
+
+    def save_maneuvers(self, path, **options) -> Path:
+        """The free drift's OPM: the initial state and no maneuver block (``Result.save_maneuvers``)."""
+        return free_drift(self._scenario()).save_maneuvers(path, **options)
+
     def _scenario(self) -> Scenario:
         if self.scenario is None:
             raise ValueError("scenario: this result does not carry its scenario; make it with propagate_scenario")
         return self.scenario
+
+
+def free_drift(scenario: Scenario):
+    """The scenario flown without control (``without_control``) through the closed loop, every step's true state
+    kept (``Result.ephemeris``): the same loop and steps as ``propagate_scenario``'s (the null controller's,
+    docs/design.md), over the run's ``cycle_count(days)`` cycles, for its CCSDS files."""
+    from geojax.runner.rollout import simulate as closed_loop
+
+    return closed_loop(without_control(scenario), 0, ephemeris=True)
+
+
+def without_control(scenario: Scenario) -> Scenario:
+    """``scenario`` with controller "none" and no recovery law: what ``propagate_scenario`` flies."""
+    import tomllib
+
+    from geojax.scenario import from_dict
+    from geojax.scenario_toml import to_toml
+
+    return from_dict({**tomllib.loads(to_toml(scenario.config)), "controller": {"kind": "none"}})
 
 
 def propagated_cycles(days: float) -> int:

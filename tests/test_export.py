@@ -242,8 +242,10 @@ def test_estimate_without_a_filter_is_the_gaussian_fix(tmp_path):
 
 def test_opm_maneuvers_equal_the_run(run, tmp_path):
     """``ccsds-ndm`` reads the OPM: one maneuver block per burn (``burns_total``), their ΔV sums to the Delta-V the
-    loop integrated and their propellant to ``mass_used_kg`` (no execution errors in li2022-qffc), the N part to
-    ``dv_ns_per_year_mps`` over the run."""
+    loop integrated and their propellant to ``mass_used_kg`` (no execution errors in li2022-qffc), and the sums of
+    |MAN_DV_1|, |MAN_DV_2|, |MAN_DV_3| (RTN) to ``dv_radial_per_year_mps``, ``dv_ew_per_year_mps`` and
+    ``dv_ns_per_year_mps`` over the run: the budget per axis is the file's, burn by burn through the rocket
+    equation against the loop's per-cycle Delta-V split by firing time."""
     ndm = pytest.importorskip("ccsds_ndm.ndm_io")
     blocks = ndm.NdmIo().from_path(run.save_maneuvers(tmp_path / "m.opm")).body.segment.data.maneuver_parameters
     assert len(blocks) == run.metrics["burns_total"] > 0
@@ -253,9 +255,24 @@ def test_opm_maneuvers_equal_the_run(run, tmp_path):
     used = -sum(float(b.man_delta_mass.value) for b in blocks)
     assert abs(used - run.metrics["mass_used_kg"]) < 1e-9 * len(blocks)  # 9 decimals of kg printed per burn
     run_s = DAYS * 86164.0905
-    np.testing.assert_allclose(np.abs(dv[:, 2]).sum() * 365.25 * SECONDS_PER_DAY / run_s,
-                               run.metrics["dv_ns_per_year_mps"], rtol=1e-6)
+    per_axis = np.abs(dv).sum(axis=0) * 365.25 * SECONDS_PER_DAY / run_s
+    names = ("dv_radial_per_year_mps", "dv_ew_per_year_mps", "dv_ns_per_year_mps")
+    np.testing.assert_allclose(per_axis, [run.metrics[name] for name in names], rtol=1e-6)
+    assert np.all(per_axis > 0.01 * run.metrics["dv_per_year_mps"])  # every axis flown, so each sum is checked
+    assert np.linalg.norm(dv, axis=1).sum() < np.abs(dv).sum()  # components: the burns are not along one axis
 
+
+
+def test_summary_says_what_each_delta_v_component_is(run):
+    """The printed budget names each component's axis, the radial one as the arms' cosine loss, and says the three
+    are components, not a partition; a run of 3 days says its yearly rates are extrapolated."""
+    lines = run.summary()
+    row = {line.split()[0]: line for line in lines if line.startswith("  dv_")}
+    assert "radial (RTN R)" in row["dv_radial_per_year_mps"] and "cosine loss" in row["dv_radial_per_year_mps"]
+    assert "along-track (RTN T)" in row["dv_ew_per_year_mps"]
+    assert "cross-track (RTN N)" in row["dv_ns_per_year_mps"]
+    assert all("extrapolated from" in row[name] for name in row if name.endswith("_per_year_mps"))
+    assert any("not a partition" in line for line in lines)
 
 # --- the burns ---------------------------------------------------------------------------------------------
 

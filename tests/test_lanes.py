@@ -163,7 +163,7 @@ def test_the_states_stated_bytes_and_columns_are_their_records(name, changes):
 ])
 def test_every_metric_is_the_same_at_every_lane_width(name, overrides, n, days):
     """The metrics program of one batch's records compiled at n, 64 and 1024 lanes gives every metric bit for bit
-    (the N-S and E-W split, the filter's RMS, percentiles and means included: ``geojax.reductions`` stores the
+    (the Delta-V per RTN axis, the filter's RMS, percentiles and means included: ``geojax.reductions`` stores the
     values before it adds them, in the cycles' order). Independent check: the same records, three compiled
     widths."""
     from geojax import scenario, simulate_batch

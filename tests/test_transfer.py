@@ -267,12 +267,12 @@ def test_the_body_accelerates_within_the_wheels_window_shifted_by_the_torque(loo
 
 def test_a_transfer_that_starts_at_geo_ends_at_once_and_freezes(loop):
     """Termination is data: a circular equatorial start at the GEO radius meets the end conditions after the
-    first step (status 1, t_end = one step), and the state is frozen from then on (mass unchanged)."""
+    first step (status 0, the success, t_end = one step), and the state is frozen from then on (mass unchanged)."""
     alt_km = 42164.16 - c.R_EARTH_M / 1e3
     sc = transfer.load("ma2023-boom", {"orbit.perigee_alt_km": alt_km, "orbit.apogee_alt_km": alt_km,
                                        "orbit.i_deg": 0.01})
     final, records = _run(loop, sc)
-    assert int(final.status) == 1 and float(final.t_end_s) == 120.0
+    assert int(final.status) == transfer.STATUS_REACHED_GEO == 0 and float(final.t_end_s) == 120.0
     assert np.all(records.mass_kg == records.mass_kg[0])
 
 
@@ -301,13 +301,16 @@ def test_bad_fields_name_the_field(tmp_path):
 
 
 def test_cli_writes_metrics_and_records(tmp_path, capsys):
-    """The HDF5 file holds what the summary printed (read back with h5py, an independent reader)."""
+    """The HDF5 file holds what the summary printed (read back with h5py, an independent reader); half a day
+    stops at the time limit, status 1, a failure as in ``simulate`` (0 is success), the file's codes say so."""
     import h5py
 
     out = tmp_path / "t.h5"
-    assert cli.main(["transfer", "ma2023-quadrilateral", "--days", "0.5", "--out", str(out), "-q"]) == 0
+    assert cli.main(["transfer", "ma2023-quadrilateral", "--days", "0.5", "--out", str(out)]) == 0
+    assert "  status 1: time limit reached first" in capsys.readouterr().out.splitlines()
     with h5py.File(out) as f:
-        assert int(f["metrics/status"][()]) == 0 and f.attrs["layout"] == "quadrilateral"
+        assert int(f["metrics/status"][()]) == 1 and f.attrs["layout"] == "quadrilateral"
+        assert f.attrs["status_codes"].startswith("0 reached GEO") and "1 time limit reached first" in f.attrs["status_codes"]
         assert float(f["metrics/transfer_days"][()]) == pytest.approx(0.5)
         assert f["records/a_km"].shape == (1,) and 'layout = "quadrilateral"' in f.attrs["config_toml"]
 

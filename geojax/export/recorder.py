@@ -2,7 +2,8 @@
 
 It rides the loop's extension point for further states (``states.base``), for the run's CCSDS files.
 The loop keeps no Cartesian state per step.  Asked for an ephemeris, the loop carries one more model,
-``TRUTH``, with no state, whose step record is the true ECI position and velocity at the step's start, and its
+``TRUTH``, with no state, whose step record is the true ECI position and velocity at the step's start and the
+thrust held over the step (``THRUST_COLUMNS``: a feedback law's burns, ``export.trajectory.step_burns``), and its
 navigation filter (where it has one) is replaced by the same filter whose step record adds the filter's estimate
 and the covariance of its ECI (r, v) at the step's start.  Their cycle records are those step records stacked
 (``summary`` is given them), so they come back without ``keep_steps``; ``split`` takes them out of the records
@@ -29,6 +30,13 @@ class Ephemeris(NamedTuple):
     truth: object  # [..., 6] true (r, v)
     estimate: object | None  # [..., 6] the filter's estimate of (r, v) (None without a filter)
     covariance: object | None  # [..., 6, 6] the filter's covariance of its (r, v), m^2, m^2/s, m^2/s^2
+    thrust: object  # [..., 6] the thrust held over the step, THRUST_COLUMNS
+
+
+# The columns of ``Ephemeris.thrust``: the thrust held over a step as the loop flew it (``StepContext.thrust``),
+# its level as a fraction of full thrust along R, S, W (on-fraction x unit direction), the full thrust, the
+# specific impulse and the mass at the step start.
+THRUST_COLUMNS = ("fraction_r", "fraction_s", "fraction_w", "thrust_n", "isp_s", "mass_kg")
 
 
 def _no_state(params, r_eci_m, v_eci_mps, env, force_model):
@@ -36,7 +44,10 @@ def _no_state(params, r_eci_m, v_eci_mps, env, force_model):
 
 
 def _truth_step(params, state, ctx):
-    return state, jnp.concatenate([ctx.r_eci_m, ctx.v_eci_mps])
+    thrust = ctx.thrust
+    held = jnp.concatenate([thrust.on_fraction * thrust.direction_rsw,
+                            jnp.stack([thrust.thrust_n, thrust.isp_s, ctx.mass_kg]).astype(ctx.r_eci_m.dtype)])
+    return state, (jnp.concatenate([ctx.r_eci_m, ctx.v_eci_mps]), held)
 
 
 def _stacked(params, start, end, steps):
@@ -76,8 +87,8 @@ def split(records):
     """(``records`` as without the recording, ``Ephemeris``) of records made ``with_recording`` (arrays or their
     shapes; leading axes as the records')."""
     states = dict(records.cycles.states)
-    truth = states.pop(NAME)
+    truth, thrust = states.pop(NAME)
     estimate = covariance = None
     if navigation.NAME in states:
         states[navigation.NAME], (estimate, covariance) = states[navigation.NAME]
-    return records._replace(cycles=records.cycles._replace(states=states)), Ephemeris(truth, estimate, covariance)
+    return records._replace(cycles=records.cycles._replace(states=states)), Ephemeris(truth, estimate, covariance, thrust)

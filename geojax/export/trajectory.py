@@ -31,8 +31,13 @@ takes MOD as mean *of date* would be off by the 50"/yr precession since the epoc
 **Burns.**  A planner's records (``control.burns.record``) give each burn's firing start in its cycle, firing
 time and unit velocity increment in RSW (= CCSDS RTN: radial, transverse, normal), attitude errors included;
 a burn's Delta-V is the rocket equation over its firing time from the mass left by the burns before it, at
-the thrust and Isp of the scenario.  A feedback law thrusts per step, not in burns: it has no burn list.  The
-burns as a CCSDS message: ``export.maneuvers``.
+the thrust and Isp of the scenario.  A feedback law (the recovery law of ``controller.recovery`` included) thrusts
+per step: a run with ``ephemeris=True`` recorded the thrust held over every step (``recorder.THRUST_COLUMNS``),
+and each run of consecutive steps that fire with the same thrust vector in RSW is one burn (``step_burns``: the
+recovery law's along-track arc of a cycle, or its out-of-plane arc about a node; a law that turns its thrust
+every step has a burn per step), spanning those steps at the level flown (the duration is the span, the
+Delta-V the rocket equation over it from the mass at its start); a run without a controller has an empty burn
+list.  The burns as a CCSDS message: ``export.maneuvers``.
 """
 
 from __future__ import annotations
@@ -71,8 +76,10 @@ class Burns(NamedTuple):
     cycle: np.ndarray  # [m] int, control cycle from 0
     thruster: np.ndarray  # [m] int, 1 or 2 (Li 2022: 1 fires southwards, 2 northwards)
     start_tt_s: np.ndarray  # [m] TT seconds since J2000.0 at which it starts firing
-    duration_s: np.ndarray  # [m] firing time (a burn suspended in the Earth's shadow spans longer)
+    duration_s: np.ndarray  # [m] firing time (a burn suspended in the Earth's shadow spans longer; a feedback
+    # law's: the span of its steps, fired at their level)
     dv_rtn_mps: np.ndarray  # [m, 3] Delta-V along R, T, N (held fixed in RTN through the burn)
+    mass_kg: np.ndarray  # [m] the propellant it used
 
 
 class States(NamedTuple):
@@ -259,13 +266,19 @@ def mee_of_boundary(boundary, earth_angle_rad, iterations: int = 8) -> np.ndarra
 
 
 def run_burns(result) -> Burns | None:
-    """The burns a planner fired (``Burns``), in time order; None for a controller without burn records."""
+    """The burns a run fired (``Burns``), in time order: a planner's from its records, a feedback law's from the
+    thrust of every step (``step_burns``: a run with ``ephemeris=True``); none without a controller; None for a
+    feedback law's run without its steps' thrust."""
     from geojax.runner.report import scenario_of
 
     rec = result.records.cycles.controller
-    if not {"fired_s", "start_s", "directions_rsw"} <= set(rec):
-        return None
     sc = scenario_of(result)
+    if not {"fired_s", "start_s", "directions_rsw"} <= set(rec):
+        if result.ephemeris is not None:
+            return step_burns(result.ephemeris.thrust, sc.epoch_tt_s, result.step_s)
+        if sc.controller == "none" and "recovering" not in rec:
+            return step_burns(np.zeros((0, 6)), sc.epoch_tt_s, result.step_s)
+        return None
     fired_s, start_s = np.asarray(rec["fired_s"], float), np.asarray(rec["start_s"], float)
     directions = np.asarray(rec["directions_rsw"], float)
     cycle_s = steps_per_cycle(sc.step_s) * result.step_s
@@ -281,7 +294,35 @@ def run_burns(result) -> Burns | None:
     dv = exhaust_mps * np.log(mass_before / (mass_before - flow_kg_s * duration))
     return Burns(cycle.ravel()[order], thruster.ravel()[order],
                  sc.epoch_tt_s + cycle.ravel()[order] * cycle_s + start_s.ravel()[order], duration,
-                 dv[:, None] * directions.reshape(-1, 3)[order])
+                 dv[:, None] * directions.reshape(-1, 3)[order], flow_kg_s * duration)
+
+
+def step_burns(thrust, epoch_tt_s: float, step_s: float) -> Burns:
+    """The burns of the thrust held over each step (``thrust`` [n_cycles, n_steps, 6] or [n, 6],
+    ``recorder.THRUST_COLUMNS``): each run of consecutive firing steps with the same thrust vector in RSW (and the
+    same thrust and Isp) is one burn, from its first step's start over its steps' span; its Delta-V the rocket
+    equation step by step (the mass at each step's start), along the steps' direction, and its propellant theirs.
+    Thruster 1 (one thruster along the commanded direction)."""
+    thrust = np.asarray(thrust, float)
+    n_steps = thrust.shape[1] if thrust.ndim == 3 else 1
+    thrust = thrust.reshape(-1, 6)
+    level_rsw, thrust_n, isp_s, mass_kg = thrust[:, :3], thrust[:, 3], thrust[:, 4], thrust[:, 5]
+    firing = np.any(level_rsw != 0, axis=1) & (thrust_n > 0)
+    same = np.zeros_like(firing)
+    same[1:] = firing[1:] & firing[:-1] & np.all(thrust[1:, :5] == thrust[:-1, :5], axis=1)
+    first = np.flatnonzero(firing & ~same)
+    burn = np.cumsum(firing & ~same) - 1  # the burn of each firing step
+    exhaust_mps = isp_s * G0_MPS2
+    level = np.linalg.norm(level_rsw, axis=1)
+    used_kg = np.where(firing, level * thrust_n / exhaust_mps * step_s, 0.0)
+    dv_mps = np.where(firing, exhaust_mps * np.log(mass_kg / np.where(firing, mass_kg - used_kg, 1.0)), 0.0)
+    per_step = dv_mps[:, None] * level_rsw / np.where(level > 0, level, 1.0)[:, None]
+    steps = np.flatnonzero(firing)
+    dv_rtn, mass, span = (np.zeros((len(first), 3)), np.zeros(len(first)), np.zeros(len(first)))
+    np.add.at(dv_rtn, burn[steps], per_step[steps])
+    np.add.at(mass, burn[steps], used_kg[steps])
+    np.add.at(span, burn[steps], step_s)
+    return Burns(first // n_steps, np.ones(len(first), int), epoch_tt_s + first * step_s, span, dv_rtn, mass)
 
 
 def write_burns_csv(path: Path, burns: Burns) -> Path:

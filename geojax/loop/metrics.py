@@ -86,7 +86,7 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int, state
     out.update(duty_metrics(cycles, n_steps_total, n_cycles * cycle_s))
     if "fired_s" in cycles.controller:
         out.update(burn_metrics(cycles.controller, n_cycles))
-        out.update(dv_split_per_year(cycles.controller, cycles.dv_mps, n_cycles * cycle_s))
+        out.update(dv_components_per_year(cycles.controller, cycles.dv_mps, n_cycles * cycle_s))
     if "recovering" in cycles.controller:  # control.recovery: its cycles and Delta-V apart
         out.update(recovery_metrics(cycles.controller, cycles.dv_mps))
     failures = []  # (failed, code) of the parts, in their order
@@ -154,23 +154,27 @@ def duty_metrics(cycles, n_steps_total: int, run_s: float) -> dict:
     return {"duty_x": duty[0], "duty_y": duty[1], "duty_z": duty[2]}
 
 
-def dv_split_per_year(rec: dict, dv_mps, run_s: float) -> dict:
-    """The north-south and east-west components of a planner's Delta-V, per 365.25 days: ``dv_ns_per_year_mps``
-    (out of the orbit plane, RSW W) and ``dv_ew_per_year_mps`` (in it, R and S).  Each cycle's delivered
-    Delta-V (``dv_mps`` [n_cycles]) is split by the directions its burns flew (``directions_rsw`` [n_cycles, 2, 3],
+# The per-axis components of a planner's Delta-V (``dv_components_per_year``), in RSW (= RTN) order.
+DV_COMPONENTS = ("dv_radial_per_year_mps", "dv_ew_per_year_mps", "dv_ns_per_year_mps")
+
+
+def dv_components_per_year(rec: dict, dv_mps, run_s: float) -> dict:
+    """The radial, along-track and cross-track components of a planner's Delta-V, per 365.25 days, a planner's
+    budget by axis: ``dv_radial_per_year_mps`` (RSW R; with the robotic arms, the geometry's cosine loss: thrust
+    lines aimed through the centre of mass from anti-nadir arms),
+    ``dv_ew_per_year_mps`` (S, along-track: east-west control, drift and eccentricity) and
+    ``dv_ns_per_year_mps`` (W, cross-track: north-south control, inclination).  Each cycle's delivered Delta-V
+    (``dv_mps`` [n_cycles]) is split by the directions its burns flew (``directions_rsw`` [n_cycles, 2, 3],
     attitude errors included), weighted by each burn's firing time (one thrust F/m for both burns of a cycle:
-    the mass changes by parts in 1e5 within a cycle).  Components, not a partition: a burn of v at pitch beta
-    counts v sin(beta) north-south and v cos(beta) east-west, so the two add up to more than
-    ``dv_per_year_mps`` where burns combine both (they are what separate north-south and east-west burns
-    would spend)."""
+    the mass changes by parts in 1e5 within a cycle): a burn of v along the unit direction d counts v |d_R|,
+    v |d_S| and v |d_W|.  Components, not a partition: the three add up to more than ``dv_per_year_mps``
+    wherever a burn is not along one axis (their root sum of squares per burn is its Delta-V)."""
     d = rec["directions_rsw"]
     weight = rec["fired_s"] / jnp.maximum(jnp.sum(rec["fired_s"], axis=1, keepdims=True), 1e-300)
     # the weighted parts stored before they are added (``geojax.reductions``: fused, the last bit depended on
     # the lane width, 1-2 of 40 QFFC samples an ulp apart at 64 and 1024 lanes)
-    ns = dv_mps * sum_in_order(weight * jnp.abs(d[..., 2]))
-    ew = dv_mps * sum_in_order(weight * jnp.hypot(d[..., 0], d[..., 1]))
-    return {"dv_ns_per_year_mps": sum_over_cycles(ns) * SECONDS_PER_YEAR / run_s,
-            "dv_ew_per_year_mps": sum_over_cycles(ew) * SECONDS_PER_YEAR / run_s}
+    return {name: sum_over_cycles(dv_mps * sum_in_order(weight * jnp.abs(d[..., axis]))) * SECONDS_PER_YEAR / run_s
+            for axis, name in enumerate(DV_COMPONENTS)}
 
 
 def ns_delta_v_mps(rec: dict):

@@ -29,7 +29,12 @@ from geojax.physics.propagate import DYNAMICS, environment_grid, for_one_sample,
 from geojax.scenario import Scenario
 
 
-DV_SPLIT = ("dv_ns_per_year_mps", "dv_ew_per_year_mps")  # a planner's (loop.metrics.dv_split_per_year)
+# What each per-axis component of a planner's Delta-V is (loop.metrics.dv_components_per_year), printed beside it.
+DV_COMPONENT_NOTES = {
+    "dv_radial_per_year_mps": "radial (RTN R): the arms' cosine loss (thrust lines through the centre of mass)",
+    "dv_ew_per_year_mps": "along-track (RTN T): east-west control",
+    "dv_ns_per_year_mps": "cross-track (RTN N): north-south control",
+}
 
 
 def groups(result, reference=None) -> dict[str, dict]:
@@ -96,6 +101,9 @@ def summary(result, paper: bool = True) -> list[str]:
               f"{notes.get(name, '')}".rstrip() for name, value in values.items()]
     lines += [f"  {name:32s} {units_of(name):>7s} {'n/a':>12s}  {'':8s}  {text}"
               for name, text in notes.items() if name not in values]
+    if DV_COMPONENT_NOTES.keys() <= values.keys():
+        lines.append("  note: dv_radial, dv_ew and dv_ns are each burn's Delta-V per RTN axis, components and not a "
+                     "partition: they add up to more than dv_per_year_mps where a burn is not along one axis")
     if changed:
         lines.append(f"  note: {source.split(' (')[0]}'s numbers are for its own run; this one differs in "
                      f"{', '.join(changed)}, so they are shown for orientation only")
@@ -111,15 +119,18 @@ def timed(result) -> str:
 
 def row_notes(values: dict, n_cycles: int, result) -> dict[str, str]:
     """{metric: note} of the printed summary: a per-year figure of a run shorter than a year (``YEAR_CYCLES``
-    cycles) is extrapolated from its length; the north-south / east-west split is n/a (a row of its own) for a
+    cycles) is extrapolated from its length; a planner's Delta-V components say which axis each is
+    (``DV_COMPONENT_NOTES``: the radial part is the arms' cosine loss), and are n/a (a row of its own) for a
     controller without burns; ``cpu_s_per_orbit`` says what it times (Li 2022's 0.09 s beside it is its Fortran
     per orbit, one sample)."""
-    notes = {}
+    notes = {name: text for name, text in DV_COMPONENT_NOTES.items() if name in values}
     if n_cycles < YEAR_CYCLES:
         days = n_cycles * SIDEREAL_DAY_S / SECONDS_PER_DAY
-        notes.update({name: f"extrapolated from {days:.4g} days ({n_cycles} cycles)"
+        notes.update({name: "; ".join(filter(None, (notes.get(name), f"extrapolated from {days:.4g} days "
+                                                                    f"({n_cycles} cycles)")))
                       for name in values if name.endswith("_per_year_mps")})
-    notes.update({name: "n/a: this controller flies no burns to split" for name in DV_SPLIT if name not in values})
+    notes.update({name: "n/a: this controller flies no burns to split" for name in DV_COMPONENT_NOTES
+                  if name not in values})
     notes["cpu_s_per_orbit"] = f"wall s per cycle, {timed(result)}"
     return notes
 

@@ -8,9 +8,9 @@ body/boom split of Remark 2 and the attitude propellant, ``wheels`` the reaction
 unloading (by attitude thrusters or by the boom's own line).
 """
 
-from geojax.transfer.rollout import STATUS_MEANINGS, Static, TransferParams, transfer
+from geojax.transfer.rollout import STATUS_MEANINGS, STATUS_REACHED_GEO, Static, TransferParams, transfer
 from geojax.transfer.run import TransferResult, env_grid, metrics, run, run_batch, stack, static_for
 from geojax.transfer.scenario import TransferScenario, available, load
 
-__all__ = ["STATUS_MEANINGS", "Static", "TransferParams", "TransferResult", "TransferScenario", "available",
-           "env_grid", "load", "metrics", "run", "run_batch", "stack", "static_for", "transfer"]
+__all__ = ["STATUS_MEANINGS", "STATUS_REACHED_GEO", "Static", "TransferParams", "TransferResult", "TransferScenario",
+           "available", "env_grid", "load", "metrics", "run", "run_batch", "stack", "static_for", "transfer"]

@@ -2,7 +2,8 @@
 give (``geojax transfer --out`` calls them; ``geojax plot`` draws the figure of the file).
 
 The file (``kind = "transfer"``): ``/metrics`` (``run.metrics``, units in the names) and ``/records`` (per
-record interval, ``run.record_table``); attributes ``scenario``, ``layout``, ``epoch_tt_s`` and ``step_s`` beside
+record interval, ``run.record_table``); attributes ``scenario``, ``layout``, ``epoch_tt_s``, ``step_s`` and
+``status_codes`` (``rollout.STATUS_TEXT``: 0 reached GEO, the rest failures, as a ``simulate`` file's) beside
 ``store.write_h5``'s.
 """
 
@@ -17,12 +18,14 @@ def save(result, path: str | Path) -> Path:
     """Write the transfer's file to ``path`` (atomically); returns the path."""
     from geojax import store
     from geojax.scenario import to_toml
+    from geojax.transfer.rollout import STATUS_TEXT
 
     sc = scenario_of(result)
     return store.write_h5(path, {"metrics": {k: np.asarray(v) for k, v in result.metrics.items()},
                                  "records": result.records}, to_toml(sc.config), result.wall_s,
                           attrs={"kind": "transfer", "scenario": sc.name, "layout": sc.layout,
-                                 "epoch_tt_s": sc.epoch_tt_s, "step_s": sc.step_s})
+                                 "epoch_tt_s": sc.epoch_tt_s, "step_s": sc.step_s,
+                                 "status_codes": STATUS_TEXT})
 
 
 def summary(result, paper: bool = True) -> list[str]:

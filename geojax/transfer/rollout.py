@@ -33,8 +33,11 @@ from geojax.physics.forces import Environment, ForceModel, sunlit_fraction_xyz
 from geojax.physics.integrate import rk4_step
 from geojax.transfer import boom, pointing, quadrilateral, steering, wheels
 
-STATUS_MEANINGS = {0: "time limit reached first", 1: "reached GEO (end conditions met)",
-                   2: "propellant exhausted", 3: "state not finite"}
+# 0 success, the rest failures: the meaning ``simulate``'s codes have (``loop.metrics``).
+STATUS_REACHED_GEO, STATUS_TIME_LIMIT, STATUS_NO_PROPELLANT, STATUS_NONFINITE = range(4)
+STATUS_MEANINGS = {STATUS_REACHED_GEO: "reached GEO (end conditions met)",
+                   STATUS_TIME_LIMIT: "time limit reached first", STATUS_NO_PROPELLANT: "propellant exhausted", STATUS_NONFINITE: "state not finite"}
+STATUS_TEXT = ", ".join(f"{code} {text}" for code, text in STATUS_MEANINGS.items())
 
 
 class TransferParams(NamedTuple):
@@ -150,7 +153,7 @@ def initial_carry(params: TransferParams) -> Carry:
         Attitude(body, jnp.zeros(2), theta0, jnp.zeros(3), theta0, body),
         wish,
         Stats(zero, zero, zero, jnp.zeros(3), jnp.zeros(3), jnp.zeros(3), zero, zero, zero, zero),
-        jnp.array(False), jnp.array(0), zero, zero,
+        jnp.array(False), jnp.array(STATUS_TIME_LIMIT), zero, zero,
         wheels.initial(jnp.stack(r), jnp.stack(v), body, theta0[0], params.inertia_kg_m2),
     )
 
@@ -289,7 +292,9 @@ def _step(carry: Carry, env3: Environment, params: TransferParams, static: Stati
                & (after.i_rad < params.i_end_rad))
     empty = craft.mass_kg <= params.dry_mass_kg
     status = jnp.where(carry.done, carry.status,
-                       jnp.where(~finite, 3, jnp.where(arrived, 1, jnp.where(empty, 2, 0))))
+                       jnp.where(~finite, STATUS_NONFINITE,
+                                 jnp.where(arrived, STATUS_REACHED_GEO,
+                                           jnp.where(empty, STATUS_NO_PROPELLANT, STATUS_TIME_LIMIT))))
     done = carry.done | arrived | empty | ~finite
     t_end = jnp.where(carry.done, carry.t_end_s, t_s)
     wheel = wheels.add(wheel, frame, r0, torque, torque - plain_torque,

@@ -38,6 +38,8 @@ import numpy as np  # noqa: E402
 from geojax import transfer  # noqa: E402
 from geojax.papers import MA2023  # noqa: E402
 
+REACHED = transfer.STATUS_REACHED_GEO  # a transfer's success, status 0
+
 RESULTS = Path(__file__).resolve().parent / "results"
 PAPER = {"time_saving": float(MA2023["time_saving_percent"]), "fuel_saving": float(MA2023["fuel_saving_percent"]),
          "efficiency": float(MA2023["thrust_efficiency"]),
@@ -62,7 +64,7 @@ def saving_cell(m, key, b, f):
     """The boom's saving on ``key`` (rows b, f of metrics m): a value where both reached GEO, a bound on the time
     where one stopped at the time limit, else n/a (a transfer cut short used less)."""
     value = saving(m[key][b], m[key][f])
-    boom_reached, quad_reached = m["status"][b] == 1, m["status"][f] == 1
+    boom_reached, quad_reached = m["status"][b] == REACHED, m["status"][f] == REACHED
     if boom_reached and quad_reached:
         return f"{value:+.1f} %"
     if key == "transfer_days" and (boom_reached or quad_reached):
@@ -169,7 +171,7 @@ def map_figure(rows, m, cants, rates, path):
     for i, cant in enumerate(cants):
         for j, rate in enumerate(rates):
             b, q = rows.index(("boom", None, rate)), rows.index(("quadrilateral", cant, rate))
-            if m["status"][b] == 1 and m["status"][q] == 1:
+            if m["status"][b] == REACHED and m["status"][q] == REACHED:
                 grids["time"][i, j] = saving(m["transfer_days"][b], m["transfer_days"][q])
                 grids["fuel"][i, j] = saving(m["total_propellant_kg"][b], m["total_propellant_kg"][q])
             grids["eff"][i, j] = m["thrust_efficiency"][b]
@@ -205,7 +207,7 @@ def readings_summary(rows, m, cants, rates) -> list[str]:
         cells = []
         for rate in rates:
             bb, qq = rows.index(("boom", None, rate)), rows.index(("quadrilateral", cant, rate))
-            if not (m["status"][bb] == 1 and m["status"][qq] == 1):
+            if not (m["status"][bb] == REACHED and m["status"][qq] == REACHED):
                 cells.append("n/a")
                 continue
             t = saving(m["transfer_days"][bb], m["transfer_days"][qq])
@@ -298,7 +300,7 @@ def main() -> None:
             bb, qq = rows.index(("boom", None, rate)), rows.index(("quadrilateral", cant, rate))
             t = saving(m["transfer_days"][bb], m["transfer_days"][qq])
             fuel = saving(m["total_propellant_kg"][bb], m["total_propellant_kg"][qq])
-            both = m["status"][bb] == 1 and m["status"][qq] == 1
+            both = m["status"][bb] == REACHED and m["status"][qq] == REACHED
             judged = [verdict(t, PAPER["time_saving"]), verdict(fuel, PAPER["fuel_saving"]),
                       verdict(m["thrust_efficiency"][bb], PAPER["efficiency"])]
             mark = ("**" if both and all(j == "agree (5 %)" for j in judged) else
@@ -354,7 +356,7 @@ def main() -> None:
         lines.append("")
     if args.mc:
         draws, mc, mc_wall = monte_carlo(args.mc)
-        both = (mc["status"][0::2] == 1) & (mc["status"][1::2] == 1)
+        both = (mc["status"][0::2] == REACHED) & (mc["status"][1::2] == REACHED)
         time_saving = saving(mc["transfer_days"][0::2], mc["transfer_days"][1::2])
         fuel_saving = saving(mc["total_propellant_kg"][0::2], mc["total_propellant_kg"][1::2])
         eff = mc["thrust_efficiency"][0::2]
@@ -362,7 +364,7 @@ def main() -> None:
                   "Draws (uniform): joint 3 half-range 5-30 deg, joint 1 range [-90 s, 0] deg with s in 0.5-1, thrust "
                   "0.3-0.7 N, perigee +-50 km, apogee +-200 km, inclination +-0.5 deg, body inertia log-uniform "
                   f"2e3-2e5 kg m^2; slew {base_rate:g} deg/s, cant {base_cant:g} deg; 600-day limit. Reached GEO: "
-                  f"boom {int((mc['status'][0::2] == 1).sum())}, quadrilateral {int((mc['status'][1::2] == 1).sum())} "
+                  f"boom {int((mc['status'][0::2] == REACHED).sum())}, quadrilateral {int((mc['status'][1::2] == REACHED).sum())} "
                   f"of {args.mc}.", ""]
         if both.any():
             lines += [f"Over the {int(both.sum())} pairs where both reached GEO: time saving mean "

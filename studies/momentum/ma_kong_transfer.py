@@ -146,7 +146,7 @@ def report(rows, meta, angles, capacities):
                      f"{r['tilt_cross_dv_mps']:.1f} | {r['thrust_efficiency']:.4f} | "
                      f"{r['torque_overpowered_days']:.1f} | {r['lost_to_slew_days']:.2f} |")
     lines += ["", *findings(rows, capacities), "",
-              "Status 1: reached GEO; 0: the 400-day limit first. The quadrilateral's wheels hold only the "
+              "Status 0: reached GEO; 1: the 400-day limit first. The quadrilateral's wheels hold only the "
               "orbit frame's turn (I x the orbit rate, 2.6 N m s at the GTO's perigee): its pairs fire through the "
               "centre of mass.", "",
               "## The boom's savings against the quadrilateral, every propellant counted", "",
