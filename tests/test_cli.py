@@ -111,11 +111,6 @@ def test_simulate_writes_metrics_and_cycles(tmp_path, capsys):
     assert (tmp_path / "sim-station-keeping.png").stat().st_size > 10_000
 
 
-def test_simulate_refuses_a_scenario_without_controller(capsys):
-    assert cli.main(["simulate", "li2022", "--days", "2"]) == 2
-    assert "controller.kind" in capsys.readouterr().err
-
-
 def test_version_and_python_dash_m(capsys):
     """``geojax --version`` names the package's ``__version__``, which is pyproject.toml's, and
     ``python -m geojax`` is the same command."""
