@@ -76,3 +76,16 @@ def gravity_gradient_torque_body(r_body_m, inertia_kg_m2, mu_m3_s2):
     eq. (7.40); Hughes, *Spacecraft Attitude Dynamics*, Sec. 8.2)."""
     r2 = jnp.sum(r_body_m * r_body_m)
     return 3.0 * mu_m3_s2 / (r2 * r2 * jnp.sqrt(r2)) * jnp.cross(r_body_m, inertia_kg_m2 @ r_body_m)
+
+
+def wheel_momentum_body_nms(h_total_eci_nms, eci_to_body, body_momentum_nms):
+    """[3] the wheels' momentum h_w in body axes from the total angular momentum H (ECI) of body and wheels,
+    H = I omega + h_w: h_w = C H - I omega (``eci_to_body`` C; ``body_momentum_nms`` I omega, body axes).  The one
+    wheels' equation of the station-keeping loop (``states.momentum``) and of the transfer (``transfer.wheels``)."""
+    return eci_to_body @ h_total_eci_nms - body_momentum_nms
+
+
+def dumping_fraction(gain_per_s, firing_s):
+    """The fraction 1 - exp(-k T) of the way to its target that a dumping law asking dh/dt = -k (h - target)
+    goes over a firing time T, held as a zero-order hold (never more than all of it: stable at any gain)."""
+    return -jnp.expm1(-gain_per_s * firing_s)

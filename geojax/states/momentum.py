@@ -14,8 +14,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.physics.attitude import (array_frame, body_rate_rad_s, gravity_gradient_torque_body, inertia_matrix,
-                                     nadir_frame, srp_force_eci_n)
+from geojax.physics.attitude import (array_frame, body_rate_rad_s, dumping_fraction, gravity_gradient_torque_body,
+                                     inertia_matrix, nadir_frame, srp_force_eci_n, wheel_momentum_body_nms)
 from geojax.physics.constants import SECONDS_PER_DAY
 from geojax.physics.dynamics import Thrust
 from geojax.params import LOG, NUMBER, Field, degrees
@@ -211,9 +211,7 @@ def law_tilt(attitude: dict, state: Wheels, u_hat, u_other_body, firing_s, lever
     firing time ``firing_s``, divided by the lever L F (``lever_nm``)."""
     h_m = state.h_body_nms + state.error_nms
     left = remainder_nms(h_m, u_hat, u_other_body, attitude["dump_transient_fraction"] * attitude["wheel_capacity_nms"])
-    # the change held over the step's firing time T (zero-order hold): a fraction 1 - exp(-k T) of the way to
-    # what is left, as dh/dt = -k (h - left) would go over T; never more than all of it (stable at any gain)
-    fraction = -jnp.expm1(-attitude["dump_gain_per_s"] * firing_s)
+    fraction = dumping_fraction(attitude["dump_gain_per_s"], firing_s)  # over the firing time, toward ``left``
     wanted = -fraction * (h_m - left) / jnp.where(firing_s > 0, firing_s, 1.0)  # torque while firing, _|_ u_hat
     return jnp.cross(u_hat, wanted) / jnp.where(lever_nm > 0, lever_nm, 1.0)
 
@@ -267,7 +265,7 @@ def step(params, state: Wheels, ctx: StepContext):
     half = ctx.step_s / 2
     h_total = state.h_total_eci_nms + half * ((srp0 + gg0) + (srp1 + gg1)) + half * (
         state.thrust_start_eci_nm + c1.T @ state.thrust_torque_body_nm)
-    h_end = c1 @ h_total - inertia @ body_rate_rad_s(ctx.r_end_eci_m, ctx.v_end_eci_mps)
+    h_end = wheel_momentum_body_nms(h_total, c1, inertia @ body_rate_rad_s(ctx.r_end_eci_m, ctx.v_end_eci_mps))
     above = jnp.max(jnp.abs(state.h_body_nms)) > HIGH_FRACTION * a["wheel_capacity_nms"]
     new = state._replace(
         h_total_eci_nms=h_total, h_body_nms=h_end, srp_eci_nm=srp1, gravity_gradient_eci_nm=gg1,

@@ -59,7 +59,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from geojax.physics.attitude import gravity_gradient_torque_body
+from geojax.physics.attitude import dumping_fraction, gravity_gradient_torque_body, wheel_momentum_body_nms
 
 
 class WheelParams(NamedTuple):
@@ -128,7 +128,7 @@ def dump_tilt(h_body_nms, u_body, lever_body_m, force_n, firing_s, params: Wheel
     rho = jnp.dot(lever_body_m, u_body)
     live = (firing_s > 0) & (force_n > 0) & (jnp.abs(rho) > 1e-9) & (params.dump_angle_max_rad > 0)
     h_perp = h_body_nms - jnp.dot(h_body_nms, u_body) * u_body
-    fraction = -jnp.expm1(-params.dump_gain_per_s * firing_s)
+    fraction = dumping_fraction(params.dump_gain_per_s, firing_s)
     wanted = -fraction * h_perp / jnp.where(live, firing_s, 1.0)
     tilt = jnp.cross(wanted, u_body) / jnp.where(live, rho * force_n, 1.0)
     length = jnp.linalg.norm(tilt)
@@ -152,7 +152,7 @@ def start(state: Wheels, frame, inertia_kg_m2, params: WheelParams, moving):
     C^T H_eci - I omega_orb, its per-wheel extremes, and the attitude thrusters' unloading where a wheel passed its
     threshold (H_eci -= C h_w).  Returns (state, C_ECI<-body) for ``add``.  Frozen where not ``moving``."""
     c, omega = body_to_eci(*frame)
-    h_body = c.T @ state.h_total_eci_nms - inertia_kg_m2 * omega
+    h_body = wheel_momentum_body_nms(state.h_total_eci_nms, c.T, inertia_kg_m2 * omega)
     unload = moving & (jnp.max(jnp.abs(h_body)) > params.rcs_dump_fraction * params.capacity_nms)
     return state._replace(
         h_total_eci_nms=state.h_total_eci_nms - jnp.where(unload, c @ h_body, 0.0),
