@@ -68,6 +68,7 @@ from geojax.physics.propulsion import arm_limits
 THRUSTERS = mpc.THRUSTERS
 UNREAD = ("attitude.dump_gain_per_s", "attitude.dump_transient_fraction")
 TILTS = 4  # per cycle: two burns x two components across the line
+HOLD = 3  # rows per boundary on the momentum held: its R, S, W components (the price of holding it)
 
 FIELDS = {
     **mpc.FIELDS,
@@ -81,6 +82,11 @@ FIELDS = {
     # The exponential filter's gain per cycle on the measured external momentum per cycle (1: the last cycle's; 0:
     # none estimated; stable below 2).
     "disturbance_gain": Field(NUMBER, 0.5, lower=0.0, lower_inclusive=True, upper=2.0, si="disturbance_gain"),
+    # The price of holding momentum in the wheels, per N m s of |g|_1 at each boundary, in units of a tilt's
+    # Delta-V to dump it (1 / (L m) m/s per N m s): without it the program parked the momentum its tilts could not
+    # reach cheaply at the bound (a fraction of the capacity: more in a larger wheel) and lost it when the burns
+    # shortened in the eclipse season (docs/momentum.md).  0: momentum is free below the bound.
+    "hold_cost": Field(NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e3, si="hold_cost"),
 }
 
 
@@ -93,9 +99,11 @@ class Momentum(NamedTuple):
     cycle_rows: jnp.ndarray  # [C, 2G + 8] the rows on one cycle's decisions
     cycle_lower: jnp.ndarray  # [C]
     cycle_upper: jnp.ndarray  # [C]
-    rows: jnp.ndarray  # [n_max, R + F / 2 + 1, 9] state rows of boundaries 1..n_max, half-width 1
-    lower: jnp.ndarray  # [n_max, R + F / 2 + 1]
-    upper: jnp.ndarray  # [n_max, R + F / 2 + 1]
+    rows: jnp.ndarray  # [n_max, R + F / 2 + 1 + HOLD, 9] state rows of boundaries 1..n_max: the bounds (half-width
+    # 1), then the momentum held (N m s, target 0, priced ``hold_penalty``)
+    lower: jnp.ndarray  # [n_max, R + F / 2 + 1 + HOLD]
+    upper: jnp.ndarray  # [n_max, R + F / 2 + 1 + HOLD]
+    hold_penalty: jnp.ndarray  # [] m/s per N m s held a cycle: ``hold_cost`` / (L m)
     impulse: jnp.ndarray  # [3, 4] K: g's change (cycle-start RSW, N m s) per m/s of each tilt component
     mid_x: jnp.ndarray  # [F / 2 + 1, 9] the rows between the burns on the cycle's start state (its g)
     mid_u: jnp.ndarray  # [F / 2 + 1, 2G + 8] and on the cycle's decisions (the first burn's tilts)
@@ -173,16 +181,22 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, 
     facet = jnp.stack([jnp.cos(angles), jnp.sin(angles), jnp.zeros(k)], -1) / (h_half * math.cos(math.pi / shape.facets))
     g_rows = jnp.concatenate([facet, jnp.array([[0.0, 0.0, 1.0]]) / h_half])  # [k + 1, 3]
     n_max = shape.n_max
+    # the momentum held, g itself (target 0, soft): its price keeps the wheels as empty as the tilts can make them
+    # cheaply, so the bound is a limit the plan keeps off, not where it parks momentum (a larger wheel then flies
+    # the same plan until its own bound binds)
+    hold_rows = jnp.concatenate([jnp.zeros((HOLD, 6)), jnp.eye(3)], 1)
     rows = jnp.concatenate([
         jnp.concatenate([model.rows, jnp.zeros((n_max, model.rows.shape[1], 3))], -1),
-        jnp.concatenate([jnp.zeros((n_max, k + 1, 6)), jnp.broadcast_to(g_rows, (n_max, k + 1, 3))], -1)], 1)
+        jnp.concatenate([jnp.zeros((n_max, k + 1, 6)), jnp.broadcast_to(g_rows, (n_max, k + 1, 3))], -1),
+        jnp.broadcast_to(hold_rows, (n_max, HOLD, 9))], 1)
     horizon = jnp.sum(model.mask)
     boundary = jnp.arange(1, n_max + 1)
     free = g0 + boundary[:, None] * d  # [n_max, 3] g without tilts
     value = free @ g_rows.T  # [n_max, k + 1]
     active = (boundary <= horizon)[:, None]
-    lower = jnp.concatenate([model.lower, jnp.where(active, -1.0 - value, -inf)], 1)
-    upper = jnp.concatenate([model.upper, jnp.where(active, 1.0 - value, inf)], 1)
+    lower = jnp.concatenate([model.lower, jnp.where(active, -1.0 - value, -inf), jnp.where(active, -free, -inf)], 1)
+    upper = jnp.concatenate([model.upper, jnp.where(active, 1.0 - value, inf), jnp.where(active, -free, inf)], 1)
+    hold_penalty = leaves["hold_cost"] / (attitude["thrust_arm_m"] * mass_kg)
     # Between the burns, just before the second: g_j + f d + (the first burn's impulse), f the second's place in
     # the cycle (the momentum's extremes within a cycle are at its boundaries and here: it moves linearly
     # with the other torques between the burns).
@@ -196,8 +210,8 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, 
     mid_active = (start < horizon)[:, None]
     mid_lower = jnp.where(mid_active, -1.0 - mid_value, -inf)
     mid_upper = jnp.where(mid_active, 1.0 - mid_value, inf)
-    return Momentum(lines, across, effect, cycle_rows, cycle_lower, cycle_upper, rows, lower, upper, impulse,
-                    mid_x, mid_u, mid_lower, mid_upper)
+    return Momentum(lines, across, effect, cycle_rows, cycle_lower, cycle_upper, rows, lower, upper, hold_penalty,
+                    impulse, mid_x, mid_u, mid_lower, mid_upper)
 
 
 def operator(model: mpc.Model, momentum: Momentum, shape: mpc.Shape) -> lp.Operator:
@@ -288,8 +302,10 @@ def program(model: mpc.Model, momentum: Momentum, leaves: dict, shape: mpc.Shape
                              momentum.lower.reshape(-1)])
     upper = jnp.concatenate([jnp.tile(momentum.cycle_upper, n_max), momentum.mid_upper.reshape(-1),
                              momentum.upper.reshape(-1)])
-    soft = momentum.mid_lower.size + momentum.lower.size
-    penalty = jnp.concatenate([jnp.full(n_max * rc, jnp.inf), jnp.full(soft, 1.0) * leaves["penalty_mps"]])
+    bounds = jnp.full(momentum.lower.shape[1] - HOLD, 1.0) * leaves["penalty_mps"]
+    per_boundary = jnp.concatenate([bounds, jnp.full(HOLD, 1.0) * momentum.hold_penalty])
+    penalty = jnp.concatenate([jnp.full(n_max * rc, jnp.inf), jnp.full(momentum.mid_lower.size, 1.0) * leaves["penalty_mps"],
+                               jnp.tile(per_boundary, n_max)])
     return c, lower, upper, penalty
 
 
@@ -409,7 +425,7 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         excess = excess_of(boundary_rows, momentum.lower, momentum.upper)
         r_orbit = model.lower.shape[1]
         violation = jnp.max(excess[:, :r_orbit])
-        momentum_violation = jnp.maximum(jnp.max(excess[:, r_orbit:]), jnp.max(excess_of(
+        momentum_violation = jnp.maximum(jnp.max(excess[:, r_orbit:-HOLD]), jnp.max(excess_of(
             between, momentum.mid_lower.reshape(-1), momentum.mid_upper.reshape(-1))))
         solved = (violation <= mpc.SOLVED_VIOLATION) & jnp.all(jnp.isfinite(solution.x))
         # the end the plan expects of what is flown (a burn shorter than ``thrusters.min_burn_s`` is not, nor its
