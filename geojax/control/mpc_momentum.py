@@ -23,9 +23,10 @@ program on ``control.mpc``'s minimum-fuel LP (Gazzino 2016's Problem 3 on Li 202
   tilts' impulses in the cycle-start RSW axes (each burn's rotated by its right ascension past the start).
 * Rows on g at every boundary 1..N: the body turns about the orbit normal once per cycle, so its x (S) and z
   (-R) wheels see the in-plane part of g at every angle within the cycle: |g_RS| <= h_max as an inscribed polygon
-  of ``facets`` sides, and |g_W| <= h_max (the y wheel, -W); h_max = ``momentum_fraction`` of the capacity (the
-  rest is the margin for the momentum taken up between the boundaries).  The same rows just before each cycle's
-  second burn (g_j + f d + the first burn's impulse: rows on a cycle's start state and its decisions together,
+  of ``facets`` sides, and |g_W| <= h_max (the y wheel, -W); h_max = ``momentum_band_nms``, at most
+  ``momentum_fraction`` of the capacity (the rest is the margin for the momentum taken up between the boundaries;
+  not a share of a larger wheel: the program holds momentum up to h_max for nothing, and parks it there, so a
+  larger wheel flies the same plan).  The same rows just before each cycle's second burn (g_j + f d + the first burn's impulse: rows on a cycle's start state and its decisions together,
   ``mpc.riccati``'s stage terms); without them a plan swung the wheels by 42 N m s within one cycle and peaked at
   131.7 N m s in a year of li2022-momentum-mpc.  Soft, with the orbit rows' penalty.
 * The orbit sees the tilts: e_1, e_2 change the mean elements as any Delta-V does (``effects.effect_matrix``),
@@ -68,12 +69,15 @@ from geojax.physics.propulsion import arm_limits
 THRUSTERS = mpc.THRUSTERS
 UNREAD = ("attitude.dump_gain_per_s", "attitude.dump_transient_fraction")
 TILTS = 4  # per cycle: two burns x two components across the line
-HOLD = 3  # rows per boundary on the momentum held: its R, S, W components (the price of holding it)
 
 FIELDS = {
     **mpc.FIELDS,
-    # The share of each wheel's capacity the plan may fill at a cycle boundary (the rest: what the wheels take up
-    # between boundaries, a day's external momentum and the burns' transients).
+    # The momentum the plan may hold at a cycle boundary and between the burns, per wheel: ``momentum_band_nms``,
+    # at most ``momentum_fraction`` of the capacity (the rest: what the wheels take up between boundaries, a day's
+    # external momentum and the burns' transients).  The band is not a share of any capacity: the program holds
+    # momentum up to its band for nothing, so a band that grew with the wheel parked more where the tilts reach
+    # worst (docs/momentum.md), and a larger wheel flies the same plan with more margin.
+    "momentum_band_nms": Field(NUMBER, 25.0, lower=0.0, upper=1e6, si="momentum_band_nms"),
     "momentum_fraction": Field(NUMBER, 0.5, lower=0.0, upper=1.0, si="momentum_fraction"),
     # The price of a tilt, per m/s of Delta-V across the line (|z|_1), against 1 per m/s of burn: at 1 the program
     # never takes a tilt's Delta-V for the orbit (a burn in that direction costs no more), so it tilts for the
@@ -82,11 +86,6 @@ FIELDS = {
     # The exponential filter's gain per cycle on the measured external momentum per cycle (1: the last cycle's; 0:
     # none estimated; stable below 2).
     "disturbance_gain": Field(NUMBER, 0.5, lower=0.0, lower_inclusive=True, upper=2.0, si="disturbance_gain"),
-    # The price of holding momentum in the wheels, per N m s of |g|_1 at each boundary, in units of a tilt's
-    # Delta-V to dump it (1 / (L m) m/s per N m s): without it the program parked the momentum its tilts could not
-    # reach cheaply at the bound (a fraction of the capacity: more in a larger wheel) and lost it when the burns
-    # shortened in the eclipse season (docs/momentum.md).  0: momentum is free below the bound.
-    "hold_cost": Field(NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e3, si="hold_cost"),
 }
 
 
@@ -99,11 +98,9 @@ class Momentum(NamedTuple):
     cycle_rows: jnp.ndarray  # [C, 2G + 8] the rows on one cycle's decisions
     cycle_lower: jnp.ndarray  # [C]
     cycle_upper: jnp.ndarray  # [C]
-    rows: jnp.ndarray  # [n_max, R + F / 2 + 1 + HOLD, 9] state rows of boundaries 1..n_max: the bounds (half-width
-    # 1), then the momentum held (N m s, target 0, priced ``hold_penalty``)
-    lower: jnp.ndarray  # [n_max, R + F / 2 + 1 + HOLD]
-    upper: jnp.ndarray  # [n_max, R + F / 2 + 1 + HOLD]
-    hold_penalty: jnp.ndarray  # [] m/s per N m s held a cycle: ``hold_cost`` / (L m)
+    rows: jnp.ndarray  # [n_max, R + F / 2 + 1, 9] state rows of boundaries 1..n_max, half-width 1
+    lower: jnp.ndarray  # [n_max, R + F / 2 + 1]
+    upper: jnp.ndarray  # [n_max, R + F / 2 + 1]
     impulse: jnp.ndarray  # [3, 4] K: g's change (cycle-start RSW, N m s) per m/s of each tilt component
     mid_x: jnp.ndarray  # [F / 2 + 1, 9] the rows between the burns on the cycle's start state (its g)
     mid_u: jnp.ndarray  # [F / 2 + 1, 2G + 8] and on the cycle's decisions (the first burn's tilts)
@@ -176,27 +173,21 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, 
     cycle_upper = jnp.concatenate([jnp.full(2 * g, inf), jnp.ones(2), jnp.full(2 * TILTS, inf), jnp.zeros(2)])
 
     # State rows: the orbit's (on the elements) and the momentum's (on g) at boundaries 1..n_max.
-    h_half = leaves["momentum_fraction"] * attitude["wheel_capacity_nms"]
+    h_half = jnp.minimum(leaves["momentum_band_nms"], leaves["momentum_fraction"] * attitude["wheel_capacity_nms"])
     angles = 2 * jnp.pi * jnp.arange(k) / shape.facets
     facet = jnp.stack([jnp.cos(angles), jnp.sin(angles), jnp.zeros(k)], -1) / (h_half * math.cos(math.pi / shape.facets))
     g_rows = jnp.concatenate([facet, jnp.array([[0.0, 0.0, 1.0]]) / h_half])  # [k + 1, 3]
     n_max = shape.n_max
-    # the momentum held, g itself (target 0, soft): its price keeps the wheels as empty as the tilts can make them
-    # cheaply, so the bound is a limit the plan keeps off, not where it parks momentum (a larger wheel then flies
-    # the same plan until its own bound binds)
-    hold_rows = jnp.concatenate([jnp.zeros((HOLD, 6)), jnp.eye(3)], 1)
     rows = jnp.concatenate([
         jnp.concatenate([model.rows, jnp.zeros((n_max, model.rows.shape[1], 3))], -1),
-        jnp.concatenate([jnp.zeros((n_max, k + 1, 6)), jnp.broadcast_to(g_rows, (n_max, k + 1, 3))], -1),
-        jnp.broadcast_to(hold_rows, (n_max, HOLD, 9))], 1)
+        jnp.concatenate([jnp.zeros((n_max, k + 1, 6)), jnp.broadcast_to(g_rows, (n_max, k + 1, 3))], -1)], 1)
     horizon = jnp.sum(model.mask)
     boundary = jnp.arange(1, n_max + 1)
     free = g0 + boundary[:, None] * d  # [n_max, 3] g without tilts
     value = free @ g_rows.T  # [n_max, k + 1]
     active = (boundary <= horizon)[:, None]
-    lower = jnp.concatenate([model.lower, jnp.where(active, -1.0 - value, -inf), jnp.where(active, -free, -inf)], 1)
-    upper = jnp.concatenate([model.upper, jnp.where(active, 1.0 - value, inf), jnp.where(active, -free, inf)], 1)
-    hold_penalty = leaves["hold_cost"] / (attitude["thrust_arm_m"] * mass_kg)
+    lower = jnp.concatenate([model.lower, jnp.where(active, -1.0 - value, -inf)], 1)
+    upper = jnp.concatenate([model.upper, jnp.where(active, 1.0 - value, inf)], 1)
     # Between the burns, just before the second: g_j + f d + (the first burn's impulse), f the second's place in
     # the cycle (the momentum's extremes within a cycle are at its boundaries and here: it moves linearly
     # with the other torques between the burns).
@@ -210,8 +201,8 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, 
     mid_active = (start < horizon)[:, None]
     mid_lower = jnp.where(mid_active, -1.0 - mid_value, -inf)
     mid_upper = jnp.where(mid_active, 1.0 - mid_value, inf)
-    return Momentum(lines, across, effect, cycle_rows, cycle_lower, cycle_upper, rows, lower, upper, hold_penalty,
-                    impulse, mid_x, mid_u, mid_lower, mid_upper)
+    return Momentum(lines, across, effect, cycle_rows, cycle_lower, cycle_upper, rows, lower, upper, impulse,
+                    mid_x, mid_u, mid_lower, mid_upper)
 
 
 def operator(model: mpc.Model, momentum: Momentum, shape: mpc.Shape) -> lp.Operator:
@@ -302,10 +293,8 @@ def program(model: mpc.Model, momentum: Momentum, leaves: dict, shape: mpc.Shape
                              momentum.lower.reshape(-1)])
     upper = jnp.concatenate([jnp.tile(momentum.cycle_upper, n_max), momentum.mid_upper.reshape(-1),
                              momentum.upper.reshape(-1)])
-    bounds = jnp.full(momentum.lower.shape[1] - HOLD, 1.0) * leaves["penalty_mps"]
-    per_boundary = jnp.concatenate([bounds, jnp.full(HOLD, 1.0) * momentum.hold_penalty])
-    penalty = jnp.concatenate([jnp.full(n_max * rc, jnp.inf), jnp.full(momentum.mid_lower.size, 1.0) * leaves["penalty_mps"],
-                               jnp.tile(per_boundary, n_max)])
+    soft = momentum.mid_lower.size + momentum.lower.size
+    penalty = jnp.concatenate([jnp.full(n_max * rc, jnp.inf), jnp.full(soft, 1.0) * leaves["penalty_mps"]])
     return c, lower, upper, penalty
 
 
@@ -425,7 +414,7 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         excess = excess_of(boundary_rows, momentum.lower, momentum.upper)
         r_orbit = model.lower.shape[1]
         violation = jnp.max(excess[:, :r_orbit])
-        momentum_violation = jnp.maximum(jnp.max(excess[:, r_orbit:-HOLD]), jnp.max(excess_of(
+        momentum_violation = jnp.maximum(jnp.max(excess[:, r_orbit:]), jnp.max(excess_of(
             between, momentum.mid_lower.reshape(-1), momentum.mid_upper.reshape(-1))))
         solved = (violation <= mpc.SOLVED_VIOLATION) & jnp.all(jnp.isfinite(solution.x))
         # the end the plan expects of what is flown (a burn shorter than ``thrusters.min_burn_s`` is not, nor its
