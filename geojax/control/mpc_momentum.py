@@ -26,9 +26,10 @@ program on ``control.mpc``'s minimum-fuel LP (Gazzino 2016's Problem 3 on Li 202
   of ``facets`` sides, and |g_W| <= h_max (the y wheel, -W); h_max = ``momentum_band_nms``, at most
   ``momentum_fraction`` of the capacity (the rest is the margin for the momentum taken up between the boundaries;
   not a share of a larger wheel: the program holds momentum up to h_max for nothing, and parks it there, so a
-  larger wheel flies the same plan).  The same rows just before each cycle's second burn (g_j + f d + the first burn's impulse: rows on a cycle's start state and its decisions together,
-  ``mpc.riccati``'s stage terms); without them a plan swung the wheels by 42 N m s within one cycle and peaked at
-  131.7 N m s in a year of li2022-momentum-mpc.  Soft, with the orbit rows' penalty.
+  larger wheel flies the same plan).  The same rows just before each cycle's second burn (g_j + f d + the first
+  burn's impulse: rows on a cycle's start state and its decisions together, ``mpc.riccati``'s stage terms);
+  without them a plan swung the wheels by 42 N m s within one cycle and peaked at 131.7 N m s in a year of
+  li2022-momentum-mpc.  Soft, with the orbit rows' penalty.
 * The orbit sees the tilts: e_1, e_2 change the mean elements as any Delta-V does (``effects.effect_matrix``),
   so the plan makes up the tilt's Delta-V across the line.  The tilts cost ``tilt_cost`` per m/s of |z|_1 (a
   small price that makes a tilt the program does not need zero, where the interior point would otherwise return
