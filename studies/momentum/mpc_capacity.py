@@ -13,7 +13,7 @@ law (``li2022-momentum``'s), on
 
 The offset is the centre of pressure's along the solar array's axis (``attitude.srp_offset_array_m[0]``), the tilt
 limit 5°.  A case is held when every draw keeps its box (status ok) and its wheels within their capacity all year.
-The criterion (issue 57): a larger wheel never does worse, and the MPC holds at least what the law holds.  Beside
+The criterion: a larger wheel never does worse, and the MPC holds at least what the law holds.  Beside
 them: the momentum MPC as it was, its band half of each capacity (``momentum_band_nms`` out of the way), and on the
 second satellite the MPC without momentum (``controller.kind = "mpc"``) flying the dumping law, the law under the
 MPC's burns.  Writes ``mpc_capacity.md`` and ``mpc_capacity.json`` into ``--out``.
