@@ -342,7 +342,7 @@ def _params(**attitude):
 def _wheels_state(h_body):
     zero, none = jnp.zeros(()), jnp.zeros(3)
     return momentum.Wheels(none, jnp.asarray(h_body, float), zero, zero, zero, zero, zero, none, none, zero, none,
-                           none, none, none, none)
+                           none, none, none, none, none)
 
 
 def _at(mass_kg=5000.0):
