@@ -23,11 +23,13 @@ program on ``control.mpc``'s minimum-fuel LP (Gazzino 2016's Problem 3 on Li 202
   tilts' impulses in the cycle-start RSW axes (each burn's rotated by its right ascension past the start).
 * Rows on g at every boundary 1..N: the body turns about the orbit normal once per cycle, so its x (S) and z
   (-R) wheels see the in-plane part of g at every angle within the cycle: |g_RS| <= h_max as an inscribed polygon
-  of ``facets`` sides, and |g_W| <= h_max (the y wheel, -W); h_max = ``momentum_fraction`` of the capacity (the
-  rest is the margin for the momentum taken up between the boundaries).  The same rows just before each cycle's
-  second burn (g_j + f d + the first burn's impulse: rows on a cycle's start state and its decisions together,
-  ``mpc.riccati``'s stage terms); without them a plan swung the wheels by 42 N m s within one cycle and peaked at
-  131.7 N m s in a year of li2022-momentum-mpc.  Soft, with the orbit rows' penalty.
+  of ``facets`` sides, and |g_W| <= h_max (the y wheel, -W); h_max = ``momentum_band_nms``, at most
+  ``momentum_fraction`` of the capacity (the rest is the margin for the momentum taken up between the boundaries;
+  not a share of a larger wheel: the program holds momentum up to h_max for nothing, and parks it there, so a
+  larger wheel flies the same plan).  The same rows just before each cycle's second burn (g_j + f d + the first
+  burn's impulse: rows on a cycle's start state and its decisions together, ``mpc.riccati``'s stage terms);
+  without them a plan swung the wheels by 42 N m s within one cycle and peaked at 131.7 N m s in a year of
+  li2022-momentum-mpc.  Soft, with the orbit rows' penalty.
 * The orbit sees the tilts: e_1, e_2 change the mean elements as any Delta-V does (``effects.effect_matrix``),
   so the plan makes up the tilt's Delta-V across the line.  The tilts cost ``tilt_cost`` per m/s of |z|_1 (a
   small price that makes a tilt the program does not need zero, where the interior point would otherwise return
@@ -71,8 +73,12 @@ TILTS = 4  # per cycle: two burns x two components across the line
 
 FIELDS = {
     **mpc.FIELDS,
-    # The share of each wheel's capacity the plan may fill at a cycle boundary (the rest: what the wheels take up
-    # between boundaries, a day's external momentum and the burns' transients).
+    # The momentum the plan may hold at a cycle boundary and between the burns, per wheel: ``momentum_band_nms``,
+    # at most ``momentum_fraction`` of the capacity (the rest: what the wheels take up between boundaries, a day's
+    # external momentum and the burns' transients).  The band is not a share of any capacity: the program holds
+    # momentum up to its band for nothing, so a band that grew with the wheel parked more where the tilts reach
+    # worst (docs/momentum.md), and a larger wheel flies the same plan with more margin.
+    "momentum_band_nms": Field(NUMBER, 25.0, lower=0.0, upper=1e6, si="momentum_band_nms"),
     "momentum_fraction": Field(NUMBER, 0.5, lower=0.0, upper=1.0, si="momentum_fraction"),
     # The price of a tilt, per m/s of Delta-V across the line (|z|_1), against 1 per m/s of burn: at 1 the program
     # never takes a tilt's Delta-V for the orbit (a burn in that direction costs no more), so it tilts for the
@@ -168,7 +174,7 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, 
     cycle_upper = jnp.concatenate([jnp.full(2 * g, inf), jnp.ones(2), jnp.full(2 * TILTS, inf), jnp.zeros(2)])
 
     # State rows: the orbit's (on the elements) and the momentum's (on g) at boundaries 1..n_max.
-    h_half = leaves["momentum_fraction"] * attitude["wheel_capacity_nms"]
+    h_half = jnp.minimum(leaves["momentum_band_nms"], leaves["momentum_fraction"] * attitude["wheel_capacity_nms"])
     angles = 2 * jnp.pi * jnp.arange(k) / shape.facets
     facet = jnp.stack([jnp.cos(angles), jnp.sin(angles), jnp.zeros(k)], -1) / (h_half * math.cos(math.pi / shape.facets))
     g_rows = jnp.concatenate([facet, jnp.array([[0.0, 0.0, 1.0]]) / h_half])  # [k + 1, 3]

@@ -107,6 +107,7 @@ class Wheels(NamedTuple):
     thrust_start_eci_nm: jnp.ndarray  # [3] the thrust's torque over the current step, ECI axes at its start
     line_eci: jnp.ndarray  # [3] the unit thrust direction of the latest firing step, ECI (0: none yet)
     other_line_eci: jnp.ndarray  # [3] that of the burn before the latest (more than 90 deg from it), ECI
+    external_eci_nms: jnp.ndarray  # [3] integral of the external torques (SRP, gravity gradient) since the start, ECI
 
 
 class WheelStep(NamedTuple):
@@ -126,6 +127,7 @@ class WheelCycle(NamedTuple):
     steps_above: jnp.ndarray  # [] step starts from the run's start with a wheel above HIGH_FRACTION of capacity
     thrust_impulse_nms: jnp.ndarray  # [] integral of |tau_thrust| dt from the run's start to the cycle end
     cross_dv_mps: jnp.ndarray  # [] the dumping tilts' Delta-V across the plan from the run's start to the cycle end
+    external_eci_nms: jnp.ndarray  # [3] integral of the SRP and gravity-gradient torques from the run's start, ECI
 
 
 def init(params, r_eci_m, v_eci_mps, env, fm) -> Wheels:
@@ -137,7 +139,7 @@ def init(params, r_eci_m, v_eci_mps, env, fm) -> Wheels:
     zero = jnp.zeros_like(h0[0])
     none = jnp.zeros_like(h0)
     return Wheels(c.T @ (inertia @ body_rate_rad_s(r_eci_m, v_eci_mps) + h0), h0, zero, zero, zero, zero, zero,
-                  none, none, zero, srp, gg, none, none, none)
+                  none, none, zero, srp, gg, none, none, none, none)
 
 
 def cycle(params, state: Wheels, start) -> Wheels:
@@ -263,8 +265,8 @@ def step(params, state: Wheels, ctx: StepContext):
                             com_shift_body_m(params, ctx.mass_kg))
     srp0, gg0 = state.srp_eci_nm, state.gravity_gradient_eci_nm
     half = ctx.step_s / 2
-    h_total = state.h_total_eci_nms + half * ((srp0 + gg0) + (srp1 + gg1)) + half * (
-        state.thrust_start_eci_nm + c1.T @ state.thrust_torque_body_nm)
+    external = half * ((srp0 + gg0) + (srp1 + gg1))
+    h_total = state.h_total_eci_nms + external + half * (state.thrust_start_eci_nm + c1.T @ state.thrust_torque_body_nm)
     h_end = wheel_momentum_body_nms(h_total, c1, inertia @ body_rate_rad_s(ctx.r_end_eci_m, ctx.v_end_eci_mps))
     above = jnp.max(jnp.abs(state.h_body_nms)) > HIGH_FRACTION * a["wheel_capacity_nms"]
     new = state._replace(
@@ -274,7 +276,8 @@ def step(params, state: Wheels, ctx: StepContext):
         + half * (jnp.linalg.norm(gg0) + jnp.linalg.norm(gg1)),
         steps_above=state.steps_above + above,
         thrust_impulse_nms=state.thrust_impulse_nms + ctx.step_s * jnp.linalg.norm(state.thrust_torque_body_nm),
-        cross_dv_mps=state.cross_dv_mps + ctx.step_s * state.cross_force_n / ctx.mass_kg)
+        cross_dv_mps=state.cross_dv_mps + ctx.step_s * state.cross_force_n / ctx.mass_kg,
+        external_eci_nms=state.external_eci_nms + external)
     return new, WheelStep(state.h_body_nms)
 
 
@@ -293,26 +296,35 @@ def summary(params, start: Wheels, end: Wheels, steps: WheelStep) -> WheelCycle:
     """The cycle's record: per-wheel extremes over its step starts and its end, the running totals."""
     h = jnp.concatenate([steps.h_nms, end.h_body_nms[None]])
     return WheelCycle(jnp.max(jnp.abs(h), axis=0), start.h_body_nms, end.h_body_nms, end.srp_impulse_nms,
-                      end.gravity_gradient_impulse_nms, end.steps_above, end.thrust_impulse_nms, end.cross_dv_mps)
+                      end.gravity_gradient_impulse_nms, end.steps_above, end.thrust_impulse_nms, end.cross_dv_mps,
+                      end.external_eci_nms)
 
 
 def metrics(params, cycles: WheelCycle, n_steps_total: int, run_s: float):
     """({name: []}, saturated): the largest wheel momentum over the run and over its last year (365.25 days of
     cycles, the whole run when shorter: what a mission of several years holds once the first year's transient has
-    passed; the per-cycle records give any year's), its secular growth per day (the net change of h_w
-    between the run's first and last cycle boundaries, one orbit apart each, so the orbit-periodic part drops
-    out), the torque impulse per source (SRP, gravity gradient, thrust: the dumped momentum and the centre of
-    mass's shift), the Delta-V the dumping tilts put across the plan, the fraction of step starts above 80 % of
-    capacity; saturated where a wheel exceeded its capacity (``attitude.wheel_capacity_nms``) at any step start
-    or cycle end."""
+    passed; the per-cycle records give any year's), two rates per day (``DESCRIPTIONS``), the torque impulse per
+    source (SRP, gravity gradient, thrust: the dumped momentum and the centre of mass's shift), the Delta-V the
+    dumping tilts put across the plan, the fraction of step starts above 80 % of capacity; saturated where a wheel
+    exceeded its capacity (``attitude.wheel_capacity_nms``) at any step start or cycle end.
+
+    The rates are per cycle, one orbit each, so the orbit-periodic part of the momentum drops out of both; the net
+    change over the whole run would not do (it cancels as the Sun goes round: 0.005 N m s a day over a year whose
+    wheels saturated on day 8).  The external torques' rate is their net impulse over each cycle (ECI), its norm
+    averaged over the cycles: what the wheels would store a day without dumping.  The wheels' growth is the
+    largest net change of h_w over one cycle (body axes, one orbit apart): what they stored on their worst day,
+    dumping included."""
     peak = jnp.max(cycles.max_abs_nms)
     n_cycles = cycles.max_abs_nms.shape[0]
+    cycle_s = run_s / n_cycles
     year = min(n_cycles, int(np.ceil(365.25 * SECONDS_PER_DAY * n_cycles / run_s - 1e-9)))  # the last year's cycles
+    external = jnp.diff(cycles.external_eci_nms, axis=0, prepend=jnp.zeros_like(cycles.external_eci_nms[:1]))
     out = {
         "max_wheel_momentum_nms": peak,
         "max_wheel_momentum_last_year_nms": jnp.max(cycles.max_abs_nms[n_cycles - year:]),
-        "wheel_momentum_per_day_nms": jnp.linalg.norm(cycles.end_nms[-1] - cycles.start_nms[0])
-        * SECONDS_PER_DAY / run_s,
+        "external_momentum_per_day_nms": jnp.sum(jnp.linalg.norm(external, axis=-1)) * SECONDS_PER_DAY / run_s,
+        "max_wheel_growth_per_day_nms": jnp.max(jnp.linalg.norm(cycles.end_nms - cycles.start_nms, axis=-1))
+        * SECONDS_PER_DAY / cycle_s,
         "srp_torque_impulse_nms": cycles.srp_impulse_nms[-1],
         "gravity_gradient_impulse_nms": cycles.gravity_gradient_impulse_nms[-1],
         "time_above_80pct_capacity_fraction": cycles.steps_above[-1] / n_steps_total,
@@ -332,13 +344,17 @@ def columns(cycles: WheelCycle) -> dict:
 
 
 MODEL = StateModel(NAME, init, step, summary, metrics, cycle=cycle, status=SATURATED, columns=columns,
-                   thrust=thrust, estimate=estimate, bytes_per_cycle=14 * 8, columns_per_cycle=6)  # WheelCycle's
+                   thrust=thrust, estimate=estimate, bytes_per_cycle=17 * 8, columns_per_cycle=6)  # WheelCycle's
 
 DESCRIPTIONS = {
     "max_wheel_momentum_nms": "largest |momentum| of any reaction wheel at any step start (body axes)",
     "max_wheel_momentum_last_year_nms": "the same over the run's last 365.25 days (the whole run when shorter)",
-    "wheel_momentum_per_day_nms": "secular growth of the wheels' momentum: its net change from the first cycle "
-                                  "start to the last cycle end, per day",
+    "external_momentum_per_day_nms": "secular rate of the external torques (SRP at its offset, gravity gradient): "
+                                     "the norm of their net impulse over each cycle (ECI), averaged over the "
+                                     "cycles, per day: what the wheels store a day without dumping",
+    "max_wheel_growth_per_day_nms": "largest net change of the wheels' momentum over any one cycle, |h(end) - "
+                                    "h(start)| (body axes, one orbit apart), per day: their worst day, dumping "
+                                    "included",
     "srp_torque_impulse_nms": "integral of |SRP torque| over the run (centre-of-pressure offset)",
     "gravity_gradient_impulse_nms": "integral of |gravity-gradient torque| over the run",
     "time_above_80pct_capacity_fraction": "fraction of the step starts with a wheel above 80 % of its capacity",
