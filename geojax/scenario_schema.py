@@ -21,7 +21,10 @@ MAX_DAYS = 36526.0  # a hundred years
 EPHEMERIS_UTC_RANGE = {"meeus": ("1999-01-01", "2051-01-01"), "de421": ("1999-01-01", "2200-02-01")}
 
 SCHEMA: dict[str, dict[str, Field]] = {
-    "": {"name": Field(str, REQUIRED), "description": Field(str, "")},
+    "": {"name": Field(str, REQUIRED), "description": Field(str, ""),
+         "states": Field(list, [], static=True, identity=tuple,
+                         doc="parts of one's own the loop carries, by import path ('package.module:NAME' of a "
+                             "geojax.StateModel or geojax.Part)")},
     "epoch": {
         "utc": Field(str, REQUIRED, symbol="epoch", unit="year", static=True),  # a sweep axis of dates is drawn in years
         "ut1_minus_utc_s": Field(_NUMBER, 0.0, lower=-0.9, upper=0.9, static=True),

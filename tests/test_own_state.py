@@ -12,6 +12,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -69,3 +70,54 @@ def test_a_part_of_ones_own_declares_its_figures(tmp_path):
     assert tmp_path / "figs" / "wear.txt" in drawn
     assert np.isclose(float((tmp_path / "figs" / "wear.txt").read_text()), r.metrics["wear_firing_hours"] * 3600.0,
                       rtol=1e-14)
+
+
+def _wear_module(folder: Path) -> str:
+    """The docs example's definitions (up to its ``WEAR``, without its run) as a module ``wear_part`` in
+    ``folder``; returns its import path."""
+    page = (ROOT / "docs" / "python.md").read_text()
+    code = re.search(r"```python\n(.*?)```", page.split("## A state of one's own", 1)[1], re.S).group(1)
+    (folder / "wear_part.py").write_text(code.split("\nsc = ", 1)[0] + "\n")
+    return "wear_part:WEAR"
+
+
+def test_a_scenario_file_names_a_part_of_ones_own_by_import_path(tmp_path, monkeypatch):
+    """``states = ["wear_part:WEAR"]`` at a scenario file's top carries the part as ``simulate(states=...)``
+    does: the same metrics bit for bit; a path that is not one is refused in one line naming it."""
+    import geojax
+
+    monkeypatch.syspath_prepend(str(tmp_path))
+    path = _wear_module(tmp_path)
+    text = geojax.scenario.read_text("li2022-qffc")
+    (tmp_path / "mine.toml").write_text(f'states = ["{path}"]\n' + text)
+    named = geojax.simulate(geojax.load_scenario(str(tmp_path / "mine.toml"), {"duration.days": 3}), seed=1)
+    import wear_part
+
+    given = geojax.simulate(geojax.load_scenario("li2022-qffc", {"duration.days": 3}), seed=1,
+                            states=(wear_part.WEAR,))
+    assert named.metrics["wear_firing_hours"] > 0
+    assert {k: float(v) for k, v in named.metrics.items() if k != "cpu_s_per_orbit"} == \
+        {k: float(v) for k, v in given.metrics.items() if k != "cpu_s_per_orbit"}
+    (tmp_path / "bad.toml").write_text('states = ["wear_part:NOPE"]\n' + text)
+    with pytest.raises(ValueError, match="states: cannot import 'wear_part:NOPE'"):
+        geojax.load_scenario(str(tmp_path / "bad.toml"))
+
+
+def test_a_sweep_carries_a_part_of_ones_own(tmp_path, monkeypatch):
+    """``load_sweep(..., states={"wear": WEAR})``: every sample carries the part, its metric in the file."""
+    import geojax
+    from geojax import store
+
+    monkeypatch.syspath_prepend(str(tmp_path))
+    _wear_module(tmp_path)
+    import wear_part
+
+    (tmp_path / "s.toml").write_text('name = "wear"\nscenario = "li2022-qffc"\ncontrollers = ["qffc"]\n'
+                                     'repetitions = 2\n[set]\n"duration.days" = 3\n')
+    spec = geojax.load_sweep(tmp_path / "s.toml", states={"wear": wear_part.WEAR})
+    out = geojax.run_sweep(spec, tmp_path / "s.h5")
+    data, _ = store.read_h5(out)
+    hours = np.asarray(data["metrics"]["wear_firing_hours"])
+    assert hours.size == 2 and np.all(hours > 0)
+    with pytest.raises(ValueError, match="named 'wear'"):
+        geojax.load_sweep(tmp_path / "s.toml", states={"other": wear_part.WEAR})

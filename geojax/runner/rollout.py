@@ -194,8 +194,8 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
     scenarios = [scenarios] if isinstance(scenarios, Scenario) else list(scenarios)
     if params is not None and len(scenarios) != 1:
         raise ValueError("params: give one scenario with a batch of params, or a list of scenarios")
-    call = functools.partial(_loop_call, scenarios, params, seeds, keys, controller, keep_steps, bool(states),
-                             ephemeris)
+    own_states = bool(states) or bool(scenarios[0].config.get("states"))  # a user's code: not kept traced
+    call = functools.partial(_loop_call, scenarios, params, seeds, keys, controller, keep_steps, own_states, ephemeris)
     compiling = {}
 
     def compile_meanwhile(layout: Batch):
@@ -228,7 +228,7 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
                                                           for x in kept))
     return Result(metrics, status, records, to_numpy(final), jax.tree_util.tree_map(np.asarray, params),
                   batch.step_s, time.perf_counter() - start, compile_s, run_s, states=batch.states,
-                  parts=parts.parts_of(batch.states, states), ephemeris=kept)
+                  parts=parts.parts_of(batch.states, (*parts.named(scenarios[0].config), *states)), ephemeris=kept)
 
 
 def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, own_states: bool, ephemeris, batch: Batch):

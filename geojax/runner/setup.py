@@ -236,8 +236,9 @@ def static_keys(schema: dict) -> dict:
     """{dotted key: the scenario's identity of it} of every static ``Field`` of ``schema``'s tables but the
     controller's (whose static keys its own fields declare, ``_check_static``): what fixes the compiled loop's
     shapes and code, declared on the fields alone."""
-    return {f"{table}.{key}": (lambda sc, table=table, key=key, field=field:
-                               field.identity_of(sc.config[table][key]))
+    return {f"{table}.{key}" if table else key:
+            (lambda sc, table=table, key=key, field=field:
+             field.identity_of((sc.config[table] if table else sc.config)[key]))
             for table, fields in schema.items() if table != "controller"
             for key, field in fields.items() if field.static}
 

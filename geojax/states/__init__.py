@@ -5,6 +5,8 @@ the parts' scenario tables, the models a scenario turns on, their ``Params`` lea
 
 from __future__ import annotations
 
+import importlib
+
 from geojax.params import table_leaves
 from geojax.states import momentum, navigation, wear
 from geojax.states.base import Part, StateModel, part_of
@@ -38,9 +40,33 @@ def descriptions() -> dict:
     return {k: v for p in REGISTRY for k, v in p.descriptions.items()}
 
 
+def imported(path: str):
+    """The ``StateModel`` or ``Part`` a scenario names by its import path (``"package.module:NAME"``);
+    ``ValueError`` naming the path where it cannot be imported or is neither."""
+    module, _, name = path.partition(":") if isinstance(path, str) else ("", "", "")
+    if not module or not name:
+        raise ValueError(f"states: {path!r} is not an import path 'package.module:NAME'")
+    try:
+        entry = getattr(importlib.import_module(module), name)
+    except (ImportError, AttributeError) as err:
+        raise ValueError(f"states: cannot import {path!r} ({err})") from None
+    try:
+        part_of(entry)
+    except TypeError:
+        raise ValueError(f"states: {path!r} is a {type(entry).__name__}, not a geojax.StateModel or Part") from None
+    return entry
+
+
+def named(config: dict) -> tuple:
+    """The parts of one's own a scenario names (its top-level ``states``), imported."""
+    return tuple(imported(path) for path in config.get("states", ()))
+
+
 def selected(config: dict, extra: tuple = ()) -> tuple[tuple[Part, StateModel], ...]:
-    """(part, model) of every part a validated scenario turns on, in the registry's order, then ``extra`` (a
-    user's own: ``StateModel`` s or ``Part`` s, always on).  Static: they shape the compiled loop."""
+    """(part, model) of every part a validated scenario turns on, in the registry's order, then the parts of
+    one's own it names (``states = ["package.module:NAME"]``) and ``extra`` (given in Python: ``StateModel`` s or
+    ``Part`` s), always on.  Static: they shape the compiled loop."""
+    extra = (*named(config), *extra)
     out = []
     for p in REGISTRY:
         model = p.select(config[p.table]) if p.select is not None else p.model
@@ -74,7 +100,9 @@ def leaves_of(config: dict, extra: tuple = ()) -> dict:
 
 def validate(config: dict) -> None:
     """Each registered part's checks across a validated scenario (in place: a part may complete its table): where
-    its ``switch`` is off, every other key of its table keeps its default; then its own ``validate``."""
+    its ``switch`` is off, every other key of its table keeps its default; then its own ``validate``; the parts
+    of one's own the scenario names are imported (one line naming a path that is not one)."""
+    named(config)
     for p in REGISTRY:
         table = config.get(p.table, {})
         if p.switch is not None and not table[p.switch]:

@@ -92,7 +92,7 @@ def lane_plan(sweep: Sweep, controller: str, chunk: int | None = None) -> lanes_
     samples = math.ceil(min(chunk or math.inf, sweep.n_points * sweep.repetitions) / jax.local_device_count())
     n_cycles = cycle_count(scenarios[0].days)
     own_reference = reference_per_sample(scenarios, ctrl)
-    states = states_of(scenarios[0].config)  # the wheels', the filter's records, and their kept columns
+    states = states_of(scenarios[0].config, sweep.parts)  # the parts' records, and their kept columns
     kept = len(CYCLE_NAMES) + sum(m.columns_per_cycle for m in states) if sweep.cycles else 0
     return lanes_mod.plan(ctrl, n_cycles, samples, kept_records=kept,
                           state_bytes_per_cycle=sum(m.bytes_per_cycle for m in states),
@@ -112,7 +112,8 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int, on_phase, devices
     points = list(_points(sweep))
     groups = epoch_axis.groups(points)
     scenarios = [_scenario(sweep, controller, p) for p in points]
-    batches = [prepare([scenarios[i] for i in group], sweep.custom.get(controller)) for group in groups]
+    batches = [prepare([scenarios[i] for i in group], sweep.custom.get(controller), states=sweep.parts)
+               for group in groups]
     batch = batches[0]
     if any(b.reference_per_sample != batch.reference_per_sample for b in batches):
         raise ValueError(f"grid.{epoch_axis.KEY}: the other axes must vary the same leaves at every epoch")
@@ -156,8 +157,8 @@ def _identity(sweep: Sweep, controller: str, sc, batch: Batch):
     """What, beside its arguments' shapes, fixes the program ``_compiled_batch`` compiles (``geojax.traced``): the
     closed loop's settings as ``simulate`` keeps them, and what ``one`` reads of the sweep (seed, dispersion, cycle
     records, the metrics' cycle count); None for a user's controller (its code is not in traced's digest)."""
-    if sweep.custom.get(controller) is not None or controller not in REGISTRY:
-        return None
+    if sweep.custom.get(controller) is not None or controller not in REGISTRY or sweep.parts or sc.config["states"]:
+        return None  # a user's code (a controller's, a part's) is not in traced's digest
     settings = repr(sorted(static_settings(sc.config["controller"], batch.controller.fields).items()))
     return program_identity(sc, controller, settings, batch.controller.lanes_cpu, batch.step_s, batch.n_cycles,
                             batch.reference_per_sample, sweep.seed, sweep.dispersed, repr(sweep.dispersion),

@@ -34,6 +34,7 @@ class Sweep:
     dispersion: dict = dataclasses.field(default_factory=lambda: {k: f.default for k, f in DISPERSION_FIELDS.items()})
     custom: dict = dataclasses.field(default_factory=dict)  # {name: Controller} of a user's own controllers
     lanes: int | None = None  # samples per device per compiled call; None: the platform's (``geojax.lanes``)
+    parts: tuple = ()  # a user's own parts every sample carries (``StateModel`` s or ``Part`` s: ``load(states=)``)
 
     @property
     def dispersed(self) -> bool:
@@ -48,13 +49,15 @@ class Sweep:
         return math.prod(self.shape)
 
 
-def load(path: str | Path, changes: dict | None = None, controllers: dict | None = None) -> Sweep:
+def load(path: str | Path, changes: dict | None = None, controllers: dict | None = None,
+         states: dict | None = None) -> Sweep:
     """Read and validate a sweep file; ``ValueError`` with one line naming the fault.
 
     ``changes`` replaces top-level keys and adds to ``[set]`` (a study's quick
     run: ``{"repetitions": 2, "set": {"duration.days": 30}}``); the sweep then
     stores its changed text.  ``controllers`` ({name: Controller}) adds a user's own controllers, named
-    in the file's ``controllers`` list like the registered ones.
+    in the file's ``controllers`` list like the registered ones; ``states`` ({name: StateModel or Part}) a user's
+    own parts every sample carries (their metrics go to the file under their names).
     """
     from geojax.control import REGISTRY, lookup
 
@@ -116,10 +119,26 @@ def load(path: str | Path, changes: dict | None = None, controllers: dict | None
     dispersion = check_table("dispersion.", raw.get("dispersion", {}), DISPERSION_FIELDS)
     sweep = Sweep(str(raw.get("name", path.stem)), str(raw["scenario"]), tuple(controllers), reps, seed, dict(fixed),
                   {k: list(v) for k, v in grid.items()}, text, raw.get("cycles", False), dispersion,
-                  {k: v for k, v in controllers_extra.items() if k in controllers}, lanes)
+                  {k: v for k, v in controllers_extra.items() if k in controllers}, lanes, _own_parts(states))
     for controller in sweep.controllers:  # every value within its range, every batch compilable
         prepare_check(sweep, controller)
     return sweep
+
+
+def _own_parts(states: dict | None) -> tuple:
+    """The parts of ``load(states=)``, each under its own name (``ValueError`` naming a mismatch)."""
+    from geojax.states.base import part_of
+
+    out = []
+    for name, entry in (states or {}).items():
+        try:
+            part = part_of(entry)
+        except TypeError as err:
+            raise ValueError(f"states[{name!r}]: {err}") from None
+        if part.name != name:
+            raise ValueError(f"states[{name!r}]: the part is named {part.name!r}; give it under its own name")
+        out.append(entry)
+    return tuple(out)
 
 
 def prepare_check(sweep: Sweep, controller: str) -> None:
