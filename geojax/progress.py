@@ -65,6 +65,8 @@ class Progress:
         head = f"{self.done}/{self.total} {self.unit}"
         if self.current_phase:
             body = f"  {self.current_phase} ({now - self._phase_start:.0f} s)"
+        elif self.done == self._resumed and self.done < self.total:  # a rate of 0.0 would say it had stalled
+            body = f"  running (the rate once the first {self.unit} finish)"
         else:
             elapsed = now - self.start
             rate = (self.done - self._resumed) / elapsed if elapsed > 0 else 0.0

@@ -37,6 +37,20 @@ def test_a_terminal_gets_a_bar_with_the_phase_then_the_rate(monkeypatch):
     assert stream.getvalue().endswith("\n")
 
 
+def test_before_the_first_unit_finishes_it_says_running_not_a_rate_of_zero(monkeypatch):
+    """A sweep's first chunk runs for minutes before a sample is counted: no "0.0 samples/s" meanwhile."""
+    clock = Clock()
+    monkeypatch.setattr(progress.time, "perf_counter", clock)
+    stream = Terminal()
+    with progress.Progress(100, "samples", stream=stream) as bar:
+        bar.restart()
+        clock.now += 500.0
+        bar.update(0)
+        assert stream.getvalue().endswith("0/100 samples  running (the rate once the first samples finish) ")
+        bar.update(50)
+        assert stream.getvalue().endswith("50/100 samples  0.1 samples/s  ETA 500 s ")
+
+
 def test_a_file_gets_a_line_per_phase_then_every_10_percent_or_30_s_whichever_is_later(monkeypatch):
     clock = Clock()
     monkeypatch.setattr(progress.time, "perf_counter", clock)
