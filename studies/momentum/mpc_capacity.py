@@ -32,7 +32,7 @@ import numpy as np
 import geojax
 from geojax import scenario
 from geojax.loop.metrics import STATUS_MEANINGS
-from geojax.loop.rollout import simulate_batch
+from geojax.runner.rollout import simulate_batch
 
 HERE = Path(__file__).resolve().parent
 ERRORS = {"errors.h_rv": 1.0, "errors.h_att": 1.0}  # Li 2022's nominal 3-sigma levels (eqs. (45)-(48))
