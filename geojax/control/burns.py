@@ -132,8 +132,9 @@ def thrust(params, plan: BurnPlan, t, state, environment, tilts_rsw=None) -> Thr
     direction = jnp.where(fraction[0] > 0, plan.directions_rsw[0], plan.directions_rsw[1])
     level = jnp.where(fraction[0] > 0, plan.magnitude_scale[0], plan.magnitude_scale[1])
     tilt = None if tilts_rsw is None else jnp.where(fraction[0] > 0, tilts_rsw[0], tilts_rsw[1])
+    thruster = jnp.where(fraction[0] > 0, 0, 1)  # burn k flies from arm k's thruster (``states.faults``)
     return Thrust(direction, params.thrusters["thrust_n"] * level, params.thrusters["isp_s"], jnp.sum(fraction),
-                  tilt)
+                  tilt, thruster)
 
 
 def record(plan: BurnPlan) -> dict:

@@ -45,6 +45,9 @@ class Thrust(NamedTuple):
     # Flown by the wheels' model (``states.momentum.thrust``), which turns it into the direction and clears it;
     # None (every other controller): no leaf.
     tilt_rsw: jnp.ndarray | None = None
+    # [] int or None: which thruster flies it, from 0 (``control.burns``: the burn's arm); None: thruster 0.  Read by
+    # the parts that act on one thruster (``states.faults``); no leaf where a controller does not say.
+    thruster: jnp.ndarray | None = None
 
 
 def no_thrust() -> Thrust:

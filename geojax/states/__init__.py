@@ -8,13 +8,14 @@ from __future__ import annotations
 import importlib
 
 from geojax.params import table_leaves
-from geojax.states import momentum, navigation, wear
+from geojax.states import faults, momentum, navigation, wear
 from geojax.states.base import Part, StateModel, part_of
 
 REGISTRY: tuple[Part, ...] = (
     momentum.PART,  # the reaction wheels' momentum ([attitude] wheels = true)
     navigation.PART,  # the orbit-determination filter ([navigation] model = "ekf")
     wear.PART,  # the thrusters' firing hours and starts ([wear] enabled = true)
+    faults.PART,  # burns lost, a thruster out, thrust degraded ([faults]: any key)
 )
 # The loop's own status codes; the parts' follow in the registry's order, then a user's own parts' in theirs.
 CORE_STATUSES = ("ok", "cycles without a solution", "left the longitude box", "left the latitude box",
