@@ -64,3 +64,18 @@ def test_every_command_the_readme_shows_parses_and_names_files_that_exist():
                 assert (ROOT / value).is_file(), argv
             elif value and name == "scenario":
                 assert value in scenario.available() or value.startswith("ma2023"), argv
+
+
+def test_no_readme_command_is_one_measured_to_take_over_two_minutes():
+    """The README's examples run in under two minutes as written: a command docs/measured_times.json records
+    (the original measurements and those of the cut examples) must have been measured under 120 s, so the
+    README cannot go back to the 14.5-minute sweep or the year-long tuning without this failing."""
+    import json
+
+    measured = json.loads((ROOT / "docs" / "measured_times.json").read_text())
+    runs = [*measured["runs"], *measured["readme_examples"]["runs"]]
+    times = {tuple(shlex.split(run["command"])): run["wall_s"] for run in runs}
+    shown = {tuple(argv) for argv in readme_commands()}
+    assert {("geojax", "sweep"), ("geojax", "tune"), ("geojax", "bound")} <= {argv[:2] for argv in shown & times.keys()}
+    for argv in shown & times.keys():
+        assert times[argv] is not None and times[argv] < 120, " ".join(argv)

@@ -104,6 +104,8 @@ def summary(result, paper: bool = True) -> list[str]:
     if DV_COMPONENT_NOTES.keys() <= values.keys():
         lines.append("  note: dv_radial, dv_ew and dv_ns are each burn's Delta-V per RTN axis, components and not a "
                      "partition: they add up to more than dv_per_year_mps where a burn is not along one axis")
+    if published and sc.name in papers.DIFFERS_FROM_PAPER:
+        lines.append(f"  note: {papers.DIFFERS_FROM_PAPER[sc.name]}")
     if changed:
         lines.append(f"  note: {source.split(' (')[0]}'s numbers are for its own run; this one differs in "
                      f"{', '.join(changed)}, so they are shown for orientation only")
