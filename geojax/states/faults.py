@@ -30,7 +30,7 @@ FIELDS = {
     "enabled": Field(bool, False, static=True,
                      doc="carry the faults part (set by any other key of the table; give it in a sweep's base "
                          "where a grid moves a faults key from its default)"),
-    "missed_burn_probability": Field(NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1.0 + 1e-12,
+    "missed_burn_probability": Field(NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1.0,
                                      si="missed_burn_probability", unit="",
                                      doc="each planned burn (a thruster's firing in a cycle) is lost with this "
                                          "probability, drawn from the part's own random stream"),
@@ -115,7 +115,7 @@ def metrics(params, cycles: Faults, n_steps_total: int, run_s: float):
         "fault_lost_firing_s": jnp.sum(cycles.impulse_lost_s),
     }
     for k in range(TRACKED):
-        out[f"on_time_s_t{k}"] = jnp.sum(cycles.flown_s[:, k])
+        out[f"on_time_t{k}_s"] = jnp.sum(cycles.flown_s[:, k])
         out[f"burns_t{k}"] = jnp.sum(flown[:, k]).astype(float)
     return out, jnp.asarray(False)
 
@@ -152,7 +152,7 @@ DESCRIPTIONS = {
     "burns_missed": "burns commanded but not flown at all (drawn missed, or their thruster out)",
     "burns_drawn_missed": "burns lost to faults.missed_burn_probability (its own random stream)",
     "fault_lost_firing_s": "the thrust the faults took away, as firing time at full thrust, s",
-    **{f"on_time_s_t{k}": f"thruster {k}'s firing time as delivered, s" for k in range(TRACKED)},
+    **{f"on_time_t{k}_s": f"thruster {k}'s firing time as delivered, s" for k in range(TRACKED)},
     **{f"burns_t{k}": f"thruster {k}'s burns flown" for k in range(TRACKED)},
     **{f"fired_s_t{k}": f"thruster {k}'s firing time delivered in the cycle, s (/cycles)" for k in range(TRACKED)},
     **{f"planned_s_t{k}": f"thruster {k}'s firing time commanded in the cycle, s (/cycles)" for k in range(TRACKED)},
