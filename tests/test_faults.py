@@ -32,10 +32,11 @@ def test_missed_burns_are_binomial_and_the_box_holds():
 
 
 def test_a_thruster_out_fires_nothing_in_its_window_and_the_rest_unchanged():
-    """Thruster 0 out from day 10 for 5 days: its delivered firing time is zero in every cycle of the window
-    (counted from the /cycles columns), thruster 1 fires what it was commanded, and before the window what was
-    flown is what was planned (the part changes nothing it is not asked to)."""
-    r = run({"thruster_out": 0, "out_from_day": 10.0, "out_days": 5.0})
+    """Thruster 0 out from day 10 for 5 days, the planner not told: its delivered firing time is zero in every
+    cycle of the window (counted from the /cycles columns) while it is still commanded, thruster 1 fires what it
+    was commanded, and before the window what was flown is what was planned (the part changes nothing it is not
+    asked to)."""
+    r = run({"thruster_out": 0, "out_from_day": 10.0, "out_days": 5.0, "planner_told": False})
     table = r.cycles()
     t_days = np.asarray(table["t_s"]) / SECONDS_PER_DAY
     fired0, planned0 = np.asarray(table["fired_s_t0"]), np.asarray(table["planned_s_t0"])
@@ -46,13 +47,27 @@ def test_a_thruster_out_fires_nothing_in_its_window_and_the_rest_unchanged():
     np.testing.assert_array_equal(np.asarray(table["fired_s_t1"]), np.asarray(table["planned_s_t1"]))
 
 
-def test_degraded_thrust_delivers_its_fraction():
-    """Every thruster at 0.9 of its thrust with the plan unaware: the first cycle's burns are planned alike, so
-    that cycle's Delta-V is 0.9 x the nominal run's (the rocket equation is linear in thrust to 1e-6 over a burn)."""
-    nominal, degraded = run({}, days=2), run({"thrust_scale": 0.9}, days=2)
+def test_a_told_planner_commands_nothing_from_a_thruster_it_knows_is_out():
+    """Told (the default), the planner learns of the outage at the first cycle start after day 10: from the next
+    cycle on it commands nothing from thruster 0 until the outage ends."""
+    r = run({"thruster_out": 0, "out_from_day": 10.0, "out_days": 5.0})
+    table = r.cycles()
+    t_days = np.asarray(table["t_s"]) / SECONDS_PER_DAY
+    inside = (t_days > 10.5) & (t_days < 14.5)
+    assert np.all(np.asarray(table["planned_s_t0"])[inside] == 0)
+    assert np.any(np.asarray(table["planned_s_t0"])[t_days > 15.5] > 0)
+
+
+@pytest.mark.parametrize("told", [False, True])
+def test_degraded_thrust_delivers_its_fraction_or_is_planned_for(told):
+    """Every thruster at 0.9 of its thrust.  Unaware, the first cycle's burns are planned alike, so that cycle's
+    Delta-V is 0.9 x the nominal run's (F t / m, the rocket equation linear in thrust to 1e-5 over a burn); told,
+    each burn fires 1 / 0.9 as long at 0.9 of the thrust, the nominal Delta-V (to the mass flow's second order)."""
+    nominal = run({}, days=2)
+    degraded = run({"thrust_scale": 0.9, "planner_told": told}, days=2)
     dv_n = float(np.asarray(nominal.records.cycles.dv_mps)[0])
     dv_d = float(np.asarray(degraded.records.cycles.dv_mps)[0])
-    assert dv_d == pytest.approx(0.9 * dv_n, rel=1e-5)
+    assert dv_d == pytest.approx((1.0 if told else 0.9) * dv_n, rel=1e-5)
 
 
 @pytest.mark.parametrize("key, value, says", [

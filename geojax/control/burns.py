@@ -38,6 +38,7 @@ from geojax.physics.forces import sunlit_fraction_xyz
 from geojax.physics.propulsion import delta_v_direction_rsw, firing_fraction, sunlit_clock
 from geojax.physics.trig import sincos
 from geojax.nominal_errors import NOMINAL_3SIGMA_ATT_DEG  # noqa: F401 (Li 2022 eq. (48))
+from geojax.states.faults import NAME as FAULTS
 
 # ``fold_in`` constant of the magnitude errors' draw from the cycle's key (the FOMPC's search takes 1; the parts
 # their own named streams, ``states.base.stream_id``).
@@ -69,6 +70,9 @@ def fly(params, burns, prediction, ns_fraction, estimate, context, key) -> BurnP
     directions = delta_v_direction_rsw(burns.alpha_rad + attitude_error[0], burns.beta_rad + attitude_error[1])
     v_mps = jnp.where(params.errors["att_known"] > 0, refit_magnitudes_mps(burns, directions, l_start), burns.v_mps)
     burn_s = v_mps * estimate.mass_kg / thrusters["thrust_n"]  # eq. (13)
+    if FAULTS in estimate.states:  # told of the thrusters' levels (``states.faults``): burn k from thruster k
+        level = estimate.states[FAULTS][:2]
+        burn_s = jnp.where(level > 0, burn_s / jnp.where(level > 0, level, 1.0), 0.0)
     burn_s = jnp.where((burn_s >= thrusters["min_burn_s"]) & burns.feasible, burn_s, 0.0)
     start = jnp.clip(t_mid - burn_s / 2, 0.0, cycle_s - burn_s)
     clock = sunlit_clock(sunlit_fraction(context.env, params.station["lon_rad"], context.force_model), step_s)

@@ -6,8 +6,10 @@ a planner's burn ``k`` from arm ``k``'s thruster; a controller that does not say
 where its burn of the cycle was drawn missed (each planned burn lost with ``missed_burn_probability``, one
 uniform draw per thruster per cycle from the part's own random stream) or where it is out (``thruster_out``,
 from ``out_from_day`` for ``out_days`` days, 0: to the end), and delivers ``thrust_scale`` of its thrust
-otherwise.  The controller is not told (it plans as if nothing were wrong); the closed loop shows what that
-costs, and the next cycle's estimate sees the orbit the faults left.  A "burn" is a thruster's firing within one
+otherwise.  With ``planner_told`` (the default) the planner learns at each cycle
+start what telemetry shows then (``estimate.states["faults"]``: each thruster's level; ``control.burns`` plans a
+degraded thruster's burns with its delivered level and fires no burn from a thruster it knows is out); without,
+it plans as if nothing were wrong, and the closed loop shows what that costs.  A "burn" is a thruster's firing within one
 control cycle (a planner's burn; a feedback law's cycle of firing).
 """
 
@@ -44,6 +46,10 @@ FIELDS = {
                       unit="day", doc="how long the outage lasts, days; 0: to the end of the run"),
     "thrust_scale": Field(NUMBER, 1.0, lower=0.0, upper=2.0, si="thrust_scale", unit="",
                           doc="the fraction of the commanded thrust every thruster delivers (degradation: < 1)"),
+    "planner_told": Field(bool, True, si="planner_told",
+                          doc="the planner learns of an outage or a degradation at the first cycle start after it "
+                              "(from telemetry) and plans with what is left; false: it plans as if nothing were "
+                              "wrong"),
 }
 
 
@@ -69,14 +75,27 @@ def cycle(params, state: Faults, start) -> Faults:
     return Faults(missed, zero, zero, zero[0])
 
 
-def delivered_level(params, state: Faults, thruster, t_s):
-    """The fraction [] of its commanded thrust that ``thruster`` delivers over a step starting at ``t_s``."""
+def health(params, thruster, t_s):
+    """The fraction [] of its commanded thrust that ``thruster`` can deliver at ``t_s``: 0 while it is out, else
+    ``thrust_scale`` (what telemetry shows; a burn drawn missed is not known ahead)."""
     leaves = params.states[NAME]
     start_s = leaves["out_from_s"]
     end_s = jnp.where(leaves["out_s"] > 0, start_s + leaves["out_s"], jnp.inf)
     out = (thruster == leaves["thruster_out"]) & (t_s >= start_s) & (t_s < end_s)
-    lost = out | state.missed[thruster]
-    return jnp.where(lost, 0.0, leaves["thrust_scale"])
+    return jnp.where(out, 0.0, leaves["thrust_scale"])
+
+
+def delivered_level(params, state: Faults, thruster, t_s):
+    """The fraction [] of its commanded thrust that ``thruster`` delivers over a step starting at ``t_s``."""
+    return jnp.where(state.missed[thruster], 0.0, health(params, thruster, t_s))
+
+
+def estimate(params, state: Faults, told):
+    """What the planner is told at a cycle start (``estimate.states["faults"]``): each thruster's level [TRACKED]
+    as telemetry shows it then (``health``), or 1 for every thruster where ``planner_told`` is false."""
+    levels = jnp.stack([health(params, k, told.t_s) for k in range(TRACKED)])
+    known = jnp.where(params.states[NAME]["planner_told"] > 0, levels, 1.0)
+    return told._replace(states={**told.states, NAME: known})
 
 
 def thrust(params, state: Faults, commanded, ctx):
@@ -143,7 +162,7 @@ def validate(config: dict) -> dict:
     return table
 
 
-MODEL = StateModel(NAME, init, step, summary, metrics, cycle=cycle, columns=columns, thrust=thrust,
+MODEL = StateModel(NAME, init, step, summary, metrics, cycle=cycle, columns=columns, thrust=thrust, estimate=estimate,
                    bytes_per_cycle=(3 * TRACKED + 1) * 8, columns_per_cycle=2 * TRACKED)
 DESCRIPTIONS = {
     "burns_total": "burns flown (with the faults part: as flown; burns_planned beside it)",
