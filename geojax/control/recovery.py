@@ -180,6 +180,8 @@ def with_recovery(controller: Controller) -> Controller:
         own = controller.thrust(params, plan.inner, t, state, environment)
         t0 = t - environment.index * environment.step_s
         back = thrust_of(params, plan.command, t, t0)
+        if own.thruster is not None:  # a planner's arms: a push south (dv along -W) from arm 0, north from arm 1
+            back = back._replace(thruster=jnp.where(back.direction_rsw[2] > 0, 1, 0))
         return jax.tree_util.tree_map(lambda r, o: jnp.where(plan.command.recovering, r, o), back, own)
 
     def record(plan: Plan) -> dict:
