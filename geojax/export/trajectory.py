@@ -51,6 +51,7 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
+from geojax.states.faults import NAME as FAULTS
 from geojax.export.oem import Covariance, Metadata, write_oem
 from geojax.physics.constants import G0_MPS2
 from geojax.physics.elements import mee_to_cartesian
@@ -266,8 +267,9 @@ def mee_of_boundary(boundary, earth_angle_rad, iterations: int = 8) -> np.ndarra
 
 
 def run_burns(result) -> Burns | None:
-    """The burns a run fired (``Burns``), in time order: a planner's from its records, a feedback law's from the
-    thrust of every step (``step_burns``: a run with ``ephemeris=True``); none without a controller; None for a
+    """The burns a run fired (``Burns``), in time order: a planner's from its records (as flown where the faults
+    part rode the loop: missed burns left out, cut ones as cut, degraded ones at the level delivered), a feedback
+    law's from the thrust of every step (``step_burns``: a run with ``ephemeris=True``); none without a controller; None for a
     feedback law's run without its steps' thrust."""
     from geojax.runner.report import scenario_of
 
@@ -281,6 +283,11 @@ def run_burns(result) -> Burns | None:
         return None
     fired_s, start_s = np.asarray(rec["fired_s"], float), np.asarray(rec["start_s"], float)
     directions = np.asarray(rec["directions_rsw"], float)
+    level = 1.0
+    faults = result.records.cycles.states.get(FAULTS)
+    if faults is not None:  # ``states.faults``: the burns as flown (burn k from thruster k), at the level delivered
+        fired_s = np.where(fired_s > 0, np.asarray(faults.flown_s, float)[:, :fired_s.shape[1]], 0.0)
+        level = float(result.params.states[FAULTS]["thrust_scale"])
     cycle_s = steps_per_cycle(sc.step_s) * result.step_s
     cycle = np.broadcast_to(np.arange(len(fired_s))[:, None], fired_s.shape)
     thruster = np.broadcast_to(np.array([1, 2]), fired_s.shape)
@@ -289,7 +296,7 @@ def run_burns(result) -> Burns | None:
     duration = fired_s.ravel()[order]
     thrusters = result.params.thrusters
     exhaust_mps = float(thrusters["isp_s"]) * G0_MPS2
-    flow_kg_s = float(thrusters["thrust_n"]) / exhaust_mps
+    flow_kg_s = level * float(thrusters["thrust_n"]) / exhaust_mps
     mass_before = float(result.params.initial.mass_kg) - flow_kg_s * (np.cumsum(duration) - duration)
     dv = exhaust_mps * np.log(mass_before / (mass_before - flow_kg_s * duration))
     return Burns(cycle.ravel()[order], thruster.ravel()[order],
