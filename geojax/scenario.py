@@ -286,9 +286,11 @@ def _check_honoured(config: dict, module) -> None:
     ``module``: the registry entry of ``controller.kind`` (None: a user's ``Controller``, not checked)."""
     kind, count = config["controller"]["kind"], config["thrusters"]["count"]
     flown, why = getattr(module, "THRUSTERS", (None, ""))
-    if count is not None and flown is not None and count != flown:
+    redundant = getattr(module, "REDUNDANT_THRUSTERS", None)  # e.g. 4: two per arm, one flown per arm
+    if count is not None and flown is not None and count not in (flown, redundant):
+        also = f" or {redundant} (two per arm, the planner flying one of each)" if redundant else ""
         raise ValueError(f"thrusters.count: the {kind} controller flies {flown} thruster{'s' * (flown > 1)} ({why}), "
-                         f"got {count}; leave it out or set {flown}")
+                         f"got {count}; leave it out or set {flown}{also}")
     for key in getattr(module, "UNREAD", ()):
         table, name = key.split(".")
         if key in ARM_LIMIT_KEYS and config["thrusters"]["layout"] == "arms":

@@ -69,9 +69,10 @@ SCHEMA: dict[str, dict[str, Field]] = {
                               lower_inclusive=True),
     },
     "thrusters": {
-        # The thrusters on board: unset, the controller's (2 for Li's arms, 1 for a gimbal or a manipulator); a
-        # count the controller cannot fly is refused at load (``control.base``: its module's ``THRUSTERS``).
-        "count": Field(int, None, lower=1, upper=65, lower_inclusive=True,
+        # The thrusters on board: unset, the controller's (2 for Li's arms, 1 for a gimbal or a manipulator; the
+        # arms' planners also fly 4, two per arm); a count the controller cannot fly is refused at load
+        # (``control.base``: its module's ``THRUSTERS`` and ``REDUNDANT_THRUSTERS``).
+        "count": Field(int, None, lower=1, upper=65, lower_inclusive=True, si="count",
                        doc="thrusters on board; unset: the controller's (refused if it flies another number)"),
         "thrust_n": Field(_NUMBER, REQUIRED, lower=0.0, upper=1e5, si="thrust_n", transform=LOG),
         "isp_s": Field(_NUMBER, REQUIRED, lower=0.0, upper=1e6, si="isp_s", transform=LOG),

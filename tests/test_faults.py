@@ -14,8 +14,10 @@ from geojax.physics.constants import SECONDS_PER_DAY
 DAYS = 30
 
 
-def run(faults: dict, seed: int = 3, days: float = DAYS):
+def run(faults: dict, seed: int = 3, days: float = DAYS, count: int | None = None):
     overrides = {"duration.days": days, **{f"faults.{k}": v for k, v in faults.items()}}
+    if count is not None:
+        overrides["thrusters.count"] = count
     return geojax.simulate(geojax.load_scenario("li2022-qffc", overrides), seed=seed)
 
 
@@ -93,3 +95,26 @@ def test_the_burns_file_lists_the_burns_as_flown():
     dv_file = float(np.sum(np.linalg.norm(burns.dv_rtn_mps, axis=1)))
     dv_loop = float(np.sum(np.asarray(r.records.cycles.dv_mps)))
     assert dv_file == pytest.approx(dv_loop, rel=1e-6)
+
+
+def test_four_thrusters_fly_on_with_one_out_and_the_planner_told():
+    """Two thrusters per arm, thruster 0 out from day 10 to the end, the planner told: thruster 0 fires nothing
+    after the cycle that met the outage, its arm's second thruster (2) takes its burns, the box is kept, and the
+    Delta-V is within 3 % of the run without the fault (the same arm, the same directions)."""
+    days = 30
+    plain = run({"enabled": True}, days=days, count=4)
+    faulty = run({"thruster_out": 0, "out_from_day": 10.0}, days=days, count=4)
+    table = faulty.cycles()
+    t_days = np.asarray(table["t_s"]) / SECONDS_PER_DAY
+    assert np.all(np.asarray(table["fired_s_t0"])[t_days > 11.0] == 0)
+    assert np.all(np.asarray(table["fired_s_t2"])[t_days < 9.5] == 0)
+    assert np.sum(np.asarray(table["fired_s_t2"])[t_days > 11.0] > 0) >= 10
+    assert faulty.status == 0 and plain.status == 0
+    dv_plain, dv_faulty = float(plain.metrics["dv_per_year_mps"]), float(faulty.metrics["dv_per_year_mps"])
+    assert dv_faulty == pytest.approx(dv_plain, rel=0.03)
+
+
+def test_four_thrusters_without_faults_fly_as_two():
+    """thrusters.count = 4 and nothing wrong: the planner flies thrusters 0 and 1, every number as with 2."""
+    two, four = run({"enabled": True}, days=3, count=2), run({"enabled": True}, days=3, count=4)
+    np.testing.assert_array_equal(np.asarray(two.records.cycles.dv_mps), np.asarray(four.records.cycles.dv_mps))

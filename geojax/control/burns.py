@@ -57,6 +57,7 @@ class BurnPlan(NamedTuple):
     ns_fraction: jnp.ndarray  # [] north-south correction flown, as a fraction of the QFFC's (1 for the QFFC)
     start_s: jnp.ndarray  # [2] when each burn starts firing, s from the cycle start (after the shadow it met)
     magnitude_scale: jnp.ndarray  # [2] thrust level flown over the planned (1 + the execution error)
+    thrusters: jnp.ndarray | None = None  # [2] int: the thruster flying each burn (None: burn k from thruster k)
 
 
 def fly(params, burns, prediction, ns_fraction, estimate, context, key) -> BurnPlan:
@@ -70,8 +71,9 @@ def fly(params, burns, prediction, ns_fraction, estimate, context, key) -> BurnP
     directions = delta_v_direction_rsw(burns.alpha_rad + attitude_error[0], burns.beta_rad + attitude_error[1])
     v_mps = jnp.where(params.errors["att_known"] > 0, refit_magnitudes_mps(burns, directions, l_start), burns.v_mps)
     burn_s = v_mps * estimate.mass_kg / thrusters["thrust_n"]  # eq. (13)
-    if FAULTS in estimate.states:  # told of the thrusters' levels (``states.faults``): burn k from thruster k
-        level = estimate.states[FAULTS][:2]
+    flying = None
+    if FAULTS in estimate.states:  # told of the thrusters' levels (``states.faults``)
+        flying, level = allocated(estimate.states[FAULTS], thrusters.get("count"))
         burn_s = jnp.where(level > 0, burn_s / jnp.where(level > 0, level, 1.0), 0.0)
     burn_s = jnp.where((burn_s >= thrusters["min_burn_s"]) & burns.feasible, burn_s, 0.0)
     start = jnp.clip(t_mid - burn_s / 2, 0.0, cycle_s - burn_s)
@@ -79,7 +81,20 @@ def fly(params, burns, prediction, ns_fraction, estimate, context, key) -> BurnP
     grid = jnp.arange(n_steps + 1) * step_s
     clock_start = jnp.interp(start, grid, clock)
     return BurnPlan(burns, burn_s, clock, clock_start, directions, prediction, ns_fraction,
-                    firing_start_s(clock, clock_start, step_s), magnitude_scale(params.errors, key))
+                    firing_start_s(clock, clock_start, step_s), magnitude_scale(params.errors, key), flying)
+
+
+def allocated(levels, count):
+    """(thruster [2] int, level [2]) flying each arm's burn: arm k carries thruster k and, where
+    ``thrusters.count`` is 4, thruster k + 2; of those on board the one with the highest level as told
+    (``levels`` [4], ``states.faults``), the first where they tie.  The same Delta-V costs the same propellant at
+    any level (one Isp), so the least-fuel choice is any working thruster; the highest level fires the shortest
+    burn, the nearest to the impulse the plan assumes."""
+    on_board = jnp.arange(levels.shape[0]) < (2 if count is None else count)
+    levels = jnp.where(on_board, levels, 0.0)
+    primary, redundant = levels[0:2], levels[2:4]
+    use_redundant = redundant > primary
+    return jnp.arange(2) + 2 * use_redundant, jnp.where(use_redundant, redundant, primary)
 
 
 def magnitude_scale(errors, key):
@@ -136,7 +151,8 @@ def thrust(params, plan: BurnPlan, t, state, environment, tilts_rsw=None) -> Thr
     direction = jnp.where(fraction[0] > 0, plan.directions_rsw[0], plan.directions_rsw[1])
     level = jnp.where(fraction[0] > 0, plan.magnitude_scale[0], plan.magnitude_scale[1])
     tilt = None if tilts_rsw is None else jnp.where(fraction[0] > 0, tilts_rsw[0], tilts_rsw[1])
-    thruster = jnp.where(fraction[0] > 0, 0, 1)  # burn k flies from arm k's thruster (``states.faults``)
+    flying = jnp.arange(2) if plan.thrusters is None else plan.thrusters  # burn k from arm k (``states.faults``)
+    thruster = jnp.where(fraction[0] > 0, flying[0], flying[1])
     return Thrust(direction, params.thrusters["thrust_n"] * level, params.thrusters["isp_s"], jnp.sum(fraction),
                   tilt, thruster)
 

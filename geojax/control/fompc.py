@@ -47,6 +47,7 @@ from geojax.control.base import Controller
 from geojax.control.qffc import model_cycle
 
 THRUSTERS = qffc.THRUSTERS
+REDUNDANT_THRUSTERS = qffc.REDUNDANT_THRUSTERS
 FIELDS = qffc.FIELDS
 
 

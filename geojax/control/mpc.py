@@ -59,6 +59,7 @@ HORIZON_LIMIT = 30  # cycles: the largest N_max accepted
 SOLVED_VIOLATION = 0.01  # a plan violating a row by more than this fraction of its half-width is "not solved"
 
 THRUSTERS = (2, "Li 2022's two robotic arms, one burn of each per cycle")  # control.base
+REDUNDANT_THRUSTERS = 4  # or two per arm (``control.burns`` allocating, ``qffc.REDUNDANT_THRUSTERS``)
 
 FIELDS = {
     # Horizon N (cycles) and the limits of the mean elements about their targets.

@@ -68,6 +68,7 @@ from geojax.physics.elements import mee_to_cartesian, wrap_angle
 from geojax.physics.propulsion import arm_limits
 
 THRUSTERS = mpc.THRUSTERS
+REDUNDANT_THRUSTERS = mpc.REDUNDANT_THRUSTERS
 UNREAD = ("attitude.dump_gain_per_s", "attitude.dump_transient_fraction")
 TILTS = 4  # per cycle: two burns x two components across the line
 

@@ -32,6 +32,8 @@ __all__ = ["ArmTrig", "BurnPair", "CONTROLLER", "FIELDS", "_log_at_least_one", "
 # The [controller] keys of Li 2022's planners.  The QFFC reads vdt_estimate only; it accepts the FOMPC's keys
 # (and ignores them) so that one scenario and one sweep file run both controllers on the same grid.
 THRUSTERS = (2, "Li 2022's two robotic arms, one burn each per cycle")  # control.base: honoured or refused
+# thrusters.count may also be 4: two per arm (thrusters k and k + 2 on arm k), ``control.burns`` allocating
+REDUNDANT_THRUSTERS = 4
 
 FIELDS = {
     # Start V_DT from the estimate of Li 2022, eqs. (37)-(39), instead of the drift target.
