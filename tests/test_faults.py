@@ -109,6 +109,11 @@ def test_four_thrusters_fly_on_with_one_out_and_the_planner_told():
     assert np.all(np.asarray(table["fired_s_t0"])[t_days > 11.0] == 0)
     assert np.all(np.asarray(table["fired_s_t2"])[t_days < 9.5] == 0)
     assert np.sum(np.asarray(table["fired_s_t2"])[t_days > 11.0] > 0) >= 10
+    from geojax.export import trajectory
+
+    burns = trajectory.run_burns(faulty)  # the burn list numbers thrusters from 1: thruster 2 is "3"
+    late = burns.cycle > 11
+    assert set(np.asarray(burns.thruster)[late]) <= {2, 3} and 3 in set(np.asarray(burns.thruster)[late])
     assert faulty.status == 0 and plain.status == 0
     dv_plain, dv_faulty = float(plain.metrics["dv_per_year_mps"]), float(faulty.metrics["dv_per_year_mps"])
     assert dv_faulty == pytest.approx(dv_plain, rel=0.03)

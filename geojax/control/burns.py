@@ -160,9 +160,12 @@ def thrust(params, plan: BurnPlan, t, state, environment, tilts_rsw=None) -> Thr
 def record(plan: BurnPlan) -> dict:
     """Per-cycle records of a planner (read by ``loop.metrics``)."""
     fired_s = jnp.maximum(jnp.minimum(plan.burn_s, plan.clock[-1] - plan.clock_start), 0.0)
-    return {"burns": plan.burns, "fired_s": fired_s, "prediction": plan.prediction,
-            "ns_fraction": plan.ns_fraction, "solved": plan.burns.feasible, "directions_rsw": plan.directions_rsw,
-            "start_s": plan.start_s}
+    out = {"burns": plan.burns, "fired_s": fired_s, "prediction": plan.prediction,
+           "ns_fraction": plan.ns_fraction, "solved": plan.burns.feasible, "directions_rsw": plan.directions_rsw,
+           "start_s": plan.start_s}
+    if plan.thrusters is not None:  # allocated (``allocated``): the thruster of each burn, from 0
+        out["thrusters"] = plan.thrusters
+    return out
 
 
 def sunlit_fraction(env_steps, station_lon_rad, fm):

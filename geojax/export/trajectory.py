@@ -285,12 +285,14 @@ def run_burns(result) -> Burns | None:
     directions = np.asarray(rec["directions_rsw"], float)
     level = 1.0
     faults = result.records.cycles.states.get(FAULTS)
-    if faults is not None:  # ``states.faults``: the burns as flown (burn k from thruster k), at the level delivered
-        fired_s = np.where(fired_s > 0, np.asarray(faults.flown_s, float)[:, :fired_s.shape[1]], 0.0)
+    if faults is not None:  # ``states.faults``: the burns as flown (each by its thruster), at the level delivered
+        flying = np.asarray(rec["thrusters"]) if "thrusters" in rec else np.broadcast_to(np.arange(2), fired_s.shape)
+        fired_s = np.where(fired_s > 0, np.take_along_axis(np.asarray(faults.flown_s, float), flying, axis=1), 0.0)
         level = float(result.params.states[FAULTS]["thrust_scale"])
     cycle_s = steps_per_cycle(sc.step_s) * result.step_s
     cycle = np.broadcast_to(np.arange(len(fired_s))[:, None], fired_s.shape)
-    thruster = np.broadcast_to(np.array([1, 2]), fired_s.shape)
+    thruster = np.asarray(rec["thrusters"]) + 1 if "thrusters" in rec else np.broadcast_to(np.array([1, 2]),
+                                                                                           fired_s.shape)
     order = np.lexsort((start_s.ravel(), cycle.ravel()))
     order = order[fired_s.ravel()[order] > 0]
     duration = fired_s.ravel()[order]
