@@ -269,8 +269,8 @@ def mee_of_boundary(boundary, earth_angle_rad, iterations: int = 8) -> np.ndarra
 def run_burns(result) -> Burns | None:
     """The burns a run fired (``Burns``), in time order: a planner's from its records (as flown where the faults
     part rode the loop: missed burns left out, cut ones as cut, degraded ones at the level delivered), a feedback
-    law's from the thrust of every step (``step_burns``: a run with ``ephemeris=True``); none without a controller; None for a
-    feedback law's run without its steps' thrust."""
+    law's from the thrust of every step (``step_burns``: a run with ``ephemeris=True``); none without a
+    controller; None for a feedback law's run without its steps' thrust."""
     from geojax.runner.report import scenario_of
 
     rec = result.records.cycles.controller

@@ -9,8 +9,8 @@ from ``out_from_day`` for ``out_days`` days, 0: to the end), and delivers ``thru
 otherwise.  With ``planner_told`` (the default) the planner learns at each cycle
 start what telemetry shows then (``estimate.states["faults"]``: each thruster's level; ``control.burns`` plans a
 degraded thruster's burns with its delivered level and fires no burn from a thruster it knows is out); without,
-it plans as if nothing were wrong, and the closed loop shows what that costs.  A "burn" is a thruster's firing within one
-control cycle (a planner's burn; a feedback law's cycle of firing).
+it plans as if nothing were wrong, and the closed loop shows what that costs.  A "burn" is a thruster's
+firing within one control cycle (a planner's burn; a feedback law's cycle of firing).
 """
 
 from __future__ import annotations
