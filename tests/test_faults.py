@@ -83,43 +83,16 @@ def test_bad_faults_are_refused_naming_the_key(key, value, says):
         geojax.load_scenario("li2022-qffc", {f"faults.{key}": value, "thrusters.count": 2})
 
 
-def test_the_burns_file_lists_the_burns_as_flown():
-    """With burns lost and every thruster at 0.9, the burn list (what the CSV and the OPM write) holds the burns
-    flown, no more (``burns_flown``), and their Delta-V, by the rocket equation at the delivered thrust, adds up
-    to the loop's own RK4 Delta-V (an independent integration of the same burns, to 1e-6)."""
-    from geojax.export import trajectory
+def test_a_thruster_out_must_be_on_board(tmp_path):
+    """Katz's gimbal (thrusters.count = 1): thruster 1 out is refused, naming the key; and a file that leaves
+    thrusters.count unset may name thruster 0 only (the count it would get is the controller's)."""
+    with pytest.raises(ValueError, match=r"^faults\.thruster_out: thruster 1 is not on board"):
+        geojax.load_scenario("katz2025-continuous", {"faults.thruster_out": 1})
+    from pathlib import Path
 
-    r = run({"missed_burn_probability": 0.3, "thrust_scale": 0.9, "planner_told": False}, days=10)
-    burns = trajectory.run_burns(r)
-    assert len(burns.cycle) == float(r.metrics["burns_flown"]) < float(r.metrics["burns_planned"])
-    dv_file = float(np.sum(np.linalg.norm(burns.dv_rtn_mps, axis=1)))
-    dv_loop = float(np.sum(np.asarray(r.records.cycles.dv_mps)))
-    assert dv_file == pytest.approx(dv_loop, rel=1e-6)
-
-
-def test_four_thrusters_fly_on_with_one_out_and_the_planner_told():
-    """Two thrusters per arm, thruster 0 out from day 10 to the end, the planner told: thruster 0 fires nothing
-    after the cycle that met the outage, its arm's second thruster (2) takes its burns, the box is kept, and the
-    Delta-V is within 3 % of the run without the fault (the same arm, the same directions)."""
-    days = 30
-    plain = run({"enabled": True}, days=days, count=4)
-    faulty = run({"thruster_out": 0, "out_from_day": 10.0}, days=days, count=4)
-    table = faulty.cycles()
-    t_days = np.asarray(table["t_s"]) / SECONDS_PER_DAY
-    assert np.all(np.asarray(table["fired_s_t0"])[t_days > 11.0] == 0)
-    assert np.all(np.asarray(table["fired_s_t2"])[t_days < 9.5] == 0)
-    assert np.sum(np.asarray(table["fired_s_t2"])[t_days > 11.0] > 0) >= 10
-    from geojax.export import trajectory
-
-    burns = trajectory.run_burns(faulty)  # the burn list numbers thrusters from 1: thruster 2 is "3"
-    late = burns.cycle > 11
-    assert set(np.asarray(burns.thruster)[late]) <= {2, 3} and 3 in set(np.asarray(burns.thruster)[late])
-    assert faulty.status == 0 and plain.status == 0
-    dv_plain, dv_faulty = float(plain.metrics["dv_per_year_mps"]), float(faulty.metrics["dv_per_year_mps"])
-    assert dv_faulty == pytest.approx(dv_plain, rel=0.03)
-
-
-def test_four_thrusters_without_faults_fly_as_two():
-    """thrusters.count = 4 and nothing wrong: the planner flies thrusters 0 and 1, every number as with 2."""
-    two, four = run({"enabled": True}, days=3, count=2), run({"enabled": True}, days=3, count=4)
-    np.testing.assert_array_equal(np.asarray(two.records.cycles.dv_mps), np.asarray(four.records.cycles.dv_mps))
+    text = (Path(geojax.__file__).parent / "scenarios" / "li2022-qffc.toml").read_text()
+    unset = tmp_path / "unset.toml"
+    unset.write_text("\n".join(line for line in text.splitlines() if not line.startswith("count")))
+    assert geojax.load_scenario(str(unset), {"faults.thruster_out": 0}).config["faults"]["enabled"]
+    with pytest.raises(ValueError, match=r"^faults\.thruster_out: thruster 1 needs thrusters\.count"):
+        geojax.load_scenario(str(unset), {"faults.thruster_out": 1})

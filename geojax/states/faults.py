@@ -154,6 +154,9 @@ def validate(config: dict) -> dict:
     if any(table[key] != field.default for key, field in FIELDS.items() if key != "enabled"):
         table["enabled"] = True
     count = config["thrusters"]["count"]
+    if table["enabled"] and count is None and table["thruster_out"] > 0:  # thruster 0 is always on board
+        raise ValueError(f"faults.thruster_out: thruster {table['thruster_out']} needs thrusters.count set (the "
+                         f"thrusters on board), got it unset")
     if table["enabled"] and count is not None and table["thruster_out"] >= count:
         raise ValueError(f"faults.thruster_out: thruster {table['thruster_out']} is not on board (thrusters.count = "
                          f"{count}, indices from 0)")
