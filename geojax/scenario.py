@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from geojax import scenario_physics
+from geojax import scenario_cluster, scenario_physics
 from geojax.physics import constants as c
 from geojax.physics.forces import ForceModel
 from geojax.physics.frames import earth_rotation_angle_rad
@@ -77,6 +77,8 @@ class Scenario(ScenarioFile):
 
     initial_mee: np.ndarray  # [6], ECI of the epoch
     force_model: ForceModel
+    # a cluster's satellites (``[[satellites]]``, ``scenario_cluster``), each a full scenario; () for one satellite
+    satellites: tuple = ()
 
     @property
     def mass_kg(self) -> float:
@@ -128,7 +130,7 @@ def started_at(name_or_path: str | Path, utc: str, overrides: dict | None = None
     base = load(name_or_path, overrides, controller)
     kind = base.config["orbit"]["elements"]
     moved = load(name_or_path, {**(overrides or {}), "epoch.utc": utc}, controller)
-    if kind == "station_offset":
+    if kind in ("station_offset", "station"):
         return moved
     if kind != "mee":
         raise ValueError(f"orbit.elements: moving a scenario to another epoch needs \"mee\" or \"station_offset\" "
@@ -238,6 +240,8 @@ def read_text(name_or_path: str | Path) -> str:
 
 def from_dict(raw: dict, controller=None) -> Scenario:
     """Validate a scenario table and build the ``Scenario`` (``controller``: as in ``load``)."""
+    if "satellites" in raw or "collocation" in raw:
+        return _cluster(raw, controller)
     config = _validate(raw, controller)
     utc = parse_utc(config["epoch"]["utc"])
     epoch_tt_s = tt_seconds_from_utc(utc)
@@ -245,6 +249,25 @@ def from_dict(raw: dict, controller=None) -> Scenario:
     _check_ephemeris_range(utc, config)
     initial_mee = scenario_physics.initial_mee(config, epoch_tt_s, tt_minus_ut1_s)
     return Scenario(config, epoch_tt_s, tt_minus_ut1_s, initial_mee, scenario_physics.force_model(config))
+
+
+def _cluster(raw: dict, controller=None) -> Scenario:
+    """A cluster's scenario: the file's keys as the first satellite would have them without its overrides, and
+    every satellite's own (``Scenario.satellites``), each validated as a scenario of its own."""
+    raw = dict(raw)
+    satellites, collocation = raw.pop("satellites", None), raw.pop("collocation", None)
+    if satellites is None:
+        raise ValueError("collocation: a table of a cluster; give the satellites as [[satellites]] tables")
+    members, table = scenario_cluster.member_overrides(satellites, collocation)
+    base = from_dict(raw, controller)
+    flown = []
+    for i, (name, overrides) in enumerate(members):
+        try:
+            flown.append(from_dict({**with_overrides(raw, overrides), "name": name}, controller))
+        except ValueError as err:
+            raise scenario_cluster.with_satellite_prefix(i, name, err) from None
+    config = {**base.config, "satellites": [dict(s) for s in satellites], "collocation": table}
+    return dataclasses.replace(base, config=config, satellites=tuple(flown))
 
 
 def _validate(raw: dict, controller=None) -> dict:

@@ -30,7 +30,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "ut1_minus_utc_s": Field(_NUMBER, 0.0, lower=-0.9, upper=0.9, static=True),
     },
     "orbit": {
-        "elements": Field(str, REQUIRED, choices=("mee", "kepler", "station_offset")),
+        "elements": Field(str, REQUIRED, choices=("mee", "kepler", "station_offset", "station")),
         # elements = "mee": Li 2022, eq. (5)
         # Bounds catch unit slips, not physics: an orbit beyond Earth's Hill sphere (1.5e6 km), |h|, |k| of
         # 100 (i = 178.9 deg, near the retrograde singularity of MEE), angles of tens of turns.
@@ -156,4 +156,5 @@ ORBIT_KEYS = {
     "mee": ("p_km", "f", "g", "h", "k", "L_rad"),
     "kepler": ("a_km", "e", "i_deg", "raan_deg", "argp_deg", "true_anomaly_deg"),
     "station_offset": ("offset_ecef_km",),
+    "station": (),  # on the station's targets: its longitude, e and i vectors, at its radius
 }

@@ -47,7 +47,7 @@ from geojax.control.base import Controller, Estimate
 from geojax.control.predictor import Reference, boundary_elements, estimate_mean
 from geojax.nominal_errors import NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS
 from geojax.physics.dynamics import SpacecraftState
-from geojax.physics.elements import cartesian_to_mee, semi_major_axis_m, wrap_angle
+from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, semi_major_axis_m, wrap_angle
 from geojax.physics.forces import Environment, ForceModel
 from geojax.physics.frames import latitude_rad, rsw_to_eci_xyz, subsatellite_lon_tan_lat_xyz
 from geojax.physics.fusion import materialized
@@ -123,6 +123,15 @@ class Shared(NamedTuple):
     n_active: jnp.ndarray | None = None
 
 
+class Positions(NamedTuple):
+    """A cycle's true positions and velocities (ECI, m and m/s), what a cluster's separations are computed from
+    (``loop.cluster``), and the position the controller was told at the cycle start."""
+
+    steps_rv: jnp.ndarray  # [n_steps, 6] at every step start
+    end_rv: jnp.ndarray  # [6] at the cycle's end
+    estimated_r: jnp.ndarray  # [3] the estimate's position at the cycle start (the fix, or a filter's)
+
+
 def simulate(controller: Controller, params: Params, shared: Shared, key, *, step_s: float,
              dynamics: Dynamics = MEE, keep_steps: bool = False, states: tuple[StateModel, ...] = ()):
     """Closed loop over the cycles of ``shared.env``; returns (final ``SpacecraftState``, ``Records``).
@@ -131,32 +140,74 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
     ``controller``, ``step_s``, ``dynamics``, ``keep_steps`` and ``states`` (the further states carried,
     ``geojax.states``) are static.
     """
-    check_streams(states)
+    xs = cycle_inputs(controller, shared)
+    body = jax.checkpoint(cycle_body(controller, params, key, step_s=step_s, dynamics=dynamics,
+                                     keep_steps=keep_steps, states=states))
+    carry = initial_carry(controller, params, shared.env, xs[3][0], dynamics, step_s, states)
+    if shared.n_active is None:
+        (final, _, _), (cycles, steps) = jax.lax.scan(body, carry, xs)
+    else:
+        (final, _, _), (cycles, steps) = _scan_first(body, carry, xs, shared.n_active)
+    return final, Records(cycles, steps)
+
+
+def cycle_inputs(controller: Controller, shared: Shared):
+    """What the cycle scan runs over: (cycle index, environment, the reference's osculating elements and
+    window), leading axis cycle (a reference with a leading satellite axis keeps it after the cycle's)."""
     env = shared.env
-    n_cycles, n_steps = env.earth_angle_rad.shape[:2]
+    n_cycles = env.earth_angle_rad.shape[0]
+    width = controller.reference_cycles
+    if not width:
+        return jnp.arange(n_cycles), env, jnp.zeros((n_cycles, 6)), jnp.zeros((n_cycles, 0, 7))
+    window = None if shared.reference is None else shared.reference.window
+    have = (0, 0) if window is None else window.shape[-3:-1]
+    if have[0] < n_cycles or have[1] < width:
+        raise ValueError(f"reference: the controller reads {width} boundaries per cycle for {n_cycles} cycles, "
+                         f"got {have[1]} for {have[0]}")
+    if window.ndim == 4:  # [satellite, cycle, ...] -> [cycle, satellite, ...]
+        return (jnp.arange(n_cycles), env, jnp.swapaxes(shared.reference.osc[:, :n_cycles], 0, 1),
+                jnp.swapaxes(window[:, :n_cycles, :width], 0, 1))
+    return jnp.arange(n_cycles), env, shared.reference.osc[:n_cycles], window[:n_cycles, :width]
+
+
+def initial_carry(controller: Controller, params: Params, env: Environment, window, dynamics: Dynamics,
+                  step_s: float, states: tuple[StateModel, ...] = ()):
+    """The loop's carry at the run's start: (spacecraft state, controller state, {part: state})."""
+    check_streams(states)
+    n_steps = env.earth_angle_rad.shape[1]
+    fm = params.forces
+    first_env = jax.tree_util.tree_map(lambda x: x[0], env)
     cycle_s = n_steps * step_s
+    initial_state = controller.init(params, CycleContext(jnp.asarray(0), jnp.asarray(0) * cycle_s, cycle_s, step_s,
+                                                         first_env, window, fm))
+    # A controller's state that starts as constants (the FOMPC's warm start) becomes per sample in the loop: under
+    # vmap it starts as per-sample zeros added (x + 0 = x), so that vmap batches the cycle once, not once to find
+    # that and again (the FOMPC's 32-lane loop traced in 7.1-7.5 s instead of 8.7; see the step sums' zero below).
+    anchor = 0.0 * params.initial.orbit[0]
+    initial_state = jax.tree_util.tree_map(
+        lambda x: x + anchor.astype(x.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, initial_state)
+    r0, v0 = position_velocity(dynamics, params.initial.orbit, fm.mu_m3_s2) if states else (None, None)
+    env0 = jax.tree_util.tree_map(lambda x: x[0, 0, 0], env) if states else None  # the run's first instant
+    return params.initial, initial_state, {m.name: m.init(params, r0, v0, env0, fm) for m in states}
+
+
+def cycle_body(controller: Controller, params: Params, key, *, step_s: float, dynamics: Dynamics = MEE,
+               keep_steps: bool = False, states: tuple[StateModel, ...] = (), positions: bool = False):
+    """One sample's control cycle, ``(carry, xs) -> (carry, (CycleRecord, StepRecord | None))`` over the
+    inputs of ``cycle_inputs`` (one cycle's); with ``positions`` the outputs also hold the cycle's
+    ``Positions`` (a cluster's separations, ``loop.cluster``)."""
     fm = params.forces
     mu = fm.mu_m3_s2
     width = controller.reference_cycles
-    if width:
-        have = (0, 0) if shared.reference is None else shared.reference.window.shape[:2]
-        if have[0] < n_cycles or have[1] < width:
-            raise ValueError(f"reference: the controller reads {width} boundaries per cycle for {n_cycles} cycles, "
-                             f"got {have[1]} for {have[0]}")
-        windows = shared.reference.window[:n_cycles, :width]
-        osc_ref = shared.reference.osc[:n_cycles]
-    else:
-        windows, osc_ref = jnp.zeros((n_cycles, 0, 7)), jnp.zeros((n_cycles, 6))
     station_lon = params.station["lon_rad"]
-
-    def context(k, env_steps, window):
-        return CycleContext(k, k * cycle_s, cycle_s, step_s, env_steps, window, fm)
 
     def one_cycle(carry, xs):
         state, controller_state, extra = carry
         k, env_steps, osc_ref_k, window = xs
+        n_steps = env_steps.earth_angle_rad.shape[0]
+        cycle_s = n_steps * step_s
         cycle_key = jax.random.fold_in(key, k)
-        ctx = context(k, env_steps, window)
+        ctx = CycleContext(k, k * cycle_s, cycle_s, step_s, env_steps, window, fm)
         extra = _cycle_start(states, params, extra, dynamics, state, k, ctx.t_s, cycle_key, mu)
         fix = measured_mee(dynamics, state.orbit, jax.random.normal(cycle_key, (2, 6))[0], params.errors, mu)
         estimate = _estimate_hooks(states, params, extra, Estimate(fix, jnp.zeros(6), state.mass_kg, ctx.t_s))
@@ -186,14 +237,15 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
             new = rk4_step(dynamics.rhs, state, env3, fm, thrust, step_s, dynamics.rk4_stages_in_loop)
             extra, extra_steps = _steps(states, params, extra, dynamics, state, new, r, v, thrust, env3,
                                         ctx.t_s + j * step_s, step_s, mu)
-            return (new, sums, extra), (lon, tan_lat, accel_ecef, extra_steps)
+            rv = jnp.stack([*r, *v]) if positions else None
+            return (new, sums, extra), (lon, tan_lat, accel_ecef, extra_steps, rv)
 
         # The orbit is carried as one array [6] and the mean elements' sums as the loop steps (docs/speed.md,
         # "Cycle means").  The sums start at a zero computed from the orbit (0 x p = +0 for MEE, +-0 for a
         # Cartesian x: the same sums): under vmap a zero that carries the sample axis, so that vmap batches the
         # step once, not once to find that the sums become batched and again.
         zero = 0.0 * state.orbit[0]
-        (final, (fghk_sum, a_sum), extra_end), (lon, tan_lat, accel, extra_steps) = jax.lax.scan(
+        (final, (fghk_sum, a_sum), extra_end), (lon, tan_lat, accel, extra_steps, steps_rv) = jax.lax.scan(
             jax.checkpoint(step), (state, (jnp.zeros(4, state.orbit.dtype) + zero, zero), extra),
             (jnp.arange(n_steps), env_steps))
         # the cycle's mean elements from the step starts' records and the end state, whose longitude and
@@ -219,26 +271,13 @@ def simulate(controller: Controller, params: Params, shared: Shared, key, *, ste
             firing, {} if controller.record is None else controller.record(plan),
             {m.name: m.summary(params, extra[m.name], extra_end[m.name], extra_steps[m.name]) for m in states})
         steps = StepRecord(lon, latitude_rad(tan_lat), accel, extra_steps) if keep_steps else None
-        return (final, controller_state, extra_end), (record, steps)
+        if not positions:
+            return (final, controller_state, extra_end), (record, steps)
+        told = Positions(steps_rv, jnp.concatenate(position_velocity(dynamics, final.orbit, mu)),
+                         mee_to_cartesian(estimate.fix_mee, mu)[0])
+        return (final, controller_state, extra_end), (record, steps, told)
 
-    initial_state = controller.init(params, context(jnp.asarray(0), jax.tree_util.tree_map(lambda x: x[0], env),
-                                                    windows[0]))
-    # A controller's state that starts as constants (the FOMPC's warm start) becomes per sample in the loop: under
-    # vmap it starts as per-sample zeros added (x + 0 = x), so that vmap batches the cycle once, not once to find
-    # that and again (the FOMPC's 32-lane loop traced in 7.1-7.5 s instead of 8.7; see the step sums' zero below).
-    anchor = 0.0 * params.initial.orbit[0]
-    initial_state = jax.tree_util.tree_map(
-        lambda x: x + anchor.astype(x.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, initial_state)
-    xs = (jnp.arange(n_cycles), env, osc_ref, windows)
-    r0, v0 = position_velocity(dynamics, params.initial.orbit, mu) if states else (None, None)
-    env0 = jax.tree_util.tree_map(lambda x: x[0, 0, 0], env) if states else None  # the run's first instant
-    carry = (params.initial, initial_state, {m.name: m.init(params, r0, v0, env0, fm) for m in states})
-    body = jax.checkpoint(one_cycle)
-    if shared.n_active is None:
-        (final, _, _), (cycles, steps) = jax.lax.scan(body, carry, xs)
-    else:
-        (final, _, _), (cycles, steps) = _scan_first(body, carry, xs, shared.n_active)
-    return final, Records(cycles, steps)
+    return one_cycle
 
 
 def _cycle_start(states, params, extra: dict, dynamics, state, k, t_s, cycle_key, mu) -> dict:

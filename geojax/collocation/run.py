@@ -1,0 +1,149 @@
+"""A cluster's run (``simulate_cluster``): its satellites' closed loops in one compiled program
+(``loop.cluster``), each satellite's metrics as a lone run's, and the distance between them.
+
+Each satellite draws its errors from the run's seed folded with a stable id of its name (CRC-32), never its
+place in the file, so that adding a satellite changes no other satellite's draws.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+import zlib
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from geojax.loop.cluster import SeparationRecord, pairs, separation_metrics, simulate_cluster as cluster_loop
+from geojax.loop.metrics import STATUS_TEXT, cycle_table, summarize
+from geojax.loop.simulate import Records
+from geojax.physics.propagate import for_lanes
+from geojax.runner.rollout import Result
+from geojax.runner.setup import prepare, reference
+from geojax import states as parts
+from geojax.scenario import Scenario, to_toml
+
+# What the summary prints of each satellite, beside its status.
+SATELLITE_METRICS = ("dv_per_year_mps", "max_abs_dlon_deg", "max_abs_dlat_deg")
+
+
+class ClusterResult(NamedTuple):
+    """A cluster's run: its satellites' results as a batch (``satellites``: leading axis satellite, in the file's
+    order, named ``names``), each pair's per-cycle separations (``separation``: [cycle, pair], pairs in
+    ``loop.cluster.pairs`` order) and the cluster's metrics (``metrics``, units in the names)."""
+
+    names: tuple[str, ...]
+    satellites: Result
+    separation: SeparationRecord
+    metrics: dict
+    scenario: Scenario
+    seed: int
+    alert_km: float
+    wall_s: float
+
+    @property
+    def pair_names(self) -> tuple[str, ...]:
+        return tuple(f"{self.names[i]}_{self.names[j]}" for i, j in pairs(len(self.names)))
+
+    def metric_table(self) -> dict[str, float]:
+        """The cluster's metrics as floats, each pair's by its names (``min_separation_km_A_B``)."""
+        out = {}
+        for name, value in self.metrics.items():
+            if name.startswith("pair_"):
+                out.update({f"{name[5:]}_{pair}": float(v) for pair, v in zip(self.pair_names, value)})
+            else:
+                out[name] = float(value)
+        return out
+
+    def summary(self) -> list[str]:
+        """What ``geojax simulate`` prints of a cluster: the least separation, when and between which pair, the
+        operator's view of it, then each pair and each satellite."""
+        m = self.metric_table()
+        i, j = pairs(len(self.names))[int(m["min_separation_pair"])]
+        meanings = self.satellites.status_meanings
+        lines = [f"{self.scenario.name}: {len(self.names)} satellites ({', '.join(self.names)}), "
+                 f"{self.scenario.controller} each, {self.scenario.days:g} days in {self.wall_s:.1f} s",
+                 f"  min_separation_km {m['min_separation_km']:.4f} on day {m['min_separation_day']:.3f} between "
+                 f"{self.names[i]} and {self.names[j]}; below_alert_h {m['below_alert_h']:.2f} "
+                 f"(closer than alert_km {self.alert_km:g})",
+                 f"  from the estimates at cycle starts: min_estimated_separation_km "
+                 f"{m['min_estimated_separation_km']:.4f}, max_separation_error_km {m['max_separation_error_km']:.4f}"]
+        for pair in self.pair_names:
+            lines.append(f"  pair {pair}: min_separation_km {m['min_separation_km_' + pair]:.4f}, below_alert_h "
+                         f"{m['below_alert_h_' + pair]:.2f}")
+        for k, name in enumerate(self.names):
+            values = ", ".join(f"{key} {float(self.satellites.metrics[key][k]):.4g}" for key in SATELLITE_METRICS)
+            lines.append(f"  {name}: status {int(self.satellites.status[k])} "
+                         f"({meanings[int(self.satellites.status[k])]}), {values}")
+        return lines
+
+    def cycles(self) -> dict[str, np.ndarray]:
+        """Per cycle: the cluster's least separation over its pairs (``min_separation_km``), each pair's, and the
+        operator's view at the cycle starts."""
+        out = {"min_separation_km": np.min(self.separation.min_m, axis=1) / 1e3}
+        for k, pair in enumerate(self.pair_names):
+            out[f"min_separation_km_{pair}"] = self.separation.min_m[:, k] / 1e3
+            out[f"estimated_separation_km_{pair}"] = self.separation.estimated_start_m[:, k] / 1e3
+        return out
+
+    def save(self, path) -> object:
+        """The cluster's file: ``/metrics`` (the cluster's, then each satellite's as ``/satellites/<name>/metrics``),
+        ``/cycles`` (the separations) and each satellite's ``/satellites/<name>/cycles``."""
+        from geojax import store
+
+        groups = {"metrics": self.metric_table(), "cycles": self.cycles()}
+        one = lambda tree, k: jax.tree_util.tree_map(lambda x: x[k], tree)  # noqa: E731
+        for k, name in enumerate(self.names):
+            metrics = {key: float(v[k]) for key, v in self.satellites.metrics.items()}
+            groups[f"satellites/{name}/metrics"] = {**metrics, "status": int(self.satellites.status[k])}
+            groups[f"satellites/{name}/cycles"] = cycle_table(one(self.satellites.records, k), self.satellites.states)
+        attrs = {"kind": "collocation", "scenario": self.scenario.name, "epoch_tt_s": self.scenario.epoch_tt_s,
+                 "seed": self.seed, "satellites": ",".join(self.names), "status_codes": STATUS_TEXT}
+        return store.write_h5(path, groups, to_toml(self.scenario.config), self.wall_s, attrs=attrs)
+
+
+def satellite_keys(seed: int, names) -> jax.Array:
+    """Each satellite's key: the seed's, folded with a stable id of the satellite's name."""
+    base = jax.random.key(seed)
+    return jnp.stack([jax.random.fold_in(base, zlib.crc32(name.encode()) | (1 << 31)) for name in names])
+
+
+@functools.partial(jax.jit, static_argnames=("controller", "step_s", "dynamics", "keep_steps", "states",
+                                             "steps_per_cycle"))
+def cluster_rollout(params, keys, shared, reference_env, alert_m, *, controller, step_s, dynamics, keep_steps,
+                    states, steps_per_cycle):
+    """One cluster's closed loop, its satellites' metrics and its separations: (final, records, separation,
+    satellite metrics, cluster metrics); pure, vmappable over clusters."""
+    if reference_env is not None:  # each satellite its own uncontrolled reference (their targets differ)
+        own = jax.vmap(lambda p: reference(p, reference_env, step_s, dynamics, controller.reference_cycles))(params)
+        shared = shared._replace(reference=own)
+    final, records, separation = cluster_loop(controller, params, shared, keys, step_s=step_s, alert_m=alert_m,
+                                              dynamics=dynamics, keep_steps=keep_steps, states=states)
+    metrics = jax.vmap(lambda p, f, c: summarize(p, f, Records(c, None), step_s, steps_per_cycle, states))(
+        params, final, records.cycles)
+    return final, records, separation, metrics, separation_metrics(separation, steps_per_cycle * step_s)
+
+
+def simulate_cluster(sc: Scenario, seed: int = 0, keep_steps: bool = False) -> ClusterResult:
+    """The closed loops of the cluster ``sc`` (a scenario with ``[[satellites]]``) in one compiled call."""
+    if not sc.satellites:
+        raise ValueError(f"{sc.name}: not a cluster; give [[satellites]] tables (docs/collocation.md)")
+    start = time.perf_counter()
+    batch = prepare(list(sc.satellites))
+    names = tuple(member.name for member in sc.satellites)
+    alert_km = float(sc.config["collocation"]["alert_km"])
+    steps_per_cycle = batch.shared.env.earth_angle_rad.shape[1]
+    out = cluster_rollout(batch.params, satellite_keys(seed, names), batch.shared,
+                          batch.reference_env if batch.reference_per_sample else None, jnp.asarray(alert_km * 1e3),
+                          controller=batch.controller, step_s=batch.step_s,
+                          dynamics=for_lanes(batch.dynamics, len(names)), keep_steps=keep_steps, states=batch.states,
+                          steps_per_cycle=steps_per_cycle)
+    final, records, separation, metrics, cluster = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(out))
+    status = metrics.pop("status")
+    wall_s = time.perf_counter() - start
+    satellites = Result(metrics, status, records, final, jax.tree_util.tree_map(np.asarray, batch.params),
+                        batch.step_s, wall_s, states=batch.states,
+                        parts=parts.parts_of(batch.states, parts.named(sc.satellites[0].config)))
+    return ClusterResult(names, satellites, separation, cluster, sc, seed, alert_km, wall_s)

@@ -1,0 +1,59 @@
+"""Several satellites in one slot, in one scenario file: the ``[[satellites]]`` tables (each a ``name`` and
+dotted overrides of the scenario's keys, as a sweep's ``[set]`` takes them) and the ``[collocation]`` table.
+
+Every satellite is a full scenario, the file's keys with its own overrides; the cluster shares the epoch, the
+integration grid, the duration and the force model's environment, so those keys are refused as overrides, and
+so is every key that sets the compiled program (the controller's kind and its static settings: one program
+flies every satellite).
+"""
+
+from __future__ import annotations
+
+import re
+
+from geojax.params import NUMBER, Field, check_table
+
+FIELDS = {
+    "alert_km": Field(NUMBER, 2.0, lower=0.0,
+                      doc="the distance below which a pair's time counts as an alert (below_alert_h), km"),
+}
+
+# Tables whose keys every satellite of a cluster shares: one grid, one environment, one duration.
+SHARED_TABLES = ("epoch", "integration", "duration", "forces")
+NAME = re.compile(r"[A-Za-z0-9_]+")
+
+
+def member_overrides(satellites, collocation) -> tuple[list[tuple[str, dict]], dict]:
+    """The validated ``[[satellites]]`` (``satellites``: the file's list of tables) as (name, overrides) each, and
+    the validated ``[collocation]`` table; ``ValueError`` naming the key for a cluster of one, a name given twice
+    or not a plain word, or an override of a shared key."""
+    if not isinstance(satellites, list) or not all(isinstance(s, dict) for s in satellites):
+        raise ValueError("satellites: must be an array of tables ([[satellites]]), each with a name")
+    if len(satellites) < 2:
+        raise ValueError(f"satellites: a cluster needs at least two [[satellites]], got {len(satellites)}; for one "
+                         f"satellite leave [[satellites]] out")
+    members, seen = [], set()
+    for i, table in enumerate(satellites):
+        name = table.get("name")
+        if not isinstance(name, str) or not NAME.fullmatch(name):
+            raise ValueError(f"satellites[{i}].name: must be letters, digits or _, got {name!r}")
+        if name in seen:
+            raise ValueError(f"satellites[{i}].name: {name!r} is given twice; every satellite needs its own name")
+        seen.add(name)
+        overrides = {k: v for k, v in table.items() if k != "name"}
+        for key in overrides:
+            table_name = str(key).split(".")[0]
+            if table_name in SHARED_TABLES or key in ("description", "controller.kind", "controller.recovery"):
+                raise ValueError(f"satellites[{i}].{key}: shared by every satellite of the cluster (the epoch, the "
+                                 f"integration grid, the duration, the force model and the controller's kind); set "
+                                 f"it once, outside [[satellites]]")
+            if "." not in str(key):
+                raise ValueError(f"satellites[{i}].{key}: not a scenario key; give TABLE.KEY, quoted (e.g. "
+                                 f"\"station.ex\" = 2.0e-4)")
+        members.append((name, overrides))
+    return members, check_table("collocation.", collocation or {}, FIELDS)
+
+
+def with_satellite_prefix(index: int, name: str, err: ValueError) -> ValueError:
+    """A satellite's own validation error, named by its place in the file."""
+    return ValueError(f"satellites[{index}] ({name}): {err}")
