@@ -29,6 +29,8 @@ def _propagate(args) -> int:
 
     sc = scenario.load(args.scenario, _overrides(args))
     _check_outputs(args)
+    if sc.satellites:
+        return _run_cluster(sc, 0, args, uncontrolled=True)
     cli_files.check(args, sc)
     drift = uncontrolled.without_control(sc) if args.oem or args.maneuvers else None  # refused before the run
     result = uncontrolled.propagate_scenario(sc, progress=False if args.quiet else None)
@@ -46,6 +48,8 @@ def _simulate(args) -> int:
         raise ValueError(f"--seed: must be an integer >= 0, got {args.seed}")
     sc = scenario.load(args.scenario, _overrides(args))
     _check_outputs(args)
+    if sc.satellites:
+        return _run_cluster(sc, args.seed, args)
     cli_files.check(args, sc)
     return _run_simulation(sc, args.seed, args.out, args.plots, args)
 
@@ -78,6 +82,27 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
                                  "times instead of a progress bar", out, plots, figures.get("reference"))
     cli_files.write(args, result)
     return code
+
+
+def _run_cluster(sc, seed: int, args, uncontrolled: bool = False) -> int:
+    """A cluster's run (``[[satellites]]``): its summary, its file (``--out``) and figures (``--plots``)."""
+    from geojax.collocation import run
+
+    for flag in ("oem", "maneuvers"):
+        if getattr(args, flag, None):
+            raise ValueError(f"--{flag}: a cluster's CCSDS files are not written yet; run one satellite of it "
+                             f"alone for them (its [[satellites]] overrides as --set)")
+    _say(args)(f"{sc.name}: {len(sc.satellites)} satellites in one compiled loop, "
+               f"{'free drift' if uncontrolled else sc.controller + ' each'} for {flown_days(sc.days)}; compiling "
+               f"and running...", flush=True)
+    result = run.simulate_cluster(sc, seed, uncontrolled=uncontrolled)
+    for line in result.summary():
+        _say(args)(line)
+    if args.out:
+        print(f"wrote {result.save(args.out)}")
+    if args.plots:
+        print("wrote " + " and ".join(map(str, run.plot(result, args.plots))))
+    return 0
 
 
 def _finish(args, result, detail: str, out, plots, reference=None) -> int:

@@ -19,11 +19,12 @@ import numpy as np
 from geojax.loop.cluster import SeparationRecord, pairs, separation_metrics, simulate_cluster as cluster_loop
 from geojax.loop.metrics import STATUS_TEXT, cycle_table, summarize
 from geojax.loop.simulate import Records
+from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.physics.propagate import for_lanes
 from geojax.runner.rollout import Result
 from geojax.runner.setup import prepare, reference
 from geojax import states as parts
-from geojax.scenario import Scenario, to_toml
+from geojax.scenario import Scenario, from_dict, to_toml
 
 # What the summary prints of each satellite, beside its status.
 SATELLITE_METRICS = ("dv_per_year_mps", "max_abs_dlon_deg", "max_abs_dlat_deg")
@@ -42,6 +43,7 @@ class ClusterResult(NamedTuple):
     seed: int
     alert_km: float
     wall_s: float
+    uncontrolled: bool = False  # every satellite's free drift (``geojax propagate``)
 
     @property
     def pair_names(self) -> tuple[str, ...]:
@@ -64,7 +66,7 @@ class ClusterResult(NamedTuple):
         i, j = pairs(len(self.names))[int(m["min_separation_pair"])]
         meanings = self.satellites.status_meanings
         lines = [f"{self.scenario.name}: {len(self.names)} satellites ({', '.join(self.names)}), "
-                 f"{self.scenario.controller} each, {self.scenario.days:g} days in {self.wall_s:.1f} s",
+                 f"{'free drift' if self.uncontrolled else self.scenario.controller + ' each'}, {self.scenario.days:g} days in {self.wall_s:.1f} s",
                  f"  min_separation_km {m['min_separation_km']:.4f} on day {m['min_separation_day']:.3f} between "
                  f"{self.names[i]} and {self.names[j]}; below_alert_h {m['below_alert_h']:.2f} "
                  f"(closer than alert_km {self.alert_km:g})",
@@ -89,25 +91,33 @@ class ClusterResult(NamedTuple):
         return out
 
     def save(self, path) -> object:
-        """The cluster's file: ``/metrics`` (the cluster's, then each satellite's as ``/satellites/<name>/metrics``),
-        ``/cycles`` (the separations) and each satellite's ``/satellites/<name>/cycles``."""
+        """The cluster's file: ``/metrics`` (the cluster's), ``/cycles`` (its separations per cycle),
+        ``/satellite_metrics`` (each satellite's metrics and status, [satellite]) and ``/satellite_cycles``
+        (each satellite's ``/cycles``, [satellite, cycle]); the attribute ``satellites`` names them in order."""
         from geojax import store
 
-        groups = {"metrics": self.metric_table(), "cycles": self.cycles()}
-        one = lambda tree, k: jax.tree_util.tree_map(lambda x: x[k], tree)  # noqa: E731
-        for k, name in enumerate(self.names):
-            metrics = {key: float(v[k]) for key, v in self.satellites.metrics.items()}
-            groups[f"satellites/{name}/metrics"] = {**metrics, "status": int(self.satellites.status[k])}
-            groups[f"satellites/{name}/cycles"] = cycle_table(one(self.satellites.records, k), self.satellites.states)
+        one = lambda k: jax.tree_util.tree_map(lambda x: x[k], self.satellites.records)  # noqa: E731
+        tables = [cycle_table(one(k), self.satellites.states) for k in range(len(self.names))]
+        groups = {"metrics": self.metric_table(), "cycles": self.cycles(),
+                  "satellite_metrics": {**self.satellites.metrics, "status": self.satellites.status},
+                  "satellite_cycles": {key: np.stack([t[key] for t in tables]) for key in tables[0]}}
         attrs = {"kind": "collocation", "scenario": self.scenario.name, "epoch_tt_s": self.scenario.epoch_tt_s,
                  "seed": self.seed, "satellites": ",".join(self.names), "status_codes": STATUS_TEXT}
-        return store.write_h5(path, groups, to_toml(self.scenario.config), self.wall_s, attrs=attrs)
+        dims = {"cycles": ("cycle",), "satellite_metrics": ("satellite",), "satellite_cycles": ("satellite", "cycle")}
+        return store.write_h5(path, groups, to_toml(self.scenario.config), self.wall_s, attrs=attrs, dims=dims)
 
 
 def satellite_keys(seed: int, names) -> jax.Array:
     """Each satellite's key: the seed's, folded with a stable id of the satellite's name."""
     base = jax.random.key(seed)
     return jnp.stack([jax.random.fold_in(base, zlib.crc32(name.encode()) | (1 << 31)) for name in names])
+
+
+def _drifting(sc: Scenario) -> Scenario:
+    """``sc`` with the null controller (its validated table less the keys it left unset)."""
+    table = {k: {key: v for key, v in t.items() if v is not None} if isinstance(t, dict) else t
+             for k, t in sc.config.items()}
+    return from_dict({**table, "controller": {"kind": "none"}})
 
 
 @functools.partial(jax.jit, static_argnames=("controller", "step_s", "dynamics", "keep_steps", "states",
@@ -126,12 +136,15 @@ def cluster_rollout(params, keys, shared, reference_env, alert_m, *, controller,
     return final, records, separation, metrics, separation_metrics(separation, steps_per_cycle * step_s)
 
 
-def simulate_cluster(sc: Scenario, seed: int = 0, keep_steps: bool = False) -> ClusterResult:
-    """The closed loops of the cluster ``sc`` (a scenario with ``[[satellites]]``) in one compiled call."""
+def simulate_cluster(sc: Scenario, seed: int = 0, keep_steps: bool = False, uncontrolled: bool = False
+                     ) -> ClusterResult:
+    """The closed loops of the cluster ``sc`` (a scenario with ``[[satellites]]``) in one compiled call;
+    ``uncontrolled``: its free drift (every satellite with the null controller, ``geojax propagate``)."""
     if not sc.satellites:
         raise ValueError(f"{sc.name}: not a cluster; give [[satellites]] tables (docs/collocation.md)")
     start = time.perf_counter()
-    batch = prepare(list(sc.satellites))
+    members = [_drifting(m) if uncontrolled else m for m in sc.satellites]
+    batch = prepare(members)
     names = tuple(member.name for member in sc.satellites)
     alert_km = float(sc.config["collocation"]["alert_km"])
     steps_per_cycle = batch.shared.env.earth_angle_rad.shape[1]
@@ -146,4 +159,21 @@ def simulate_cluster(sc: Scenario, seed: int = 0, keep_steps: bool = False) -> C
     satellites = Result(metrics, status, records, final, jax.tree_util.tree_map(np.asarray, batch.params),
                         batch.step_s, wall_s, states=batch.states,
                         parts=parts.parts_of(batch.states, parts.named(sc.satellites[0].config)))
-    return ClusterResult(names, satellites, separation, cluster, sc, seed, alert_km, wall_s)
+    return ClusterResult(names, satellites, separation, cluster, sc, seed, alert_km, wall_s, uncontrolled)
+
+
+def plot(result: ClusterResult, folder, dpi: int = 150) -> list:
+    """The cluster's figures in ``folder``: the e and i vector planes and the separation per cycle."""
+    from pathlib import Path
+
+    from geojax.plots.collocation import plot_separation, plot_vectors
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    one = lambda k: jax.tree_util.tree_map(lambda x: x[k], result.satellites.records)  # noqa: E731
+    cycles = [cycle_table(one(k), result.satellites.states) for k in range(len(result.names))]
+    targets = [member.config["station"] for member in result.scenario.satellites]
+    stem = result.scenario.name
+    return [plot_vectors(result.names, cycles, targets, folder / f"{stem}_vectors.png", stem, dpi=dpi),
+            plot_separation(result.pair_names, result.separation.min_m / 1e3, SIDEREAL_DAY_S, result.alert_km,
+                            folder / f"{stem}_separation.png", stem, dpi=dpi)]
