@@ -88,7 +88,7 @@ def test_kepler_eccentricity_of_one_is_refused():
 
 
 def test_unknown_scenario_lists_the_names():
-    with pytest.raises(ValueError, match="scenario .li2021.: unknown; named scenarios: gazzino2016, geo, katz2025, katz2025-constant, katz2025-continuous, katz2025-discrete, li2022"):
+    with pytest.raises(ValueError, match="scenario .li2021.: unknown; named scenarios: collocation-2, collocation-4, gazzino2016, geo, katz2025, katz2025-constant, katz2025-continuous, katz2025-discrete, li2022"):
         scenario.load("li2021")
 
 

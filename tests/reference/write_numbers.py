@@ -1,5 +1,7 @@
 """Writes ``tests/reference/numbers.npz``: every record, metric and status of short runs of shipped scenarios,
-the numbers ``tests/test_reference_numbers.py`` holds every later checkout to, bit for bit.
+the numbers ``tests/test_reference_numbers.py`` holds every later checkout to, bit for bit on the platform they
+were written on (``platform()``: XLA compiles for the host's vector instructions, and another CPU or another
+jaxlib moves the last bits: measured, 1e-16 to 7e-9 relative between two x86-64 CPUs), to 1e-6 elsewhere.
 
 Regenerate deliberately, and only when a change is meant to move numbers (say which and why in the commit):
 ``python tests/reference/write_numbers.py``.  The runs cover the padded one-sample loop (``simulate``) and the
@@ -45,6 +47,28 @@ def flat(tree, prefix: str, out: dict) -> None:
         out[prefix] = np.asarray(tree)
 
 
+def platform() -> str:
+    """What the last bits of a compiled run depend on: jax and jaxlib, and the CPU (its model and the vector
+    instructions XLA may use)."""
+    import hashlib
+    import platform as host
+
+    import jaxlib
+
+    flags, model = "", host.processor()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("flags") and not flags:
+                flags = line.split(":", 1)[1]
+            if line.startswith("model name") and not model:
+                model = line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    isa = " ".join(sorted(f for f in flags.split() if f.startswith(("avx", "sse", "fma", "amx"))))
+    return (f"jax {jax.__version__}, jaxlib {jaxlib.__version__}, {host.machine()} {model}, "
+            f"isa {hashlib.sha256(isa.encode()).hexdigest()[:12]}")
+
+
 def numbers() -> dict[str, np.ndarray]:
     out = {}
     for label, name, overrides, seed in SIMULATED:
@@ -63,5 +87,5 @@ def numbers() -> dict[str, np.ndarray]:
 
 if __name__ == "__main__":
     path = Path(sys.argv[1]) if len(sys.argv) > 1 else HERE / "numbers.npz"
-    np.savez_compressed(path, **numbers())
+    np.savez_compressed(path, **numbers(), platform=np.asarray(platform()))
     print(f"{path}: written by geojax {geojax.__version__}")
