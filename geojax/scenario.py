@@ -145,9 +145,12 @@ def with_overrides(raw: dict, overrides: dict | None) -> dict:
     element of a list key is set as ``TABLE.KEY[i]`` (``{"attitude.srp_offset_array_m[0]": 0.2}``: the others are
     the file's, or the key's defaults), so that a sweep can vary it as an axis; a key of a sub-table as
     ``TABLE.LIST[i].KEY`` (``{"navigation.stations[0].range_sigma_m": 20.0}``) or ``TABLE.SUB.KEY``
-    (``{"navigation.gnss.sigma_m": 5.0}``); a top-level key by its name alone (``{"name": "mine"}``)."""
+    (``{"navigation.gnss.sigma_m": 5.0}``); a top-level key by its name alone (``{"name": "mine"}``); in a cluster,
+    one satellite's key as ``satellites.NAME.TABLE.KEY`` and the ``[collocation]`` table's as ``collocation.KEY``."""
     raw = {k: dict(v) if isinstance(v, dict) else v for k, v in raw.items()}
     for dotted, value in (overrides or {}).items():
+        if scenario_cluster.sets_cluster(raw, str(dotted), value):  # satellites.NAME.TABLE.KEY, collocation.KEY
+            continue
         table, _, key = str(dotted).rpartition(".")
         if not table and key in SCHEMA[""]:  # a top-level key: the name, the description
             raw[key] = value

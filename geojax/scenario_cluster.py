@@ -54,6 +54,27 @@ def member_overrides(satellites, collocation) -> tuple[list[tuple[str, dict]], d
     return members, check_table("collocation.", collocation or {}, FIELDS)
 
 
+def sets_cluster(raw: dict, dotted: str, value) -> bool:
+    """Set ``dotted`` in ``raw`` if it is a cluster's key: one satellite's (``satellites.NAME.TABLE.KEY``, its
+    override) or the ``[collocation]`` table's (``collocation.KEY``); False for any other key."""
+    head, _, rest = dotted.partition(".")
+    if head == "collocation":
+        raw["collocation"] = {**(raw.get("collocation") or {}), rest: value}
+        return True
+    if head != "satellites":
+        return False
+    name, _, key = rest.partition(".")
+    items = raw.get("satellites")
+    if not isinstance(items, list) or not any(isinstance(s, dict) and s.get("name") == name for s in items):
+        known = [s.get("name") for s in items or () if isinstance(s, dict)]
+        raise ValueError(f"{dotted}: the scenario has no satellite {name!r} (satellites: {', '.join(map(str, known))})"
+                         if known else f"{dotted}: the scenario has no [[satellites]]")
+    if "." not in key:
+        raise ValueError(f"{dotted}: give satellites.NAME.TABLE.KEY (e.g. satellites.A.station.ex)")
+    raw["satellites"] = [{**s, key: value} if s.get("name") == name else s for s in items]
+    return True
+
+
 def with_satellite_prefix(index: int, name: str, err: ValueError) -> ValueError:
     """A satellite's own validation error, named by its place in the file."""
     return ValueError(f"satellites[{index}] ({name}): {err}")

@@ -20,6 +20,7 @@ from geojax.runner.setup import (Batch, controller_of, cycle_count, disperse, pr
 from geojax.params import static_settings
 from geojax.states import of_config as states_of
 from geojax.parallel import per_device
+from geojax.sweep.clusters import compiled_cluster_batch
 from geojax.sweep.spec import DISPERSION_STREAM, Sweep, _points, _scenario
 
 
@@ -89,15 +90,19 @@ def lane_plan(sweep: Sweep, controller: str, chunk: int | None = None) -> lanes_
     points = list(_points(sweep))
     scenarios = [_scenario(sweep, controller, points[i]) for i in epoch_axis.groups(points)[0]]  # one epoch's
     ctrl = sweep.custom.get(controller) or controller_of(scenarios)
+    n_satellites = len(scenarios[0].satellites) or 1  # a cluster's lane flies all its satellites
+    if scenarios[0].satellites:
+        scenarios = [m for sc in scenarios for m in sc.satellites]
     samples = math.ceil(min(chunk or math.inf, sweep.n_points * sweep.repetitions) / jax.local_device_count())
     n_cycles = cycle_count(scenarios[0].days)
     own_reference = reference_per_sample(scenarios, ctrl)
     states = states_of(scenarios[0].config, sweep.parts)  # the parts' records, and their kept columns
     kept = len(CYCLE_NAMES) + sum(m.columns_per_cycle for m in states) if sweep.cycles else 0
-    return lanes_mod.plan(ctrl, n_cycles, samples, kept_records=kept,
+    plan = lanes_mod.plan(ctrl, n_cycles, samples * n_satellites, kept_records=kept,
                           state_bytes_per_cycle=sum(m.bytes_per_cycle for m in states),
                           reference_cycles=n_cycles + ctrl.reference_cycles if own_reference else 0,
-                          requested=sweep.lanes)
+                          requested=None if sweep.lanes is None else sweep.lanes * n_satellites)
+    return plan if n_satellites == 1 else plan._replace(lanes=max(1, plan.lanes // n_satellites))
 
 
 def _compiled_batch(sweep: Sweep, controller: str, width: int, on_phase, devices=None):
@@ -112,6 +117,9 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int, on_phase, devices
     points = list(_points(sweep))
     groups = epoch_axis.groups(points)
     scenarios = [_scenario(sweep, controller, p) for p in points]
+    if scenarios[0].satellites:
+        return compiled_cluster_batch(sweep, controller, width, on_phase, devices, scenarios, groups, _lanes,
+                                      DISPERSION_STREAM)
     batches = [prepare([scenarios[i] for i in group], sweep.custom.get(controller), states=sweep.parts)
                for group in groups]
     batch = batches[0]

@@ -34,6 +34,8 @@ def summary(spec, groups) -> list[str]:
                               for k, v in zip(keys, point, strict=True))
             where = where or f"{spec.repetitions} repetitions"  # a sweep without a grid: one point
             lines.append(f"    {where}: {_point(dv, dlon, dlat, j, status[j], STATUS_MEANINGS, per_year)}")
+            if "min_separation_km" in flat:  # a sweep of clusters
+                lines.append(f"      {separation_line(flat['min_separation_km'][j], flat['alert_km'][j])}")
         if len(points) > SUMMARY_ROWS:
             lines.append(f"    ... {len(points) - SUMMARY_ROWS} more grid points (geojax plot, geojax.open_results)")
         failed = int(np.sum(dv.failed))
@@ -49,6 +51,15 @@ def summary(spec, groups) -> list[str]:
                      f"{', '.join(identical)}: nothing random in them (no orbit-determination or attitude errors, no "
                      f"[dispersion], a deterministic controller); use repetitions = 1, or add errors or a dispersion")
     return lines
+
+
+def separation_line(min_km, alert_km) -> str:
+    """A cluster sweep's grid point: the least separation's percentiles over its samples (every sample, held or
+    not: a close approach counts whatever the box did) and the fraction of samples closer than the alert."""
+    p5, p50, p95 = np.percentile(min_km, [5, 50, 95])
+    below = float(np.mean(min_km < alert_km))
+    return (f"min separation {np.min(min_km):.3f} km (percentiles 5/50/95: {p5:.3f} / {p50:.3f} / {p95:.3f} km); "
+            f"{below:.1%} of {min_km.size} samples below the alert {float(np.max(alert_km)):g} km")
 
 
 def extrapolated(spec) -> str:
