@@ -88,20 +88,19 @@ def _run_cluster(sc, seed: int, args, uncontrolled: bool = False) -> int:
     """A cluster's run (``[[satellites]]``): its summary, its file (``--out``) and figures (``--plots``)."""
     from geojax.collocation import run
 
-    for flag in ("oem", "maneuvers"):
-        if getattr(args, flag, None):
-            raise ValueError(f"--{flag}: a cluster's CCSDS files are not written yet; run one satellite of it "
-                             f"alone for them (its [[satellites]] overrides as --set)")
+    cli_files.check(args, sc.satellites[0])
     _say(args)(f"{sc.name}: {len(sc.satellites)} satellites in one compiled loop, "
                f"{'free drift' if uncontrolled else sc.controller + ' each'} for {flown_days(sc.days)}; compiling "
                f"and running...", flush=True)
-    result = run.simulate_cluster(sc, seed, uncontrolled=uncontrolled)
+    result = run.simulate_cluster(sc, seed, uncontrolled=uncontrolled,
+                                  ephemeris=cli_files.needs_ephemeris(args, sc.satellites[0]))
     for line in result.summary():
         _say(args)(line)
     if args.out:
         print(f"wrote {result.save(args.out)}")
     if args.plots:
         print("wrote " + " and ".join(map(str, run.plot(result, args.plots))))
+    cli_files.write(args, result)  # one OEM (and burns) per satellite, STEM-NAME beside the path given
     return 0
 
 

@@ -27,9 +27,11 @@ def needs_ephemeris(args, scenario) -> bool:
 
 
 def write(args, run) -> None:
-    """Write the files the flags name from ``run`` (a ``Result``), printing each path."""
+    """Write the files the flags name from ``run`` (a ``Result``, or a cluster's ``ClusterResult``: one file per
+    satellite), printing each path."""
     if getattr(args, "oem", None):
         print("wrote " + " and ".join(map(str, run.save_oem(args.oem, oem_step_s=args.oem_step,
                                                             of=getattr(args, "oem_of", None) or "truth"))))
     if getattr(args, "maneuvers", None):
-        print(f"wrote {run.save_maneuvers(args.maneuvers)}")
+        written = run.save_maneuvers(args.maneuvers)  # a cluster's: one file per satellite
+        print("wrote " + " and ".join(map(str, written if isinstance(written, list) else [written])))

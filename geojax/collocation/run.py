@@ -16,6 +16,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from geojax.export import recorder
 from geojax.loop.cluster import SeparationRecord, pairs, separation_metrics, simulate_cluster as cluster_loop
 from geojax.loop.metrics import STATUS_TEXT, cycle_table, summarize
 from geojax.loop.simulate import Records
@@ -44,6 +45,7 @@ class ClusterResult(NamedTuple):
     alert_km: float
     wall_s: float
     uncontrolled: bool = False  # every satellite's free drift (``geojax propagate``)
+    flown: tuple = ()  # the satellites' scenarios as flown (with the null controller where ``uncontrolled``)
 
     @property
     def pair_names(self) -> tuple[str, ...]:
@@ -80,6 +82,32 @@ class ClusterResult(NamedTuple):
             lines.append(f"  {name}: status {int(self.satellites.status[k])} "
                          f"({meanings[int(self.satellites.status[k])]}), {values}")
         return lines
+
+    def satellite(self, k: int) -> Result:
+        """Satellite ``k``'s own ``Result``, as ``simulate`` of it alone returns one (its files: ``save_oem``)."""
+        one = lambda tree: None if tree is None else jax.tree_util.tree_map(lambda x: x[k], tree)  # noqa: E731
+        r = self.satellites
+        return r._replace(metrics=one(r.metrics), status=r.status[k], records=one(r.records), final=one(r.final),
+                          params=one(r.params), scenario=(self.flown or self.scenario.satellites)[k], seed=self.seed,
+                          ephemeris=None if r.ephemeris is None else recorder.Ephemeris(*map(one, r.ephemeris)))
+
+    def save_oem(self, path, **options) -> list:
+        """One CCSDS OEM per satellite, ``STEM-NAME.oem`` beside ``path`` (and each planner's burns beside it;
+        ``options``: ``Result.save_oem``'s); a run made with ``ephemeris`` holds every step."""
+        from pathlib import Path
+
+        path = Path(path)
+        return [written for k, name in enumerate(self.names)
+                for written in self.satellite(k).save_oem(path.with_name(f"{path.stem}-{name}{path.suffix}"),
+                                                          object_name=name, **options)]
+
+    def save_maneuvers(self, path) -> list:
+        """One CCSDS OPM of the burns flown per satellite, ``STEM-NAME.opm`` beside ``path``."""
+        from pathlib import Path
+
+        path = Path(path)
+        return [self.satellite(k).save_maneuvers(path.with_name(f"{path.stem}-{name}{path.suffix}"))
+                for k, name in enumerate(self.names)]
 
     def cycles(self) -> dict[str, np.ndarray]:
         """Per cycle: the cluster's least separation over its pairs (``min_separation_km``), each pair's, and the
@@ -121,25 +149,34 @@ def _drifting(sc: Scenario) -> Scenario:
 
 
 @functools.partial(jax.jit, static_argnames=("controller", "step_s", "dynamics", "keep_steps", "states",
-                                             "steps_per_cycle"))
+                                             "steps_per_cycle", "ephemeris"))
 def cluster_rollout(params, keys, shared, reference_env, alert_m, *, controller, step_s, dynamics, keep_steps,
-                    states, steps_per_cycle):
+                    states, steps_per_cycle, ephemeris: bool = False):
     """One cluster's closed loop, its satellites' metrics and its separations: (final, records, separation,
-    satellite metrics, cluster metrics); pure, vmappable over clusters."""
+    satellite metrics, cluster metrics), and with ``ephemeris`` every satellite's ``export.recorder.Ephemeris``;
+    pure, vmappable over clusters."""
+    if ephemeris:
+        states = recorder.with_recording(states)
     if reference_env is not None:  # each satellite its own uncontrolled reference (their targets differ)
         own = jax.vmap(lambda p: reference(p, reference_env, step_s, dynamics, controller.reference_cycles))(params)
         shared = shared._replace(reference=own)
     final, records, separation = cluster_loop(controller, params, shared, keys, step_s=step_s, alert_m=alert_m,
                                               dynamics=dynamics, keep_steps=keep_steps, states=states)
+    kept = None
+    if ephemeris:
+        records, kept = recorder.split(records)
+        states = states[:-1]  # the recording's own model (``recorder.TRUTH``) last
     metrics = jax.vmap(lambda p, f, c: summarize(p, f, Records(c, None), step_s, steps_per_cycle, states))(
         params, final, records.cycles)
-    return final, records, separation, metrics, separation_metrics(separation, steps_per_cycle * step_s)
+    out = final, records, separation, metrics, separation_metrics(separation, steps_per_cycle * step_s)
+    return (*out, kept) if ephemeris else out
 
 
-def simulate_cluster(sc: Scenario, seed: int = 0, keep_steps: bool = False, uncontrolled: bool = False
-                     ) -> ClusterResult:
+def simulate_cluster(sc: Scenario, seed: int = 0, keep_steps: bool = False, uncontrolled: bool = False,
+                     ephemeris: bool = False) -> ClusterResult:
     """The closed loops of the cluster ``sc`` (a scenario with ``[[satellites]]``) in one compiled call;
-    ``uncontrolled``: its free drift (every satellite with the null controller, ``geojax propagate``)."""
+    ``uncontrolled``: its free drift (every satellite with the null controller, ``geojax propagate``);
+    ``ephemeris``: keep every satellite's states per step, for its CCSDS files (``ClusterResult.save_oem``)."""
     if not sc.satellites:
         raise ValueError(f"{sc.name}: not a cluster; give [[satellites]] tables (docs/collocation.md)")
     start = time.perf_counter()
@@ -152,14 +189,16 @@ def simulate_cluster(sc: Scenario, seed: int = 0, keep_steps: bool = False, unco
                           batch.reference_env if batch.reference_per_sample else None, jnp.asarray(alert_km * 1e3),
                           controller=batch.controller, step_s=batch.step_s,
                           dynamics=for_lanes(batch.dynamics, len(names)), keep_steps=keep_steps, states=batch.states,
-                          steps_per_cycle=steps_per_cycle)
-    final, records, separation, metrics, cluster = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(out))
+                          steps_per_cycle=steps_per_cycle, ephemeris=ephemeris)
+    final, records, separation, metrics, cluster, *kept = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(out))
     status = metrics.pop("status")
     wall_s = time.perf_counter() - start
     satellites = Result(metrics, status, records, final, jax.tree_util.tree_map(np.asarray, batch.params),
                         batch.step_s, wall_s, states=batch.states,
-                        parts=parts.parts_of(batch.states, parts.named(sc.satellites[0].config)))
-    return ClusterResult(names, satellites, separation, cluster, sc, seed, alert_km, wall_s, uncontrolled)
+                        parts=parts.parts_of(batch.states, parts.named(sc.satellites[0].config)),
+                        ephemeris=kept[0] if kept else None)
+    return ClusterResult(names, satellites, separation, cluster, sc, seed, alert_km, wall_s, uncontrolled,
+                         tuple(members))
 
 
 def plot(result: ClusterResult, folder, dpi: int = 150) -> list:

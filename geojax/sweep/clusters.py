@@ -92,8 +92,7 @@ def named_metrics(satellites: dict, cluster: dict, names, pair_names, alert_m) -
     out = {key: jnp.max(satellites[key]) for key in WORST}
     out["status"] = jnp.where(jnp.any(failed), status[jnp.argmax(failed)], 0).astype(status.dtype)
     for key, values in satellites.items():
-        if key != "status":
-            out.update({f"{key}_{name}": values[k] for k, name in enumerate(names)})
+        out.update({f"{key}_{name}": values[k] for k, name in enumerate(names)})
     for key, value in cluster.items():
         if key.startswith("pair_"):
             out.update({f"{key[5:]}_{pair}": value[k] for k, pair in enumerate(pair_names)})
