@@ -158,11 +158,12 @@ def test_the_slots_a_run_borrows_are_the_least_compiled_ones_within_reach(monkey
     """``slots_compiled``: its own count when none is compiled, the least compiled count at or above it, never
     one below it or beyond ``REUSE_MAX_RATIO`` times it."""
     compiled = set()
-    call = lambda count: ((count,), {}, None)  # noqa: E731  (``_loop_call``'s shape: a loop's args, its static ones)
+    call = lambda layout: ((None, None, layout.shared, None), {}, None)  # noqa: E731  (``_loop_call``'s shape)
     monkeypatch.setattr(rollout, "_LOOPS_COMPILED", compiled)
     monkeypatch.setattr(traced, "kept", lambda *args: False)
-    pick = lambda own: rollout.slots_compiled(call, lambda count: count, own)  # noqa: E731
-    monkeypatch.setattr(rollout, "_loop_key", lambda args, static: args[0])
+    layout = lambda count: rollout.Batch(*[None] * 2, count, *[None] * 5)  # noqa: E731  (``shared``: the count)
+    pick = lambda own: rollout.slots_compiled(call, layout, own)  # noqa: E731
+    monkeypatch.setattr(rollout, "_loop_key", lambda args, static: args[2])
     assert pick(32) == 32
     compiled |= {48, 384, 768}
     assert pick(32) == 48 and pick(64) == 384 and pick(96) == 384 and pick(512) == 768

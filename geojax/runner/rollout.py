@@ -271,10 +271,12 @@ def slots_compiled(call, layout, own: int) -> int:
     has compiled already or the cache folder keeps traced (``geojax.traced.kept``; its executable then comes from
     JAX's cache), else ``own``.  A shorter run after a longer one then runs the longer one's program, its first
     cycles only (``Shared.n_active``): the same numbers bit for bit (``tests/test_compilation.py``), nothing
-    compiled.  ``call(layout(count))`` is ``_loop_call``'s for a loop of ``count`` slots."""
+    compiled.  ``call(layout(count))`` is ``_loop_call``'s for a loop of ``count`` slots (only its shared arrays'
+    shapes differ from count to count: ``call`` runs once)."""
+    args, static, identity, *_ = call(layout(own))
     count = own
     while count <= REUSE_MAX_RATIO * own:
-        args, static, identity, *_ = call(layout(count))
+        args = (*args[:2], layout(count).shared, *args[3:])  # (params, keys, shared, reference_env)
         if _loop_key(args, static) in _LOOPS_COMPILED or traced.kept("closed_loop", identity, *args):
             return count
         count = cycle_slots(count + 1)
