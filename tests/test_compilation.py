@@ -154,6 +154,33 @@ def test_a_shorter_run_after_a_longer_one_runs_the_longer_ones_program(qffc, mon
     _equal(again.records, alone.records, "records")
 
 
+@pytest.mark.slow
+def test_a_shorter_run_borrows_the_longer_loop_the_cache_keeps(tmp_path):
+    """Across processes: 40 days kept their 48-slot loop in the cache folder; a new process's 4 days load that loop
+    (JAX's cache-hit event, through ``Compilations``) instead of compiling one of 32 slots, and get the numbers a
+    process with the cache off gets (its own 32 slots, plain ``jit``), bit for bit."""
+    code = ("import sys, numpy as np, geojax; from geojax import scenario; from geojax.runner import rollout; "
+            "from geojax.compilation import Compilations; "
+            "log = Compilations(min_s=0.0).__enter__(); "
+            "r = rollout.simulate(scenario.load('li2022-qffc', {'duration.days': float(sys.argv[1]), "
+            "'errors.h_rv': 1.0, 'errors.h_att': 1.0})); "
+            "np.save(sys.argv[2], np.array([r.metrics[k] for k in sorted(r.metrics)])); "
+            "print([p.cached for p in log.programs if p.name.startswith('closed_loop')])")  # traced or plain jit
+    folder = tmp_path / "cache"
+
+    def run(days, name, **settings):
+        env = _environment(**settings)
+        out = subprocess.run([sys.executable, "-c", code, str(days), str(tmp_path / f"{name}.npy")], env=env,
+                             capture_output=True, text=True, check=True)
+        return out.stdout.split("\n")[-2], np.load(tmp_path / f"{name}.npy")
+
+    assert run(40, "longer", GEOJAX_CACHE_DIR=str(folder))[0] == "[False]"
+    served, borrowed = run(4, "borrowed", GEOJAX_CACHE_DIR=str(folder))
+    off, own = run(4, "own", GEOJAX_NO_CACHE="1")
+    assert served == "[True]" and off == "[False]"
+    np.testing.assert_array_equal(borrowed, own)
+
+
 def test_the_slots_a_run_borrows_are_the_least_compiled_ones_within_reach(monkeypatch):
     """``slots_compiled``: its own count when none is compiled, the least compiled count at or above it, never
     one below it or beyond ``REUSE_MAX_RATIO`` times it."""
