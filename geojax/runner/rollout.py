@@ -271,8 +271,10 @@ def slots_compiled(call, layout, own: int) -> int:
     has compiled already or the cache folder keeps traced (``geojax.traced.kept``; its executable then comes from
     JAX's cache), else ``own``.  A shorter run after a longer one then runs the longer one's program, its first
     cycles only (``Shared.n_active``): the same numbers bit for bit (``tests/test_compilation.py``), nothing
-    compiled.  ``call(layout(count))`` is ``_loop_call``'s for a loop of ``count`` slots (only its shared arrays'
-    shapes differ from count to count: ``call`` runs once)."""
+    compiled (where JAX's cache has evicted the kept loop's executable, the longer loop compiles, in about the time
+    of the run's own: the program is the cycle's body, whatever the trip count).  ``call(layout(count))`` is
+    ``_loop_call``'s for a loop of ``count`` slots (only its shared arrays' shapes differ from count to count:
+    ``call`` runs once)."""
     args, static, identity, *_ = call(layout(own))
     count = own
     while count <= REUSE_MAX_RATIO * own:
