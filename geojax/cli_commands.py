@@ -65,7 +65,7 @@ def _run_simulation(sc, seed: int, out, plots, args) -> int:
     say = _say(args)
     say(f"{sc.name}: {sc.controller} for {flown_days(sc.days)}; the environment, the reference run and the closed "
         f"loop for {cycle_slots(cycle_count(sc.days))} cycles (every duration up to that many cycles runs the same "
-        f"program), compiled or loaded from the cache...", flush=True)
+        f"program, or a longer one's compiled already), compiled or loaded from the cache...", flush=True)
     _detail(args)(f"  {waiting_note()}", flush=True)
     figures = {}
 

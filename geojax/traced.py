@@ -59,6 +59,16 @@ def jitted(jitted, name: str, identity, *args):
     return jitted if program is None else program
 
 
+def kept(name: str, identity, *args) -> bool:
+    """Whether the traced program ``name`` of ``identity`` for arguments shaped as ``args`` is kept (loaded in this
+    process or in the cache folder): what a later call would find without tracing it."""
+    folder = cache_dir()
+    if folder is None or identity is None:
+        return False
+    key = _key(name, identity, args)
+    return key in _IN_PROCESS or (folder / f"{key}{SUFFIX}").is_file()
+
+
 _IN_PROCESS: dict[str, object] = {}  # key -> jitted call of the loaded program (one lowering per process)
 
 

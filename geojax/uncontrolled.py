@@ -20,7 +20,7 @@ from geojax.control import none
 from geojax.compilation import Compilations
 from geojax.runner.setup import cycle_count, params_of
 from geojax.loop.simulate import Shared, simulate
-from geojax.progress import Progress
+from geojax.progress import TICK_S, Progress
 from geojax.physics.propagate import DYNAMICS, CycleMeans, environment_grid, steps_per_cycle
 from geojax.scenario import Scenario
 
@@ -139,7 +139,7 @@ def propagate_scenario(scenario: Scenario, progress: bool | None = None) -> Prop
     pieces = []
     # The bar counts the run's cycles (365.25 days: 366), as the file and summary do: the cycles integrated beyond
     # them, to interpolate the end, are part of the last block.
-    with Progress(cycle_count(scenario.days), "cycles", enabled=progress) as bar, Compilations() as log:
+    with Progress(cycle_count(scenario.days), "cycles", enabled=progress, tick_s=TICK_S) as bar, Compilations() as log:
         bar.phase(f"compiling or loading from the cache, and running, the first {block} cycle{'s' * (block != 1)}")
         for b in range(n_blocks):
             block_epoch = scenario.epoch_tt_s + b * block * SIDEREAL_DAY_S

@@ -131,6 +131,75 @@ def test_a_shorter_run_is_the_first_cycles_of_a_longer_one_in_the_same_program(q
     _equal(padded.records.cycles, jax.tree_util.tree_map(lambda x: x[:, :4], longer.records.cycles), "cycles")
 
 
+def test_a_shorter_run_after_a_longer_one_runs_the_longer_ones_program(qffc, monkeypatch):
+    """One process, one sample: 40 days (48 cycle slots), then 4 days (32 slots of their own) run the 48-slot loop
+    already compiled (``rollout.slots_compiled``): no closed loop compiled or loaded (JAX's own compilation
+    events, ``Compilations``), and every metric and cycle record bit for bit those of the same 4 days in a loop
+    compiled for their own 32 slots (second method: the run with reuse turned off, whose loop is counted)."""
+    from geojax.compilation import Compilations
+
+    monkeypatch.setattr(rollout, "_LOOPS_COMPILED", set())  # this test's loops only, not the session cache's
+    monkeypatch.setattr(traced, "kept", lambda *args: False)
+    rollout.simulate(scenario.load("li2022-qffc", {**_errors(), "duration.days": 40}))
+    with Compilations(min_s=0.0) as log:
+        again = rollout.simulate(qffc)
+    monkeypatch.setattr(rollout, "REUSE_MAX_RATIO", 0)  # its own 32 slots
+    with Compilations(min_s=0.0) as own:
+        alone = rollout.simulate(qffc)
+    loops = lambda log: [p for p in log.programs if p.name == "closed_loop"]  # noqa: E731
+    assert not loops(log) and len(loops(own)) == 1, (log.programs, own.programs)
+    assert again.records.cycles.dv_mps.shape == (DAYS,) and again.metrics["mass_used_kg"] > 0
+    np.testing.assert_array_equal(again.status, alone.status)
+    _equal(again.metrics, alone.metrics, "metrics")
+    _equal(again.records, alone.records, "records")
+
+
+@pytest.mark.slow
+def test_a_shorter_run_borrows_the_longer_loop_the_cache_keeps(tmp_path):
+    """Across processes: 40 days kept their 48-slot loop in the cache folder; a new process's 4 days load that loop
+    (JAX's cache-hit event, through ``Compilations``) instead of compiling one of 32 slots, and get the numbers a
+    process with the cache off gets (its own 32 slots, plain ``jit``), bit for bit."""
+    code = ("import sys, numpy as np, geojax; from geojax import scenario; from geojax.runner import rollout; "
+            "from geojax.compilation import Compilations; "
+            "log = Compilations(min_s=0.0).__enter__(); "
+            "r = rollout.simulate(scenario.load('li2022-qffc', {'duration.days': float(sys.argv[1]), "
+            "'errors.h_rv': 1.0, 'errors.h_att': 1.0})); "
+            "np.save(sys.argv[2], np.array([r.metrics[k] for k in sorted(r.metrics)])); "
+            "print([p.cached for p in log.programs if p.name.startswith('closed_loop')])")  # traced or plain jit
+    folder = tmp_path / "cache"
+
+    def run(days, name, **settings):
+        env = _environment(**settings)
+        out = subprocess.run([sys.executable, "-c", code, str(days), str(tmp_path / f"{name}.npy")], env=env,
+                             capture_output=True, text=True, check=True)
+        return out.stdout.split("\n")[-2], np.load(tmp_path / f"{name}.npy")
+
+    assert run(40, "longer", GEOJAX_CACHE_DIR=str(folder))[0] == "[False]"
+    served, borrowed = run(4, "borrowed", GEOJAX_CACHE_DIR=str(folder))
+    off, own = run(4, "own", GEOJAX_NO_CACHE="1")
+    assert served == "[True]" and off == "[False]"
+    np.testing.assert_array_equal(borrowed, own)
+
+
+def test_the_slots_a_run_borrows_are_the_least_compiled_ones_within_reach(monkeypatch):
+    """``slots_compiled``: its own count when none is compiled, the least compiled count at or above it, never
+    one below it or beyond ``REUSE_MAX_RATIO`` times it."""
+    compiled = set()
+    call = lambda layout: ((None, None, layout.shared, None), {}, None)  # noqa: E731  (``_loop_call``'s shape)
+    monkeypatch.setattr(rollout, "_LOOPS_COMPILED", compiled)
+    monkeypatch.setattr(traced, "kept", lambda *args: False)
+    layout = lambda count: rollout.Batch(*[None] * 2, count, *[None] * 5)  # noqa: E731  (``shared``: the count)
+    pick = lambda own: rollout.slots_compiled(call, layout, own)  # noqa: E731
+    monkeypatch.setattr(rollout, "_loop_key", lambda args, static: args[2])
+    assert pick(32) == 32
+    compiled |= {48, 384, 768}
+    assert pick(32) == 48 and pick(64) == 384 and pick(96) == 384 and pick(512) == 768
+    compiled.discard(48)
+    assert pick(32) == 384 and pick(1024) == 1024  # 768 is below it
+    monkeypatch.setattr(rollout, "REUSE_MAX_RATIO", 4)
+    assert pick(32) == 32 and pick(96) == 384
+
+
 def _errors():
     return {"errors.h_rv": 1.0, "errors.h_att": 1.0}
 

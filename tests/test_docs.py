@@ -135,3 +135,38 @@ def test_a_starting_points_description_says_what_it_flies():
             assert "recovery law" in description and "uncontrolled" not in description, name
         else:
             assert "recovery" not in description, name
+
+
+# Options every command (or every command that writes a file, or the four that take it) has, said once for all
+# in docs/commands.md's prose rather than in each command's line of its first table.
+_SAID_FOR_ALL = {"--quiet": "`-q`", "--verbose": "`-v`", "--no-cache": "`--no-cache` on any command",
+                 "--force": "`--force` is given (every command that writes one", "--set": "**`--set KEY=VALUE`**"}
+
+
+def test_each_commands_line_in_the_commands_page_names_its_parsers_options():
+    """docs/commands.md's first table (hand-written: what each command is for) has a line for every command of
+    the parser, and each line's usage names exactly that command's options (second method: argparse's own
+    parser, what ``--help`` prints), but for those the page says once for all; the ``--set`` paragraph names the
+    commands that take it.  The table under "Every command's options" is generated from the same parser."""
+    import argparse
+
+    from geojax import cli
+
+    page = (ROOT / "docs" / "commands.md").read_text()
+    prose = " ".join(page.split("<!-- generated: cli-help -->")[0].split())
+    table = page.split("\n\n")[1].splitlines()
+    sub = next(a for a in cli._parser()._actions if isinstance(a, argparse._SubParsersAction))
+    with_set = set()
+    for name, parser in sub.choices.items():
+        options = {o for a in parser._actions for o in a.option_strings if o.startswith("--")} - {"--help"}
+        usages = [line.split("` |")[0] for line in table if line.startswith(f"| `geojax {name} ")]
+        assert usages, f"docs/commands.md: no line for `geojax {name}`"
+        named = {o for usage in usages for o in re.findall(r"--[a-z][a-z0-9-]*", usage)}
+        assert named <= options, f"geojax {name}: the page names {sorted(named - options)}, which it does not take"
+        missing = options - named - set(_SAID_FOR_ALL)
+        assert not missing, f"geojax {name}: its line in docs/commands.md lacks {sorted(missing)}"
+        with_set |= {name} if "--set" in options else set()
+    for option, words in _SAID_FOR_ALL.items():
+        assert words in prose, f"docs/commands.md: {option} is not said for every command ({words!r})"
+    said = re.search(r"\*\*`--set KEY=VALUE`\*\* \(repeatable\) on (.+?) sets", prose)
+    assert said and set(re.findall(r"`(\w+)`", said.group(1))) == with_set

@@ -3,6 +3,7 @@ compiling) shown before the rate starts; what a command's progress says is true:
 are the run's, and a program the compilation cache served is said to be loaded, not compiled."""
 
 import io
+import threading
 
 from geojax import progress
 
@@ -46,9 +47,58 @@ def test_before_the_first_unit_finishes_it_says_running_not_a_rate_of_zero(monke
         bar.restart()
         clock.now += 500.0
         bar.update(0)
-        assert stream.getvalue().endswith("0/100 samples  running (the rate once the first samples finish) ")
+        assert stream.getvalue().endswith("0/100 samples  running 500 s (the rate once the first samples finish) ")
         bar.update(50)
         assert stream.getvalue().endswith("50/100 samples  0.1 samples/s  ETA 500 s ")
+
+
+def test_between_counts_the_ticker_redraws_the_rate_and_the_eta_counting_down(monkeypatch):
+    """A sweep's compiled batch runs for minutes between counts: each tick redraws the bar with the rate of the
+    samples finished (not one falling as the wait goes on) and the ETA less the time since the count; off a
+    terminal a tick writes a line only after 5 line intervals without one."""
+    clock = Clock()
+    monkeypatch.setattr(progress.time, "perf_counter", clock)
+    stream = Terminal()
+    with progress.Progress(100, "samples", stream=stream) as bar:
+        bar.restart()
+        clock.now += 30.0
+        bar.tick()
+        assert stream.getvalue().endswith("0/100 samples  running 30 s (the rate once the first samples finish) ")
+        bar.update(25)  # 25 samples in 30 s: 100 s to go
+        assert stream.getvalue().endswith("25/100 samples  0.8 samples/s  ETA 90 s ")
+        clock.now += 40.0
+        bar.tick()
+        assert stream.getvalue().endswith("25/100 samples  0.8 samples/s  ETA 50 s ")
+        clock.now += 80.0  # later than the rate said: 0 s left, not a negative time
+        bar.tick()
+        assert stream.getvalue().endswith("25/100 samples  0.8 samples/s  ETA 0 s ")
+        bar.update(25)  # 50 in 150 s
+        assert stream.getvalue().endswith("50/100 samples  0.3 samples/s  ETA 150 s ")
+    lines = io.StringIO()
+    with progress.Progress(100, "samples", stream=lines, interval_s=30.0) as bar:
+        bar.restart()
+        clock.now += 149.0
+        bar.tick()
+        assert lines.getvalue() == ""
+        clock.now += 1.0
+        bar.tick()
+        assert lines.getvalue() == "[150 s] 0/100 samples  running 150 s (the rate once the first samples finish)\n"
+
+
+def test_the_ticker_thread_redraws_while_the_bar_is_open_and_stops_with_it():
+    """``tick_s``: a thread of its own redraws the bar (more frames than the counts drew) until it is closed."""
+    stream = Terminal()
+    with progress.Progress(10, "samples", stream=stream, tick_s=0.001) as bar:
+        bar.update(1)
+        for _ in range(10000):  # until a tick has drawn (no time asserted: polled, a millisecond at a time)
+            if stream.getvalue().count("\r") > 2:
+                break
+            threading.Event().wait(0.001)
+        assert stream.getvalue().count("\r") > 2 and bar._ticker.is_alive()
+    assert not bar._ticker.is_alive()
+    frames = stream.getvalue()
+    threading.Event().wait(0.01)
+    assert stream.getvalue() == frames  # nothing drawn after the close
 
 
 def test_a_file_gets_a_line_per_phase_then_every_10_percent_or_30_s_whichever_is_later(monkeypatch):

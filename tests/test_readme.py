@@ -79,3 +79,5 @@ def test_no_readme_command_is_one_measured_to_take_over_two_minutes():
     assert {("geojax", "sweep"), ("geojax", "tune"), ("geojax", "bound")} <= {argv[:2] for argv in shown & times.keys()}
     for argv in shown & times.keys():
         assert times[argv] is not None and times[argv] < 120, " ".join(argv)
+    unmeasured = sorted(" ".join(argv) for argv in shown - times.keys())
+    assert not unmeasured, f"no measured time (python benchmarks/readme_examples.py --missing --write): {unmeasured}"

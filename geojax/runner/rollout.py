@@ -26,7 +26,8 @@ from geojax.runner import report
 from geojax import compilation, traced
 from geojax import states as parts
 from geojax.parallel import Background
-from geojax.runner.setup import Batch, controller_of, padded, prepare, program_identity, reference, unstack
+from geojax.runner.setup import (Batch, controller_of, cycle_slots, padded, prepare, program_identity, reference,
+                                 unstack)
 from geojax.params import static_settings
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
@@ -205,7 +206,8 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
         return functools.partial(_wait, lowered)
 
     n = len(scenarios) if params is None else jax.tree_util.tree_leaves(params)[0].shape[0]
-    batch = prepare(scenarios, controller, pad=True, on_shapes=compile_meanwhile, one_sample=n == 1, states=states)
+    batch = prepare(scenarios, controller, pad=True, on_shapes=compile_meanwhile, one_sample=n == 1, states=states,
+                    slots=functools.partial(slots_compiled, call))
     args, _, _, _, summarized, n = call(batch)
     if meanwhile is not None:
         meanwhile()
@@ -257,6 +259,39 @@ def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, own_state
     return args, static, identity, per_duration, summarized, n
 
 
+# Slot counts a run may borrow: up to this many times its own (``slots_compiled``; 10 days in a year's 384 slots is
+# 12 times their 32): the loop carries and zeroes every slot's records, so a far longer loop is left to compile anew.
+REUSE_MAX_RATIO = 16
+_LOOPS_COMPILED: set = set()  # ``_loop_key`` of every closed loop compiled (or loaded) in this process
+
+
+def slots_compiled(call, layout, own: int) -> int:
+    """The cycle slots ``simulate_batch`` compiles its closed loop for: the least count from ``own``
+    (``runner.setup.cycle_slots``) up to ``REUSE_MAX_RATIO`` times it whose loop, otherwise the same, this process
+    has compiled already or the cache folder keeps traced (``geojax.traced.kept``; its executable then comes from
+    JAX's cache), else ``own``.  A shorter run after a longer one then runs the longer one's program, its first
+    cycles only (``Shared.n_active``): the same numbers bit for bit (``tests/test_compilation.py``), nothing
+    compiled (where JAX's cache has evicted the kept loop's executable, the longer loop compiles, in about the time
+    of the run's own: the program is the cycle's body, whatever the trip count).  ``call(layout(count))`` is
+    ``_loop_call``'s for a loop of ``count`` slots (only its shared arrays' shapes differ from count to count:
+    ``call`` runs once)."""
+    args, static, identity, *_ = call(layout(own))
+    count = own
+    while count <= REUSE_MAX_RATIO * own:
+        args = (*args[:2], layout(count).shared, *args[3:])  # (params, keys, shared, reference_env)
+        if _loop_key(args, static) in _LOOPS_COMPILED or traced.kept("closed_loop", identity, *args):
+            return count
+        count = cycle_slots(count + 1)
+    return own
+
+
+def _loop_key(args, static: dict) -> tuple:
+    """What fixes a compiled ``closed_loop_batch``: its static arguments and its arguments' tree, shapes and dtypes."""
+    leaves, tree = jax.tree_util.tree_flatten(args)
+    return (tuple(static.items()), str(tree),
+            tuple((tuple(x.shape), str(x.dtype), bool(getattr(x, "weak_type", False))) for x in leaves))
+
+
 def _compiled_programs(args, static, identity, per_duration, summarized, n, lowered: threading.Event):
     """The closed loop and its metrics compiled (or loaded from the cache) for ``args`` (arrays or shapes), the
     metrics in a thread of their own once the loop's result shapes are known; ``lowered`` is set once the loop is
@@ -271,7 +306,9 @@ def _compiled_programs(args, static, identity, per_duration, summarized, n, lowe
         records = recorder.split(records)[0]
     metrics = Background(lambda: traced.lowered(metrics_batch, "metrics", per_duration, args[0], final, records,
                                                 **summarized).compile(compiler_options(lanes)))
-    return loop_program.compile(compiler_options(lanes, static["controller"])), metrics.result()
+    loop_program = loop_program.compile(compiler_options(lanes, static["controller"]))
+    _LOOPS_COMPILED.add(_loop_key(args, static))
+    return loop_program, metrics.result()
 
 
 def compiler_options(lanes: int, controller: Controller | None = None) -> dict | None:

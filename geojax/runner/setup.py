@@ -110,7 +110,7 @@ def controller_of(scenarios: list[Scenario]) -> Controller:
 
 def prepare(scenarios: list[Scenario], controller: Controller | None = None,
             segment_cycles: int = REFERENCE_SEGMENT_CYCLES, pad: bool = False, on_shapes=None,
-            one_sample: bool = False, states: tuple = ()) -> Batch:
+            one_sample: bool = False, states: tuple = (), slots=None) -> Batch:
     """The ``Batch`` of ``scenarios`` (``controller``: a user's, else the registered one of their kind).
 
     ``segment_cycles``: cycles between re-starts of the predictor's reference (``REFERENCE_SEGMENT_CYCLES``).
@@ -128,6 +128,9 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     ``states``: a user's own parts (``StateModel`` s or ``Part`` s) carried beside the scenario's.
     ``one_sample``: the batch is one sample's (``simulate``), whose reference is compiled for start-up rather than
     run speed (``reference(sequential=True)`` with ``compilation.ONE_SAMPLE_OPTIONS``).
+    ``slots(layout, n_slots)``, with ``pad``: the slot count to compile for instead of ``n_slots``
+    (``cycle_slots(n_cycles)``), given ``layout(count)``, the ``Batch`` of shapes (as ``on_shapes`` gets it) for a
+    loop of ``count`` slots: a larger one already compiled serves the run as well (``rollout.simulate_batch``).
     """
     controller = controller_of(scenarios) if controller is None else controller
     first = scenarios[0]
@@ -146,15 +149,22 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     grid = (first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s, step_s, n_env, n_steps)
     per_sample = width > 0 and _references_differ(params)
     on_segments = functools.partial(reference_segments, n_cycles=n_cycles, width=width, segment_cycles=segment_cycles)
-    sharing = functools.partial(_shared, n_cycles=n_cycles, n_slots=n_slots if pad else None)
     batch = functools.partial(Batch, controller, stacked, step_s=step_s, dynamics=dynamics, n_cycles=n_cycles,
                               reference_per_sample=per_sample, states=parts.of_config(first.config, states))
-    before_reference = None
-    if on_shapes is not None:
+
+    @functools.cache
+    def layout(count: int | None) -> Batch:  # the batch's shapes for a loop of ``count`` slots
         env = environment_shape(*grid)
         ref = reference_shape(n_cycles, width, env.earth_angle_rad.dtype) if width and not per_sample else None
-        before_reference = on_shapes(batch(jax.eval_shape(sharing, env, ref),
-                                           reference_env=jax.eval_shape(on_segments, env) if width else None))
+        shared = jax.eval_shape(functools.partial(_shared, n_cycles=n_cycles, n_slots=count), env, ref)
+        return batch(shared, reference_env=jax.eval_shape(on_segments, env) if width else None)
+
+    if pad and slots is not None:
+        n_slots = slots(layout, n_slots)
+    sharing = functools.partial(_shared, n_cycles=n_cycles, n_slots=n_slots if pad else None)
+    before_reference = None
+    if on_shapes is not None:
+        before_reference = on_shapes(layout(n_slots if pad else None))
     env = environment_grid(*grid, first.config["forces"]["ephemeris"])
     segments = on_segments(env) if width else None
     ref = None

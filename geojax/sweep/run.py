@@ -14,7 +14,7 @@ import numpy as np
 from geojax import scenario as scenario_mod, store
 from geojax.sweep import epochs as epoch_axis
 from geojax.loop.metrics import STATUS_TEXT
-from geojax.progress import Progress
+from geojax.progress import TICK_S, Progress
 from geojax.results import dims_of_sweep
 from geojax.sweep import cluster, local
 from geojax.sweep.batch import ChunkRunner, default_chunk, lane_plan
@@ -120,7 +120,7 @@ def _run_chunks(sweep: Sweep, out: Path, parts: Path, chunk: int, progress: bool
     def save(controller: str, first: int, values: dict) -> None:
         store.atomic_write(parts / f"{controller}_{first:09d}.npz", _npz_bytes(values))
 
-    with Progress(total, "samples", enabled=progress) as bar:
+    with Progress(total, "samples", enabled=progress, tick_s=TICK_S) as bar:
         bar.skip(done)  # what an earlier run did is not in the rate
         if on_ray:
             compile_s = cluster.run_chunks(sweep, todo, save, bar, workers, make_runner=ChunkRunner)

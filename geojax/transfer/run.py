@@ -12,7 +12,7 @@ import numpy as np
 from geojax.physics.constants import G0_MPS2, SECONDS_PER_DAY
 from geojax.physics.propagate import environment_grid
 from geojax.compilation import Compilations
-from geojax.progress import Progress
+from geojax.progress import TICK_S, Progress
 from geojax.transfer import pointing, report, rollout
 from geojax.transfer.rollout import STATUS_MEANINGS, Static, TransferParams, transfer
 from geojax.transfer.scenario import TransferScenario
@@ -61,7 +61,7 @@ def run(sc: TransferScenario, days: float | None = None, record_every_s: float =
     unit = "days" if record_every_s == SECONDS_PER_DAY else "records"
     advance = jax.jit(rollout.advance, static_argnums=3)
     carry, pieces = rollout.initial_carry(sc.params), []
-    with Progress(static.n_records, unit, enabled=progress) as bar, Compilations() as log:
+    with Progress(static.n_records, unit, enabled=progress, tick_s=TICK_S) as bar, Compilations() as log:
         bar.phase("compiling or loading from the cache, and flying the first block")
         for first in range(0, static.n_records, block):
             carry, records = advance(sc.params, carry, jax.tree_util.tree_map(lambda x: x[first:first + block], grid),
