@@ -22,7 +22,7 @@ from geojax.loop.metrics import STATUS_TEXT, cycle_table, summarize
 from geojax.loop.simulate import Records
 from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.physics.propagate import for_lanes
-from geojax.runner.rollout import Result
+from geojax.runner.rollout import Result, compiler_options
 from geojax.runner.setup import prepare, reference
 from geojax import states as parts
 from geojax.scenario import Scenario, from_dict, to_toml
@@ -185,11 +185,12 @@ def simulate_cluster(sc: Scenario, seed: int = 0, keep_steps: bool = False, unco
     names = tuple(member.name for member in sc.satellites)
     alert_km = float(sc.config["collocation"]["alert_km"])
     steps_per_cycle = batch.shared.env.earth_angle_rad.shape[1]
-    out = cluster_rollout(batch.params, satellite_keys(seed, names), batch.shared,
-                          batch.reference_env if batch.reference_per_sample else None, jnp.asarray(alert_km * 1e3),
-                          controller=batch.controller, step_s=batch.step_s,
-                          dynamics=for_lanes(batch.dynamics, len(names)), keep_steps=keep_steps, states=batch.states,
-                          steps_per_cycle=steps_per_cycle, ephemeris=ephemeris)
+    args = (batch.params, satellite_keys(seed, names), batch.shared,
+            batch.reference_env if batch.reference_per_sample else None, jnp.asarray(alert_km * 1e3))
+    static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, len(names)),
+                  keep_steps=keep_steps, states=batch.states, steps_per_cycle=steps_per_cycle, ephemeris=ephemeris)
+    # compiled as a single run's program is (its compilation is the wait: ``runner.rollout.compiler_options``)
+    out = cluster_rollout.lower(*args, **static).compile(compiler_options(1, batch.controller))(*args)
     final, records, separation, metrics, cluster, *kept = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(out))
     status = metrics.pop("status")
     wall_s = time.perf_counter() - start

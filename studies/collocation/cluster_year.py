@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 from pathlib import Path
 
 import h5py
@@ -46,6 +45,14 @@ def lone_scenario(folder: Path) -> Path:
     return path
 
 
+def _finished(path: Path, spec: Path) -> bool:
+    """Whether ``path`` is a finished sweep of the sweep file ``spec`` as it reads now."""
+    if not path.exists():
+        return False
+    with h5py.File(path) as f:
+        return f.attrs.get("config_toml", None) == spec.read_text()
+
+
 def metrics(path: Path) -> dict:
     with h5py.File(path) as f:
         return {k: np.asarray(v[()], float).reshape(-1) for k, v in f["metrics"].items()} | {
@@ -61,17 +68,22 @@ def main() -> None:
     args = parser.parse_args()
     work = args.out / f"cluster_year_{args.controller}"
     work.mkdir(parents=True, exist_ok=True)
-    begun = time.perf_counter()
-    cluster = work / "cluster.h5"
-    run_sweep(load_sweep(sweep_file(work, "cluster", "collocation-4", args.controller, args.clusters, args.days)),
-              cluster, resume=cluster.with_suffix(".parts").exists())
-    lone = work / "lone.h5"
-    run_sweep(load_sweep(sweep_file(work, "lone", str(lone_scenario(work)), args.controller, args.clusters,
-                                    args.days)), lone, resume=lone.with_suffix(".parts").exists())
-    wall_s = time.perf_counter() - begun
+    cluster, lone = work / "cluster.h5", work / "lone.h5"
+    for path, spec in ((cluster, sweep_file(work, "cluster", "collocation-4", args.controller, args.clusters, args.days)),
+                       (lone, sweep_file(work, "lone", str(lone_scenario(work)), args.controller, args.clusters,
+                                         args.days))):
+        if not _finished(path, spec):  # a finished sweep of the same file is read again, not flown again
+            run_sweep(load_sweep(spec), path, resume=Path(f"{path}.parts").exists(), force=path.exists())
+    wall_s = 0.0
+    for path in (cluster, lone):  # the sweeps' own times (a finished one read again costs nothing)
+        with h5py.File(path) as f:
+            wall_s += float(f.attrs["wall_s"])
     c, s = metrics(cluster), metrics(lone)
     sep = c["min_separation_km"]
     dv_cluster = np.concatenate([c[f"dv_per_year_mps_{k}"] for k in SATELLITES])
+    worst = int(np.argmin(sep))
+    pair = ["A_B", "A_C", "A_D", "B_C", "B_D", "C_D"][int(c["min_separation_pair"][worst])]
+    near = sep < np.percentile(sep, 50) - 1.0  # the clusters of the low mode, if any
     held = {k: int(np.sum(c[f"status_{k}"] == 0)) if f"status_{k}" in c else None for k in SATELLITES}
     data = {
         "controller": args.controller, "clusters": args.clusters, "days": args.days, "wall_s": wall_s,
@@ -81,6 +93,9 @@ def main() -> None:
         "min_separation_km": {"min": float(sep.min()), "p5": float(np.percentile(sep, 5)),
                               "p50": float(np.percentile(sep, 50)), "p95": float(np.percentile(sep, 95))},
         "below_alert_fraction": float(np.mean(sep < c["alert_km"])),
+        "worst": {"day": float(c["min_separation_day"][worst]), "pair": pair,
+                  "clusters_1km_below_median": int(np.sum(near)),
+                  "their_days": sorted({round(float(d), 1) for d in c["min_separation_day"][near]})},
         "clusters_held": int(np.sum(c["status"] == 0)),
         "max_abs_dlon_deg": float(c["max_abs_dlon_deg"].max()), "max_abs_dlat_deg": float(c["max_abs_dlat_deg"].max()),
         "dv_cluster_mean_mps": float(dv_cluster.mean()), "dv_cluster_std_mps": float(dv_cluster.std()),
@@ -96,6 +111,9 @@ def main() -> None:
              "| quantity | value |", "|---|---:|",
              f"| least separation, every cluster (km) | {m['min']:.3f} |",
              f"| percentiles 5 / 50 / 95 over the clusters (km) | {m['p5']:.3f} / {m['p50']:.3f} / {m['p95']:.3f} |",
+             f"| the least, when and between which pair | day {data['worst']['day']:.2f}, {pair} |",
+             f"| clusters more than 1 km below the median, and on which days | "
+             f"{data['worst']['clusters_1km_below_median']}, days {', '.join(map(str, data['worst']['their_days']))} |",
              f"| clusters closer than the 2 km alert | {data['below_alert_fraction']:.1%} |",
              f"| clusters whose four satellites kept their boxes | {data['clusters_held']} of {args.clusters} |",
              f"| largest longitude / latitude excursion (deg) | {data['max_abs_dlon_deg']:.4f} / "
