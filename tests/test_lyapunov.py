@@ -128,3 +128,24 @@ def test_thresholds_must_have_norm_u0():
         thrust_laws.check_thresholds(U0, [6.62e-7, 1.1e-6, 4.14e-6])  # Katz's printed values, 4.4 % short
     with pytest.raises(ValueError, match="three thresholds > 0"):
         thrust_laws.check_thresholds(U0, [0.0, 0.0, U0])
+
+
+def test_with_a_station_s_e_and_i_targets_each_term_descends_its_own_lyapunov_function():
+    """Independent check (autodiff of V, not of the law): with the targets of a collocated satellite (an e vector
+    and a tilted orbit normal), the law's e part is the steepest descent of V_e = |e - e_d|^2 / 2 and its h part
+    of V_h = |h - h_d|^2 / 2 with h_d along the target normal: grad_v V . u = -k |grad_v V|^2."""
+    normal = jnp.array([2e-4, -1e-4, 1.0]) / jnp.linalg.norm(jnp.array([2e-4, -1e-4, 1.0]))
+    station = STATION._replace(e_target=jnp.array([1.5e-4, -0.5e-4, 0.0]), normal_target=normal)
+    for r, v in zip(*random_states(6, seed=4)):
+        r, v = jnp.asarray(r), jnp.asarray(v)
+        lam = jnp.arctan2(r[1], r[0])
+        radius_d = station.radius_m + GAINS.k_lambda_m_per_rad * (lam - station.lon_rad - GAINS.lambda_b_rad)
+        grad_vh = jax.grad(lambda vv: lyapunov.lyapunov_terms(station, r, vv, radius_d)[0])(v)
+        grad_ve = jax.grad(lambda vv: lyapunov.lyapunov_terms(station, r, vv, radius_d)[1])(v)
+        u_h = lyapunov.accel(GAINS._replace(k_e_m2_per_s3=jnp.asarray(0.0)), station, r, v)
+        u_e = lyapunov.accel(GAINS._replace(k_h_per_m2_s=jnp.asarray(0.0)), station, r, v)
+        assert float(grad_vh @ u_h) == pytest.approx(-float(GAINS.k_h_per_m2_s) * float(grad_vh @ grad_vh), rel=1e-8)
+        assert float(grad_ve @ u_e) == pytest.approx(-float(GAINS.k_e_m2_per_s3) * float(grad_ve @ grad_ve), rel=1e-8)
+        # the targets matter: the e part differs from Katz's e = 0 law
+        plain = lyapunov.accel(GAINS._replace(k_h_per_m2_s=jnp.asarray(0.0)), STATION, r, v)
+        assert float(jnp.linalg.norm(u_e - plain)) > 1e-3 * float(jnp.linalg.norm(plain))

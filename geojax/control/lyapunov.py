@@ -139,7 +139,7 @@ def controller(mode: str, smooth: bool = False) -> Controller:
         angle = environment.env.earth_angle_rad[0]
         r_eci, v_eci = environment.r_eci_m, environment.v_eci_mps
         r_ecef = rotate_z(r_eci, angle)
-        u_cmd = accel(gains(c), station(params), r_ecef, rotate_z(v_eci, angle))
+        u_cmd = accel(gains(c), station(params, angle), r_ecef, rotate_z(v_eci, angle))
         limits = thrust_laws.ThrustLimits(c["u0_mps2"], c.get("sigma_mps2", jnp.zeros(3)))
         u_ecef = deliver(u_cmd, limits, smooth, c[SURROGATE_TEMPERATURE])
         u_rsw = rsw_basis(r_eci, v_eci) @ rotate_z(u_ecef, -angle)
@@ -159,10 +159,18 @@ def gains(controller: dict) -> "LyapunovGains":
                          controller["lambda_b_rad"])
 
 
-def station(params) -> "Station":
-    """The slot of eq. (4) from a sample's ``Params``."""
-    return Station(params.station["lon_rad"], params.station["radius_m"], jnp.asarray(OMEGA_EARTH_RAD_S),
-                   params.forces.mu_m3_s2)
+def station(params, earth_angle_rad=None) -> "Station":
+    """The slot of eq. (4) from a sample's ``Params``; with the Earth angle, the station's e-vector and
+    inclination-vector targets too (``Station.e_target``, ``normal_target``, in ECEF axes then)."""
+    s = params.station
+    out = Station(s["lon_rad"], s["radius_m"], jnp.asarray(OMEGA_EARTH_RAD_S), params.forces.mu_m3_s2)
+    if earth_angle_rad is None:
+        return out
+    # MEE targets: e vector (f, g) in the equator; orbit normal (2k, -2h, 1 - h^2 - k^2) / (1 + h^2 + k^2)
+    h, k = s["ix"], s["iy"]
+    normal = jnp.stack([2 * k, -2 * h, 1 - h * h - k * k]) / (1 + h * h + k * k)
+    e_target = jnp.stack([s["ex"], s["ey"], 0.0 * s["ex"]])
+    return out._replace(e_target=rotate_z(e_target, earth_angle_rad), normal_target=rotate_z(normal, earth_angle_rad))
 
 
 class LyapunovGains(NamedTuple):
@@ -175,12 +183,17 @@ class LyapunovGains(NamedTuple):
 
 
 class Station(NamedTuple):
-    """The slot the law holds: desired longitude lambda_d and the radius R of eq. (4)."""
+    """The slot the law holds: desired longitude lambda_d and the radius R of eq. (4), and the station's e-vector
+    and orbit-normal targets (ECEF axes; None: Katz's e = 0 and h along the pole), so that a satellite of a
+    collocated cluster holds its own e and i vectors: the law descends |h - h_d|^2 / 2 and |e - e_d|^2 / 2, whose
+    gradients in the control are eq. (1)'s with e - e_d for e (de/du does not depend on the target)."""
 
     lon_rad: jnp.ndarray
     radius_m: jnp.ndarray
     omega_rad_s: jnp.ndarray
     mu_m3_s2: jnp.ndarray
+    e_target: jnp.ndarray | None = None
+    normal_target: jnp.ndarray | None = None
 
 
 def accel(gains: LyapunovGains, station: Station, r_ecef_m, v_ecef_mps):
@@ -193,18 +206,26 @@ def accel(gains: LyapunovGains, station: Station, r_ecef_m, v_ecef_mps):
     h, e = milankovitch(r_ecef_m, v_ecef_mps, mu)
     lon = jnp.arctan2(r_ecef_m[1], r_ecef_m[0])
     radius_d = station.radius_m + gains.k_lambda_m_per_rad * wrap_angle(lon - station.lon_rad - gains.lambda_b_rad)
-    h_d = jnp.stack([0.0, 0.0, radius_d**2 * station.omega_rad_s])
-    dh = h - h_d
+    dh = h - desired_h(station, radius_d)
+    de = e if station.e_target is None else e - station.e_target
     return -gains.k_h_per_m2_s * jnp.cross(dh, r_ecef_m) - gains.k_e_m2_per_s3 / mu * (
-        jnp.cross(r_ecef_m, jnp.cross(v_ecef_mps, e)) + jnp.cross(h, e)
+        jnp.cross(r_ecef_m, jnp.cross(v_ecef_mps, de)) + jnp.cross(h, de)
     )
+
+
+def desired_h(station: Station, radius_d_m):
+    """The desired angular momentum h_d of eq. (4): R_d^2 omega along the pole, or the target orbit normal."""
+    if station.normal_target is None:
+        return jnp.stack([0.0, 0.0, radius_d_m**2 * station.omega_rad_s])
+    return radius_d_m**2 * station.omega_rad_s * station.normal_target
 
 
 def lyapunov_terms(station: Station, r_ecef_m, v_ecef_mps, radius_d_m):
     """(|h - h_d|^2 / 2, |e|^2 / 2) for a fixed desired radius: the functions eq. (1) descends."""
     h, e = milankovitch(r_ecef_m, v_ecef_mps, station.mu_m3_s2)
-    dh = h - jnp.stack([0.0, 0.0, radius_d_m**2 * station.omega_rad_s])
-    return 0.5 * jnp.sum(dh**2), 0.5 * jnp.sum(e**2)
+    dh = h - desired_h(station, radius_d_m)
+    de = e if station.e_target is None else e - station.e_target
+    return 0.5 * jnp.sum(dh**2), 0.5 * jnp.sum(de**2)
 
 
 def milankovitch(r_m, v_mps, mu):
