@@ -27,6 +27,8 @@ from geojax.states.base import Part, StateModel
 NAME = "faults"
 # The thrusters the part tracks (indices 0 .. TRACKED - 1): Li's two arms with two thrusters each.
 TRACKED = 4
+# ``reacquire_days`` of a sample whose run ends out of its box (a metric is finite: a NaN would read as status 4).
+NOT_REACQUIRED = -1.0
 
 FIELDS = {
     "enabled": Field(bool, False, static=True,
@@ -139,6 +141,29 @@ def metrics(params, cycles: Faults, n_steps_total: int, run_s: float):
     return out, jnp.asarray(False)
 
 
+def fault_start_s(params):
+    """When the faults start [] s from the run's start: the outage's start where a thruster is out, else the run's
+    start (a burn may be lost or thrust degraded from the first cycle)."""
+    leaves = params.states[NAME]
+    return jnp.where(leaves["thruster_out"] >= 0, leaves["out_from_s"], 0.0)
+
+
+def box_metrics(params, cycles: Faults, out_of_box, cycle_s: float):
+    """The time out of the box and to re-acquire it, from the loop's box check per cycle (``out_of_box``
+    [n_cycles] bool, ``loop.metrics.box_exits``; a cycle counts whole where any of its step starts is out):
+    ``days_out_of_box`` over the run, and ``reacquire_days``, from the faults' start to the end of the last
+    cycle out of the box that ends after it: 0 where the sample never left the box after the faults' start,
+    ``NOT_REACQUIRED`` (-1) where the run ends out of the box."""
+    n_cycles = out_of_box.shape[0]
+    start_s = fault_start_s(params)
+    end_s = (jnp.arange(n_cycles) + 1.0) * cycle_s
+    after = out_of_box & (end_s > start_s)
+    last_end_s = jnp.max(jnp.where(after, end_s, 0.0))
+    reacquire_days = jnp.where(~jnp.any(after), 0.0,
+                               jnp.where(out_of_box[-1], NOT_REACQUIRED, (last_end_s - start_s) / SECONDS_PER_DAY))
+    return {"days_out_of_box": jnp.sum(out_of_box) * (cycle_s / SECONDS_PER_DAY), "reacquire_days": reacquire_days}
+
+
 def columns(cycles: Faults) -> dict:
     out = {}
     for k in range(TRACKED):
@@ -166,6 +191,7 @@ def validate(config: dict) -> dict:
 
 
 MODEL = StateModel(NAME, init, step, summary, metrics, cycle=cycle, columns=columns, thrust=thrust, estimate=estimate,
+                   box_metrics=box_metrics,
                    bytes_per_cycle=(3 * TRACKED + 1) * 8, columns_per_cycle=2 * TRACKED)
 DESCRIPTIONS = {
     "burns_total": "burns flown (with the faults part: as flown; burns_planned beside it)",
@@ -174,6 +200,9 @@ DESCRIPTIONS = {
     "burns_missed": "burns commanded but not flown at all (drawn missed, or their thruster out)",
     "burns_drawn_missed": "burns lost to faults.missed_burn_probability (its own random stream)",
     "fault_lost_firing_s": "the thrust the faults took away, as firing time at full thrust, s",
+    "days_out_of_box": "days in cycles with a step start out of the box (the status' check, per cycle)",
+    "reacquire_days": "days from the faults' start to the end of the last cycle out of the box; 0: never left "
+                      "after it, -1: the run ends out of the box",
     **{f"on_time_t{k}_s": f"thruster {k}'s firing time as delivered, s" for k in range(TRACKED)},
     **{f"burns_t{k}": f"thruster {k}'s burns flown" for k in range(TRACKED)},
     **{f"fired_s_t{k}": f"thruster {k}'s firing time delivered in the cycle, s (/cycles)" for k in range(TRACKED)},
