@@ -75,8 +75,15 @@ def test_degraded_thrust_delivers_its_fraction_or_is_planned_for(told):
 @pytest.mark.parametrize("key, value, says", [
     ("missed_burn_probability", 1.5, "faults.missed_burn_probability"),
     ("thruster_out", 3, "faults.thruster_out"),
+    ("thruster_out", [0, 3], "faults.thruster_out"),
+    ("thruster_out", [0, 5], "faults.thruster_out"),
+    ("thruster_out", [0, True], "faults.thruster_out"),
     ("out_days", -1.0, "faults.out_days"),
+    ("out_from_day", "soon", "faults.out_from_day"),
+    ("out_from_spread_days", -2.0, "faults.out_from_spread_days"),
     ("thrust_scale", 0.0, "faults.thrust_scale"),
+    ("thrust_scale", [0.9, 1.0], "faults.thrust_scale"),
+    ("thrust_scale", [0.9, 1.0, 0.0, 1.0], "faults.thrust_scale"),
 ])
 def test_bad_faults_are_refused_naming_the_key(key, value, says):
     with pytest.raises(ValueError, match=says.replace(".", r"\.")):
@@ -230,3 +237,87 @@ def test_an_arm_lost_is_kept_by_the_other_arm_when_the_planner_is_told():
     assert float(told.metrics["burns_t1"]) > 1.5 * float(told.metrics["burns_t0"])
     unaware = run({**lost, "planner_told": False}, days=60)
     assert unaware.status in (2, 3) and float(unaware.metrics["days_out_of_box"]) > 0
+
+
+def test_a_drawn_outage_start_is_uniform_over_its_spread():
+    """``out_from_spread_days``: the part's first cycle start draws the outage's start uniform over [out_from_day,
+    out_from_day + spread) from its own key.  Over 2000 keys the draws pass a Kolmogorov-Smirnov test against the
+    uniform law (the 1 % critical distance 1.63 / sqrt(n)), and the missed burns' draws of that cycle are those of
+    a run without the spread (the outage's draw is a stream apart)."""
+    import jax
+
+    from geojax.states import faults
+    from geojax.states.base import CycleStart
+
+    sc = geojax.load_scenario("li2022-qffc", {"duration.days": 30, "faults.out_from_day": 5.0,
+                                              "faults.out_from_spread_days": 20.0, "faults.thruster_out": 0})
+    plain = geojax.load_scenario("li2022-qffc", {"duration.days": 30, "faults.out_from_day": 5.0,
+                                                 "faults.thruster_out": 0})
+    from types import SimpleNamespace
+
+    def first(scenario, key):
+        params = SimpleNamespace(states={"faults": faults.leaves(scenario.config["faults"])})
+        zero = jax.numpy.zeros(3)
+        start = CycleStart(jax.numpy.asarray(0), jax.numpy.asarray(0.0), zero, zero, jax.numpy.asarray(1.0), key)
+        state = faults.init(params, zero, zero, None, None)
+        return faults.cycle(params, state, start)
+
+    keys = jax.random.split(jax.random.key(7), 2000)
+    drawn = jax.vmap(lambda k: first(sc, k))(keys)
+    days = np.sort(np.asarray(drawn.out_from_s)) / SECONDS_PER_DAY
+    assert days.min() >= 5.0 and days.max() < 25.0
+    uniform = (days - 5.0) / 20.0
+    n = len(uniform)
+    distance = max(np.max(np.arange(1, n + 1) / n - uniform), np.max(uniform - np.arange(n) / n))
+    assert distance < 1.63 / math.sqrt(n)
+    without = jax.vmap(lambda k: first(plain, k))(keys[:50])
+    np.testing.assert_array_equal(np.asarray(without.missed), np.asarray(drawn.missed)[:50])
+    assert np.all(np.asarray(without.out_from_s) == 5.0 * SECONDS_PER_DAY)
+
+
+def test_uniform_over_the_run_and_the_loop_flies_the_drawn_outage():
+    """``out_from_day = "uniform"``: the start spread over the run's length, one draw per sample (two seeds, two
+    starts); in the closed loop thruster 0 (the planner not told) delivers what it was commanded in every cycle
+    that ends before the drawn start and nothing in every cycle that begins after it (the /cycles columns)."""
+    sc = geojax.load_scenario("li2022-qffc", {"duration.days": 20, "faults.out_from_day": "uniform",
+                                              "faults.thruster_out": 0, "faults.planner_told": False})
+    assert sc.config["faults"]["out_from_day"] == 0.0 and sc.config["faults"]["out_from_spread_days"] == 20.0
+    starts = []
+    for seed in (1, 2):
+        r = geojax.simulate(sc, seed=seed)
+        start_s = np.asarray(r.records.cycles.states["faults"].out_from_s)
+        assert np.all(start_s == start_s[0]) and 0 <= start_s[0] < 20 * SECONDS_PER_DAY
+        table = r.cycles()
+        t0 = np.asarray(table["t_s"]) - np.diff(np.asarray(table["t_s"]))[0] / 2  # cycle starts (t_s: mid-cycle)
+        cycle_s = np.diff(t0)[0]
+        fired, planned = np.asarray(table["fired_s_t0"]), np.asarray(table["planned_s_t0"])
+        before, after = t0 + cycle_s <= start_s[0], t0 >= start_s[0]
+        np.testing.assert_array_equal(fired[before], planned[before])
+        assert np.all(fired[after] == 0)
+        starts.append(start_s[0])
+    assert starts[0] != starts[1]
+
+
+def test_two_thrusters_out_of_four_lose_an_arm_and_a_scale_per_thruster():
+    """Four thrusters, thrusters 0 and 2 (both of arm 0) out from day 10, the planner told: arm 1 keeps the box
+    alone for 30 days and neither of arm 0's thrusters fires after the cycle that met the outage.  A scale per
+    thruster, [0.9, 1, 1, 1] unaware: the first cycle's Delta-V is 0.9 of the nominal run's burn of thruster 0
+    plus its burn of thruster 1 (the burns files of both runs; F t / m linear in thrust to 1e-5)."""
+    r = run({"thruster_out": [0, 2], "out_from_day": 10.0}, days=30, count=4)
+    table = r.cycles()
+    late = np.asarray(table["t_s"]) / SECONDS_PER_DAY > 11.0
+    assert r.status == 0
+    assert np.all(np.asarray(table["fired_s_t0"])[late] == 0) and np.all(np.asarray(table["fired_s_t2"])[late] == 0)
+    assert np.all(np.asarray(table["fired_s_t1"])[late] + np.asarray(table["fired_s_t3"])[late] > 0)
+
+    from geojax.export import trajectory
+
+    nominal = trajectory.run_burns(run({"planner_told": False}, days=2))
+    weak = run({"thrust_scale": [0.9, 1.0, 1.0, 1.0], "planner_told": False}, days=2)
+    first = nominal.cycle == 0
+    dv = np.linalg.norm(nominal.dv_rtn_mps[first], axis=1)
+    expected = np.sum(np.where(nominal.thruster[first] == 1, 0.9, 1.0) * dv)
+    assert float(np.asarray(weak.records.cycles.dv_mps)[0]) == pytest.approx(expected, rel=1e-5)
+    marked = trajectory.run_burns(weak)
+    assert set(marked.status[(marked.cycle == 0) & (marked.thruster == 1)]) == {"degraded"}
+    assert set(marked.status[(marked.cycle == 0) & (marked.thruster == 2)]) == {"flown"}
