@@ -17,6 +17,9 @@ burn's thrust level scaled by 1 + e, e Gaussian with 1-sigma ``errors.sigma3_dv_
 ``normal(fold_in(key_k, MAGNITUDE_KEY), (2,))`` (``magnitude_scale``), the burn's planned duration kept (the
 plan does not know the error; the mass flow follows the thrust at the stated Isp).  At 0 % the scale is exactly
 1 and every number is as without the key.
+Told by the faults part (``states.faults``) of the thrusters' levels, ``allocated`` picks each arm's working
+thruster and ``one_arm`` flies a cycle from one arm where the other is lost (Ye 2022's one-node north-south
+keeping; ``docs/contingencies.md``).
 The readings the paper leaves open are switches of ``errors`` (the ablation
 ``studies/ablation/li_attitude_error.py`` measures each): the yaw and pitch
 parts scaled apart (``att_yaw``, ``att_pitch``), one draw for both burns of a
