@@ -105,12 +105,15 @@ def test_a_thruster_out_must_be_on_board(tmp_path):
         geojax.load_scenario(str(unset), {"faults.thruster_out": 1})
 
 
-def test_time_out_of_the_box_and_to_reacquire_it_counted_from_the_steps():
-    """An arm lost on day 10 (thruster 0 out to the end), the planner not told: the days out of the box and the
-    days to re-acquire are those counted again from the step records (a second computation: the osculating
-    longitude and latitude of every step start against the box, cycle by cycle), and the status agrees."""
+@pytest.mark.parametrize("out_days", [0.0, 10.0])
+def test_time_out_of_the_box_and_to_reacquire_it_counted_from_the_steps(out_days):
+    """An arm lost on day 10 (thruster 0 out to the end, or for 10 days), the planner not told: the days out of
+    the box and the days to re-acquire are those counted again from the step records (a second computation: the
+    osculating longitude and latitude of every step start against the box, cycle by cycle), and the status
+    agrees.  Lost to the end the run ends out of the box (-1); back after 10 days the box is re-acquired."""
     sc = geojax.load_scenario("li2022-qffc", {"duration.days": 60, "faults.thruster_out": 0,
-                                              "faults.out_from_day": 10.0, "faults.planner_told": False})
+                                              "faults.out_from_day": 10.0, "faults.out_days": out_days,
+                                              "faults.planner_told": False})
     r = geojax.simulate(sc, seed=3, keep_steps=True)
     box_rad = float(r.params.station["box_half_width_rad"])
     dlon = np.abs(np.angle(np.exp(1j * (np.asarray(r.records.steps.lon_rad)
@@ -124,6 +127,7 @@ def test_time_out_of_the_box_and_to_reacquire_it_counted_from_the_steps():
     ends = (np.arange(len(out)) + 1) * cycle_days
     expected = -1.0 if out[-1] else ends[out & (ends > 10.0)].max() - 10.0
     assert m["reacquire_days"] == pytest.approx(expected, rel=1e-12)
+    assert (expected == -1.0) == (out_days == 0.0)
 
 
 def test_a_sample_that_stays_in_its_box_has_no_time_out_of_it():
