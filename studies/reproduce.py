@@ -1,7 +1,7 @@
 """Regenerate a paper's tables and figures with one command.
 
     python studies/reproduce.py li2022 [katz2025 ye2022 ma2023 bounds ablation longrun lifetime compare momentum
-                                         navigation ...]   # or: all
+                                         navigation contingencies ...]   # or: all
     python studies/reproduce.py li2022 --only fig09 fig13         # scripts whose name contains a word
     python studies/reproduce.py all --list                         # the commands, without running them
 
@@ -51,6 +51,8 @@ STUDIES = {
                    ("navigation/burns_around_passes.py", ["--controller", "fompc", "--samples", "8", "--days", "120"]),
                    ("navigation/bias_estimation.py", []),
                    ("navigation/tune_thrust_ranging.py", [])],
+    "contingencies": [("contingencies/arm_lost.py", []), ("contingencies/missed_burns.py", []),
+                      ("contingencies/degradation.py", []), ("contingencies/tables.py", [])],
 }
 
 

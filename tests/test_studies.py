@@ -23,7 +23,7 @@ def test_every_listed_study_exists_and_each_script_of_a_paper_folder_is_listed(c
     # every runnable script of the paper folders (not the shared sweep helper) is in the list
     runnable = {str(p.relative_to(STUDIES)) for folder in ("li2022", "katz2025", "ye2022", "ma2023", "ablation", "bounds",
                                                                              "longrun", "lifetime", "compare", "momentum",
-                                                                             "navigation")
+                                                                             "navigation", "contingencies")
                 for p in (STUDIES / folder).glob("*.py") if "__main__" in p.read_text() and p.name != "sweep_study.py"}
     assert runnable <= set(scripts), runnable - set(scripts)
     assert reproduce.main(["all", "--list"]) == 0

@@ -17,6 +17,9 @@ burn's thrust level scaled by 1 + e, e Gaussian with 1-sigma ``errors.sigma3_dv_
 ``normal(fold_in(key_k, MAGNITUDE_KEY), (2,))`` (``magnitude_scale``), the burn's planned duration kept (the
 plan does not know the error; the mass flow follows the thrust at the stated Isp).  At 0 % the scale is exactly
 1 and every number is as without the key.
+Told by the faults part (``states.faults``) of the thrusters' levels, ``allocated`` picks each arm's working
+thruster and ``one_arm`` flies a cycle from one arm where the other is lost (Ye 2022's one-node north-south
+keeping; ``docs/contingencies.md``).
 The readings the paper leaves open are switches of ``errors`` (the ablation
 ``studies/ablation/li_attitude_error.py`` measures each): the yaw and pitch
 parts scaled apart (``att_yaw``, ``att_pitch``), one draw for both burns of a
@@ -35,7 +38,8 @@ import jax.numpy as jnp
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_matrix
 from geojax.physics.dynamics import Thrust
 from geojax.physics.forces import sunlit_fraction_xyz
-from geojax.physics.propulsion import delta_v_direction_rsw, firing_fraction, sunlit_clock
+from geojax.physics.propulsion import (alpha_beta_bounds, arm_limits, delta_v_direction_rsw, firing_fraction,
+                                      sunlit_clock)
 from geojax.physics.trig import sincos
 from geojax.nominal_errors import NOMINAL_3SIGMA_ATT_DEG  # noqa: F401 (Li 2022 eq. (48))
 from geojax.states.faults import NAME as FAULTS
@@ -60,20 +64,28 @@ class BurnPlan(NamedTuple):
     thrusters: jnp.ndarray | None = None  # [2] int: the thruster flying each burn (None: burn k from thruster k)
 
 
-def fly(params, burns, prediction, ns_fraction, estimate, context, key) -> BurnPlan:
-    """The ``BurnPlan`` of ``burns`` [qffc.BurnPair] planned at the start of the cycle of ``context``."""
+def fly(params, burns, prediction, ns_fraction, estimate, context, key, arms: int = 2) -> BurnPlan:
+    """The ``BurnPlan`` of ``burns`` [qffc.BurnPair] planned at the start of the cycle of ``context``; ``arms``
+    (static): Li's two arms, or 1 for one thruster (Ye 2022's manipulator: no arm to lose)."""
     thrusters = params.thrusters
     cycle_s, step_s = context.cycle_s, context.step_s
     n_steps = context.env.earth_angle_rad.shape[0]
     l_start = estimate.fix_mee[5]
+    flying = None
+    if FAULTS in estimate.states:  # told of the thrusters' levels (``states.faults``)
+        flying, level = allocated(estimate.states[FAULTS], thrusters.get("count"))
+        if arms == 2:  # an arm known lost: the other flies both nodes (``one_arm``)
+            lost = (level <= 0) & (level[::-1] > 0)
+            burns = jax.tree_util.tree_map(lambda one, two: jnp.where(jnp.any(lost), one, two),
+                                           one_arm(burns, jnp.where(lost[0], 1, 0), arm_limits(thrusters)), burns)
+            flying = jnp.where(lost, flying[::-1], flying)
+            level = jnp.where(lost, level[::-1], level)
     t_mid = jnp.mod(burns.l_rad - l_start, 2 * jnp.pi) / (2 * jnp.pi) * cycle_s
     attitude_error = attitude_error_rad(params.errors, key)
     directions = delta_v_direction_rsw(burns.alpha_rad + attitude_error[0], burns.beta_rad + attitude_error[1])
     v_mps = jnp.where(params.errors["att_known"] > 0, refit_magnitudes_mps(burns, directions, l_start), burns.v_mps)
     burn_s = v_mps * estimate.mass_kg / thrusters["thrust_n"]  # eq. (13)
-    flying = None
-    if FAULTS in estimate.states:  # told of the thrusters' levels (``states.faults``)
-        flying, level = allocated(estimate.states[FAULTS], thrusters.get("count"))
+    if flying is not None:
         burn_s = jnp.where(level > 0, burn_s / jnp.where(level > 0, level, 1.0), 0.0)
     burn_s = jnp.where((burn_s >= thrusters["min_burn_s"]) & burns.feasible, burn_s, 0.0)
     start = jnp.clip(t_mid - burn_s / 2, 0.0, cycle_s - burn_s)
@@ -95,6 +107,49 @@ def allocated(levels, count):
     primary, redundant = levels[0:2], levels[2:4]
     use_redundant = redundant > primary
     return jnp.arange(2) + 2 * use_redundant, jnp.where(use_redundant, redundant, primary)
+
+
+def one_arm(burns, keeper, limits):
+    """The pair ``burns`` [qffc.BurnPair] flown by arm ``keeper`` alone ([] int 0 or 1, the other lost): Ye 2022's
+    one-node north-south keeping and the east-west keeping it can.
+
+    A normal Delta-V v_n at the node l moves the inclination vector along v_n (cos l, sin l) (eq. (29)); the pair's
+    burns sit half an orbit apart, south at l_1 and north at l_2 = l_1 + pi, so their effects add along one
+    line and one burn of |v_n1| + |v_n2| at the keeper's node has the pair's inclination effect exactly.  The
+    keeper flies that burn with its own in-plane part, and the lost arm's in-plane part (its normal part 0, the
+    pitch floor beta_min where it is not 0) at the lost arm's node, half an orbit later: radial inward parts at
+    opposite nodes cancel in the eccentricity vector, so the pair's in-plane effect is kept.  Where the one burn
+    would pitch beyond beta_max, both burns gain the same radial inward part d (the least that brings it to
+    beta_max): at opposite nodes it leaves the eccentricity vector and the drift as they were and moves the mean
+    longitude, which the next cycle's plan sees.  The lost arm's yaw is clipped to the keeper's limits (eq. (1)),
+    its in-plane size kept."""
+    (alpha_lo, alpha_hi), _ = alpha_beta_bounds(limits)
+    dv = burns.dv_rsw_mps
+    own = jnp.where(keeper == 1, dv[1], dv[0])
+    other = jnp.where(keeper == 1, dv[0], dv[1])
+    north = jnp.where(keeper == 1, 1.0, -1.0)  # the keeper's normal sign: arm 0 fires south, arm 1 north
+    v_n = north * (jnp.abs(dv[0, 2]) + jnp.abs(dv[1, 2]))
+    lo, hi = jnp.where(keeper == 1, alpha_lo[1], alpha_lo[0]), jnp.where(keeper == 1, alpha_hi[1], alpha_hi[0])
+    alpha_other = jnp.clip(jnp.arctan2(-other[1], -other[0]), lo, hi)
+    p_other = jnp.hypot(other[0], other[1])
+    x, y = p_other * jnp.cos(alpha_other), p_other * jnp.sin(alpha_other)  # eq. (1)'s x = -v_r >= 0, y = -v_t
+    tan_max, tan_min = jnp.tan(limits.beta_max_rad), jnp.tan(limits.beta_min_rad)
+    radial = jnp.zeros(())
+    n_other = jnp.zeros(())
+    # the floor's normal part and the raise d depend on each other: fixed-point steps, each shrinking the error by
+    # about tan(beta_min) / tan(beta_max) (0.06 at 10 and 70 deg)
+    for _ in range(8):
+        n_other = tan_min * jnp.hypot(x + radial, y)
+        wanted = (jnp.abs(v_n) + n_other) / jnp.maximum(tan_max, 1e-12)  # the own burn's least in-plane part
+        radial = jnp.maximum(0.0, jnp.sqrt(jnp.maximum(wanted ** 2 - own[1] ** 2, 0.0)) + own[0])
+    own_new = jnp.stack([own[0] - radial, own[1], v_n + north * n_other])
+    other_new = jnp.stack([-(x + radial), -y, north * n_other])
+    dv_new = jnp.where(keeper == 1, jnp.stack([other_new, own_new]), jnp.stack([own_new, other_new]))
+    dv_new = jnp.where(jnp.any(dv != 0), dv_new, 0.0)  # no plan (an infeasible cycle): nothing to fly
+    v = jnp.linalg.norm(dv_new, axis=1)
+    alpha = jnp.arctan2(-dv_new[:, 1], -dv_new[:, 0])
+    beta = jnp.arctan2(-dv_new[:, 2], jnp.hypot(dv_new[:, 0], dv_new[:, 1]))
+    return burns._replace(dv_rsw_mps=dv_new, v_mps=v, alpha_rad=alpha, beta_rad=beta)
 
 
 def magnitude_scale(errors, key):

@@ -350,7 +350,7 @@ def tilt_rad(params, estimate, ref, cycle_s, v_ns_mps):
 
 def _plan(params, controller_state, estimate, context, key):
     seen, burns = plan_cycle(params, estimate, context)
-    flown = burns_mod.fly(params, burns, jnp.zeros(6), jnp.asarray(1.0), estimate, context, key)
+    flown = burns_mod.fly(params, burns, jnp.zeros(6), jnp.asarray(1.0), estimate, context, key, arms=1)
     return ZonePlan(flown, *seen), controller_state
 
 

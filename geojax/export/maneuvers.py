@@ -49,6 +49,8 @@ def save_maneuvers(result, path: str | Path, *, frame: str = "EME2000", time_sys
         raise ValueError(f"time_system: must be one of {', '.join(trajectory.TIME_SYSTEMS)}, got {time_system!r}")
     sc = scenario_of(result)
     burns = trajectory.run_burns(result)
+    if burns is not None:
+        burns = trajectory.burns_flown(burns)
     if burns is None:
         raise ValueError(f"maneuvers: controller {sc.controller} thrusts per step; its burns are read from the steps "
                          f"of a run made with geojax.simulate(..., ephemeris=True)")
@@ -79,7 +81,7 @@ def save_maneuvers(result, path: str | Path, *, frame: str = "EME2000", time_sys
         k, thruster = int(burns.cycle[i]), int(burns.thruster[i])
         dv_kmps = burns.dv_rtn_mps[i] / 1e3
         if planner:
-            plan = planned[k, thruster - 1]
+            plan = planned[k, (thruster - 1) % 2]  # thrusters k + 1 and k + 3 on arm k (``control.burns``)
             said = (f"planned Delta-V RTN {plan[0]:.9f} {plan[1]:.9f} {plan[2]:.9f} m/s (attitude errors not "
                     f"included)")
         else:

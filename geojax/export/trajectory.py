@@ -37,7 +37,11 @@ and each run of consecutive steps that fire with the same thrust vector in RSW i
 recovery law's along-track arc of a cycle, or its out-of-plane arc about a node; a law that turns its thrust
 every step has a burn per step), spanning those steps at the level flown (the duration is the span, the
 Delta-V the rocket equation over it from the mass at its start); a run without a controller has an empty burn
-list.  The burns as a CCSDS message: ``export.maneuvers``.
+list.  With the faults part (``states.faults``) the list holds every burn the plan fired, each as flown by its
+thruster: ``status`` says whether it flew as planned (``flown``), not at all (``missed``: drawn lost or its thruster
+out; duration and Delta-V 0), shorter (``cut``: an outage began within it) or at a lower thrust (``degraded``:
+``faults.thrust_scale`` below 1), and ``planned_s`` the firing time commanded beside it.  The burns as a CCSDS
+message: ``export.maneuvers`` (the burns flown).
 """
 
 from __future__ import annotations
@@ -51,7 +55,7 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
-from geojax.states.faults import NAME as FAULTS
+from geojax.states.faults import NAME as FAULTS, TRACKED
 from geojax.export.oem import Covariance, Metadata, write_oem
 from geojax.physics.constants import G0_MPS2
 from geojax.physics.elements import mee_to_cartesian
@@ -69,18 +73,29 @@ ACROSS_BURNS = ("Interpolate within coast arcs and burns: across a burn's start 
 J2000_TT = dt.datetime(2000, 1, 1, 12)  # J2000.0 as a TT calendar date
 BURN_COLUMNS = ("cycle", "thruster", "start_utc", "start_tt_s", "duration_s", "dv_mps", "dv_r_mps", "dv_t_mps",
                 "dv_n_mps")
+FAULT_BURN_COLUMNS = ("status", "planned_duration_s")  # after BURN_COLUMNS where the faults part rode the loop
+BURN_STATUSES = ("flown", "missed", "cut", "degraded")
 
 
 class Burns(NamedTuple):
     """A run's fired burns [m], in time order."""
 
     cycle: np.ndarray  # [m] int, control cycle from 0
-    thruster: np.ndarray  # [m] int, 1 or 2 (Li 2022: 1 fires southwards, 2 northwards)
+    thruster: np.ndarray  # [m] int from 1 (Li 2022: 1 fires southwards, 2 northwards; with thrusters.count = 4,
+    # 3 and 4 their arms' redundant ones)
     start_tt_s: np.ndarray  # [m] TT seconds since J2000.0 at which it starts firing
     duration_s: np.ndarray  # [m] firing time (a burn suspended in the Earth's shadow spans longer; a feedback
     # law's: the span of its steps, fired at their level)
     dv_rtn_mps: np.ndarray  # [m, 3] Delta-V along R, T, N (held fixed in RTN through the burn)
     mass_kg: np.ndarray  # [m] the propellant it used
+    status: np.ndarray | None = None  # [m] str, one of BURN_STATUSES, where the faults part rode the loop
+    planned_s: np.ndarray | None = None  # [m] the firing time commanded, there
+
+
+def burns_flown(burns: Burns) -> Burns:
+    """The burns of ``burns`` that fired (a missed one left out)."""
+    keep = burns.duration_s > 0
+    return Burns(*(None if x is None else np.asarray(x)[keep] for x in burns))
 
 
 class States(NamedTuple):
@@ -283,27 +298,35 @@ def run_burns(result) -> Burns | None:
         return None
     fired_s, start_s = np.asarray(rec["fired_s"], float), np.asarray(rec["start_s"], float)
     directions = np.asarray(rec["directions_rsw"], float)
-    level = 1.0
+    flying = np.asarray(rec["thrusters"]) if "thrusters" in rec else np.broadcast_to(np.arange(2), fired_s.shape)
+    planned = fired_s > 0
+    level = np.ones(fired_s.shape)
+    status = commanded_s = None
     faults = result.records.cycles.states.get(FAULTS)
     if faults is not None:  # ``states.faults``: the burns as flown (each by its thruster), at the level delivered
-        flying = np.asarray(rec["thrusters"]) if "thrusters" in rec else np.broadcast_to(np.arange(2), fired_s.shape)
-        fired_s = np.where(fired_s > 0, np.take_along_axis(np.asarray(faults.flown_s, float), flying, axis=1), 0.0)
-        level = float(result.params.states[FAULTS]["thrust_scale"])
+        commanded_s = np.take_along_axis(np.asarray(faults.planned_s, float), flying, axis=1)
+        flown_s = np.take_along_axis(np.asarray(faults.flown_s, float), flying, axis=1)
+        scale = np.broadcast_to(np.asarray(result.params.states[FAULTS]["thrust_scale"], float), (TRACKED,))
+        level = np.where(flown_s > 0, scale[flying], 0.0)
+        status = np.select([flown_s <= 0, flown_s < commanded_s, level != 1.0], BURN_STATUSES[1:], BURN_STATUSES[0])
+        fired_s = np.where(planned, flown_s, 0.0)
     cycle_s = steps_per_cycle(sc.step_s) * result.step_s
     cycle = np.broadcast_to(np.arange(len(fired_s))[:, None], fired_s.shape)
-    thruster = np.asarray(rec["thrusters"]) + 1 if "thrusters" in rec else np.broadcast_to(np.array([1, 2]),
-                                                                                           fired_s.shape)
     order = np.lexsort((start_s.ravel(), cycle.ravel()))
-    order = order[fired_s.ravel()[order] > 0]
+    order = order[planned.ravel()[order]]
     duration = fired_s.ravel()[order]
     thrusters = result.params.thrusters
     exhaust_mps = float(thrusters["isp_s"]) * G0_MPS2
-    flow_kg_s = level * float(thrusters["thrust_n"]) / exhaust_mps
-    mass_before = float(result.params.initial.mass_kg) - flow_kg_s * (np.cumsum(duration) - duration)
-    dv = exhaust_mps * np.log(mass_before / (mass_before - flow_kg_s * duration))
-    return Burns(cycle.ravel()[order], thruster.ravel()[order],
+    flow_kg_s = float(thrusters["thrust_n"]) / exhaust_mps  # at full thrust
+    full_s = level.ravel()[order] * duration  # the firing time at full thrust of the same impulse
+    mass_before = float(result.params.initial.mass_kg) - flow_kg_s * (np.cumsum(full_s) - full_s)
+    used_kg = flow_kg_s * full_s
+    dv = exhaust_mps * np.log(mass_before / (mass_before - used_kg))
+    return Burns(cycle.ravel()[order], flying.ravel()[order] + 1,
                  sc.epoch_tt_s + cycle.ravel()[order] * cycle_s + start_s.ravel()[order], duration,
-                 dv[:, None] * directions.reshape(-1, 3)[order], flow_kg_s * duration)
+                 dv[:, None] * directions.reshape(-1, 3)[order], used_kg,
+                 None if status is None else status.ravel()[order],
+                 None if commanded_s is None else commanded_s.ravel()[order])
 
 
 def step_burns(thrust, epoch_tt_s: float, step_s: float) -> Burns:
@@ -336,16 +359,19 @@ def step_burns(thrust, epoch_tt_s: float, step_s: float) -> Burns:
 
 def write_burns_csv(path: Path, burns: Burns) -> Path:
     """The burn list as CSV (``BURN_COLUMNS``: start in UTC ISO 8601 and TT seconds since J2000.0, firing time
-    s, Delta-V magnitude and RTN components m/s); written atomically."""
+    s, Delta-V magnitude and RTN components m/s; with the faults part, ``FAULT_BURN_COLUMNS``: each burn's status
+    and its firing time commanded); written atomically."""
     partial = path.with_name(path.name + ".partial")
     with partial.open("w", newline="") as handle:
         out = csv.writer(handle)
-        out.writerow(BURN_COLUMNS)
+        marked = burns.status is not None
+        out.writerow(BURN_COLUMNS + (FAULT_BURN_COLUMNS if marked else ()))
         for i in range(len(burns.cycle)):
             dv = burns.dv_rtn_mps[i]
             out.writerow([int(burns.cycle[i]), int(burns.thruster[i]), calendar(burns.start_tt_s[i], "UTC"),
                           f"{burns.start_tt_s[i]:.6f}", f"{burns.duration_s[i]:.6f}",
-                          f"{np.linalg.norm(dv):.9f}", *(f"{x:.9f}" for x in dv)])
+                          f"{np.linalg.norm(dv):.9f}", *(f"{x:.9f}" for x in dv),
+                          *((burns.status[i], f"{burns.planned_s[i]:.6f}") if marked else ())])
     partial.replace(path)
     return path
 

@@ -89,6 +89,7 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int, state
         out.update(dv_components_per_year(cycles.controller, cycles.dv_mps, n_cycles * cycle_s))
     if "recovering" in cycles.controller:  # control.recovery: its cycles and Delta-V apart
         out.update(recovery_metrics(cycles.controller, cycles.dv_mps))
+    lon_out, lat_out = box_exits(params, cycles)
     failures = []  # (failed, code) of the parts, in their order
     meanings = parts.status_meanings(states)
     for model in _models(states, cycles.states):
@@ -96,12 +97,13 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int, state
         out.update(values)
         if model.status is not None:
             failures.append((failed, meanings.index(model.status)))
+        if model.box_metrics is not None:
+            out.update(model.box_metrics(params, cycles.states[model.name], lon_out | lat_out, cycle_s))
     finite = jnp.all(jnp.isfinite(final.orbit)) & (final.mass_kg > 0)
     for value in out.values():
         finite &= jnp.isfinite(value)
-    box = params.station["box_half_width_rad"]
-    status = jnp.where(abs_dlon > box, STATUS_LEFT_LON_BOX,
-                       jnp.where(abs_lat > box, STATUS_LEFT_LAT_BOX,
+    status = jnp.where(jnp.any(lon_out), STATUS_LEFT_LON_BOX,
+                       jnp.where(jnp.any(lat_out), STATUS_LEFT_LAT_BOX,
                                  jnp.where(out["cycles_without_solution"] > 0, STATUS_NO_SOLUTION, STATUS_OK)))
     for failed, code in reversed(failures):
         status = jnp.where(failed, code, status)
@@ -109,6 +111,16 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int, state
                        jnp.where(final.mass_kg <= params.spacecraft["dry_mass_kg"], STATUS_NO_PROPELLANT, status))
     out = {k: jnp.where(jnp.isfinite(v), v, 0.0) for k, v in out.items()}
     return {**out, "status": status.astype(jnp.int8)}
+
+
+def box_exits(params, cycles):
+    """([n_cycles] bool, [n_cycles] bool): whether some step start of each cycle has the osculating sub-satellite
+    point outside the box in longitude (|lambda - lambda_station| > station.box_half_width_deg), and in latitude
+    (|geocentric latitude| > the same).  The status' box check is whether any cycle does (statuses 2 and 3)."""
+    box = params.station["box_half_width_rad"]
+    lon_out = jnp.maximum(jnp.abs(cycles.dlon_max_rad), jnp.abs(cycles.dlon_min_rad)) > box
+    lat_out = jnp.maximum(jnp.abs(cycles.lat_max_rad), jnp.abs(cycles.lat_min_rad)) > box
+    return lon_out, lat_out
 
 
 def yearly_dv(dv_mps, cycle_s: float) -> dict:

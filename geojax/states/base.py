@@ -25,6 +25,9 @@ and ``StepRecord.states``, dicts keyed by the model's ``name``. A model is pure 
 * ``metrics(params, cycle_records, n_steps_total, run_s) -> ({name: []}, failed)``: its scalar metrics (units in
   the names) and whether the sample failed in its way; ``status`` is then the meaning of the status code that
   ``failed`` sets (one of ``loop.metrics.STATUS_MEANINGS``; None: never fails);
+* ``box_metrics(params, cycle_records, out_of_box, cycle_s) -> {name: []}`` (optional): metrics of its own
+  that read the loop's box check per cycle (``out_of_box`` [n_cycles] bool: some step start of the cycle outside
+  the box, ``loop.metrics.box_exits``; ``cycle_s`` the cycle's length), the time out of the box after a fault;
 * ``columns(cycle_records) -> {name: numpy array}`` (optional): its per-cycle series in edge units (``/cycles``).
 
 With no model (every scenario that asks for none) the carry and the records hold empty dicts: no leaf, the same
@@ -123,6 +126,7 @@ class StateModel(NamedTuple):
     columns: Callable | None = None
     thrust: Callable | None = None
     estimate: Callable | None = None
+    box_metrics: Callable | None = None
     # For the lanes' memory model (``geojax.lanes``): the bytes its cycle record adds per cycle, and the values per
     # cycle its ``columns`` add to a sweep's kept records (``tests/test_lanes.py`` checks both against the records)
     bytes_per_cycle: int = 0

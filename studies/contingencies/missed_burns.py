@@ -1,0 +1,99 @@
+"""The missed-burn probability each controller holds its box at: a Monte Carlo per probability and controller.
+
+    python studies/contingencies/missed_burns.py [--samples 32] [--days 90] [--probabilities 0,0.05,0.1,0.2,0.3,0.5]
+        [--controllers qffc,fompc,mpc,katz] [--out studies/contingencies/results]
+
+Each controller's shipped scenario (``li2022-qffc``, ``li2022-fompc``, ``li2022-mpc``: Li's arms, no errors;
+``katz2025-discrete``: Katz's discrete law, whose "burn" is a cycle of firing) flown ``--days`` with every planned
+burn lost with probability p (``faults.missed_burn_probability``, the faults part's own stream, seeds 0 .. samples
+- 1; a lost burn is not known ahead, the next cycle's plan sees the orbit it left).  For each p: the fraction of
+samples that keep the box at every step, the fraction of burns lost (``burns_missed`` / ``burns_planned``, against
+p), and the mean Delta-V.  The threshold is the smallest p of the grid at which fewer than 99 % of the samples keep
+the box; with fewer than 100 samples that is the first p that loses any sample, so the grid brackets it from below.
+Writes ``missed_burns.json`` and ``missed_burns.md`` into ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+import geojax
+from geojax import scenario
+from geojax.runner.rollout import simulate_batch
+
+HERE = Path(__file__).resolve().parent
+SCENARIOS = {"qffc": "li2022-qffc", "fompc": "li2022-fompc", "mpc": "li2022-mpc", "katz": "katz2025-discrete"}
+
+
+def run_point(name: str, p: float, days: float, samples: int) -> dict:
+    # enabled at every p (p = 0 too): the same compiled loop for the whole grid
+    sc = scenario.load(SCENARIOS[name], {"duration.days": days, "faults.enabled": True,
+                                         "faults.missed_burn_probability": p})
+    begun = time.perf_counter()
+    result = simulate_batch([sc] * samples, seeds=np.arange(samples))
+    wall_s = time.perf_counter() - begun
+    m = {k: np.asarray(v, float) for k, v in result.metrics.items()}
+    status = np.asarray(result.status)
+    return {"p": p, "kept": float(np.mean(status == 0)), "statuses": [int(s) for s in status],
+            "lost_fraction": float(m["burns_missed"].sum() / max(m["burns_planned"].sum(), 1.0)),
+            "burns_planned": float(m["burns_planned"].sum()),
+            "dv_per_year_mps_mean": float(m["dv_per_year_mps"].mean()),
+            "days_out_of_box_mean": float(m["days_out_of_box"].mean()), "wall_s": wall_s}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--samples", type=int, default=32)
+    parser.add_argument("--days", type=float, default=90.0)
+    parser.add_argument("--probabilities", default="0,0.05,0.1,0.2,0.3,0.5")
+    parser.add_argument("--controllers", default="qffc,fompc,mpc,katz")
+    parser.add_argument("--out", type=Path, default=HERE / "results")
+    args = parser.parse_args()
+    grid = [float(x) for x in args.probabilities.split(",")]
+    rows = {}
+    for name in args.controllers.split(","):
+        rows[name] = [run_point(name, p, args.days, args.samples) for p in grid]
+        for r in rows[name]:
+            print(name, r["p"], f"kept {r['kept']:.3f}", f"lost {r['lost_fraction']:.3f}", f"{r['wall_s']:.0f} s",
+                  flush=True)
+    args.out.mkdir(parents=True, exist_ok=True)
+    payload = {"samples": args.samples, "days": args.days, "geojax": geojax.__version__, "controllers": rows,
+               "command": f"python studies/contingencies/missed_burns.py --samples {args.samples} --days "
+                          f"{args.days:g} --probabilities {args.probabilities} --controllers {args.controllers}"}
+    (args.out / "missed_burns.json").write_text(json.dumps(payload, indent=1))
+    (args.out / "missed_burns.md").write_text(table(payload))
+    print(table(payload))
+
+
+def threshold(points: list[dict]) -> str:
+    """The smallest p of the grid at which fewer than 99 % of the samples keep the box ("> the grid" if none)."""
+    below = [r["p"] for r in points if r["kept"] < 0.99]
+    return f"{min(below):g}" if below else f"> {max(r['p'] for r in points):g}"
+
+
+def table(payload: dict) -> str:
+    """The study's table from its results (``missed_burns.json``)."""
+    lines = [f"Burns lost with probability p: {payload['samples']} samples per point, {payload['days']:g} days "
+             f"(`{payload['command']}`; geojax {payload['geojax']}). Each cell: the fraction of samples that keep "
+             "the box / the fraction of planned burns lost / the mean ΔV (m/s/yr) / the mean days out of the box "
+             "(a sample out of it at some step start of a cycle counts the cycle). Katz's discrete law leaves the "
+             "±0.05° box in its first five days without any fault (0.058° at seed 0, 3 days out), so for it the "
+             "days out of the box are the measure.", ""]
+    grid = [r["p"] for r in next(iter(payload["controllers"].values()))]
+    lines += ["| controller | " + " | ".join(f"p = {p:g}" for p in grid) + " | fewer than 99 % kept from | wall (s) |",
+              "|---|" + "---:|" * len(grid) + "---:|---:|"]
+    for name, points in payload["controllers"].items():
+        cells = [f"{r['kept']:.2f} / {r['lost_fraction']:.3f} / {r['dv_per_year_mps_mean']:.1f} / "
+                 f"{r['days_out_of_box_mean']:.1f}" for r in points]
+        lines.append(f"| {name} | " + " | ".join(cells) + f" | {threshold(points)} | "
+                     f"{sum(r['wall_s'] for r in points):.0f} |")
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    main()
