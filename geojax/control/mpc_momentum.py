@@ -28,8 +28,11 @@ program on ``control.mpc``'s minimum-fuel LP (Gazzino 2016's Problem 3 on Li 202
   not a share of a larger wheel: the program holds momentum up to h_max for nothing, and parks it there, so a
   larger wheel flies the same plan).  The same rows just before each cycle's second burn (g_j + f d + the first
   burn's impulse: rows on a cycle's start state and its decisions together, ``mpc.riccati``'s stage terms);
-  without them a plan swung the wheels by 42 N m s within one cycle and peaked at 131.7 N m s in a year of
-  li2022-momentum-mpc.  Soft, with the orbit rows' penalty.
+  without them a plan peaked at 131.7 N m s in a year of li2022-momentum-mpc.  Soft, with the orbit rows' penalty.
+* A price on g along the burns' common line l (their unit difference, start axes), ``momentum_line_price`` m/s
+  per N m s at every boundary (a soft row, lower = upper = 0): no tilt reaches g . l but through the small angle
+  between the lines; free within the band, the program parked it there before the equinoxes, when the SRP torque
+  lies along it, and ran away (docs/momentum.md); priced, it empties it while the angle lets it, as the law does.
 * The orbit sees the tilts: e_1, e_2 change the mean elements as any Delta-V does (``effects.effect_matrix``),
   so the plan makes up the tilt's Delta-V across the line.  The tilts cost ``tilt_cost`` per m/s of |z|_1 (a
   small price that makes a tilt the program does not need zero, where the interior point would otherwise return
@@ -38,11 +41,9 @@ program on ``control.mpc``'s minimum-fuel LP (Gazzino 2016's Problem 3 on Li 202
   g over the cycle just flown less the impulse the plan commanded in it, smoothed by ``disturbance_gain`` per
   cycle (an exponential filter: the SRP torque turns with the Sun, 1 deg a day); 0 before the second cycle.
 
-The first cycle's burns are flown as the MPC's, each with its planned tilt (``Thrust.tilt_rsw``: the tilt z / v
-in RSW, flown by the wheels' model perpendicular to the line actually flown and within
-``attitude.dump_angle_max_deg``).  The solver is ``control.lp``'s interior point, certified by its duality gap,
-on a normal matrix factored by ``mpc.riccati`` over the state (elements, g) [9] and one cycle's decisions
-(w, z, t) [2G + 8].
+The first cycle's burns are flown as the MPC's, each with its planned tilt (``Thrust.tilt_rsw``, flown across the
+line actually flown, within ``attitude.dump_angle_max_deg``).  The solver: ``control.lp``'s interior point on a
+normal matrix factored by ``mpc.riccati`` over the state (elements, g) [9] and a cycle's decisions (w, z, t).
 
 Needs the wheels (``attitude.wheels = true``) and a tilt (``attitude.dump_angle_max_deg`` > 0, a thrust arm);
 the dumping law's own keys (its gain and transient fraction) are not read: the plan replaces the law.
@@ -74,19 +75,16 @@ TILTS = 4  # per cycle: two burns x two components across the line
 
 FIELDS = {
     **mpc.FIELDS,
-    # The momentum the plan may hold at a cycle boundary and between the burns, per wheel: ``momentum_band_nms``,
-    # at most ``momentum_fraction`` of the capacity (the rest: what the wheels take up between boundaries, a day's
-    # external momentum and the burns' transients).  The band is not a share of any capacity: the program holds
-    # momentum up to its band for nothing, so a band that grew with the wheel parked more where the tilts reach
-    # worst (docs/momentum.md), and a larger wheel flies the same plan with more margin.
+    # The momentum the plan may hold per wheel at the boundaries and between the burns: ``momentum_band_nms``, at
+    # most ``momentum_fraction`` of the capacity (module docstring: not a share of it; docs/momentum.md).
     "momentum_band_nms": Field(NUMBER, 25.0, lower=0.0, upper=1e6, si="momentum_band_nms"),
     "momentum_fraction": Field(NUMBER, 0.5, lower=0.0, upper=1.0, si="momentum_fraction"),
-    # The price of a tilt, per m/s of Delta-V across the line (|z|_1), against 1 per m/s of burn: at 1 the program
-    # never takes a tilt's Delta-V for the orbit (a burn in that direction costs no more), so it tilts for the
-    # wheels alone.
+    # The price of the momentum along the burns' common line, m/s per N m s at each boundary (module docstring).
+    "momentum_line_price": Field(NUMBER, 1e-4, lower=0.0, lower_inclusive=True, upper=1.0, si="momentum_line_price"),
+    # The price of a tilt per m/s of |z|_1, against 1 per m/s of burn: at 1 the program tilts for the wheels alone
+    # (a burn in the tilt's direction costs no more).
     "tilt_cost": Field(NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=100.0, si="tilt_cost"),
-    # The exponential filter's gain per cycle on the measured external momentum per cycle (1: the last cycle's; 0:
-    # none estimated; stable below 2).
+    # The gain per cycle of the external momentum's filter (1: the last cycle's; 0: none; stable below 2).
     "disturbance_gain": Field(NUMBER, 0.5, lower=0.0, lower_inclusive=True, upper=2.0, si="disturbance_gain"),
 }
 
@@ -108,6 +106,7 @@ class Momentum(NamedTuple):
     mid_u: jnp.ndarray  # [F / 2 + 1, 2G + 8] and on the cycle's decisions (the first burn's tilts)
     mid_lower: jnp.ndarray  # [n_max, F / 2 + 1]
     mid_upper: jnp.ndarray  # [n_max, F / 2 + 1]
+    row_penalty: jnp.ndarray  # [R + F / 2 + 2] each boundary row's penalty (m/s per half-width)
 
 
 def rsw_basis(r_eci_m, v_eci_mps):
@@ -178,7 +177,11 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, 
     h_half = jnp.minimum(leaves["momentum_band_nms"], leaves["momentum_fraction"] * attitude["wheel_capacity_nms"])
     angles = 2 * jnp.pi * jnp.arange(k) / shape.facets
     facet = jnp.stack([jnp.cos(angles), jnp.sin(angles), jnp.zeros(k)], -1) / (h_half * math.cos(math.pi / shape.facets))
-    g_rows = jnp.concatenate([facet, jnp.array([[0.0, 0.0, 1.0]]) / h_half])  # [k + 1, 3]
+    common = -jnp.diff(rotate_to_start(lines, past), axis=0)[0]  # the priced row: g along the common line
+    common = common / jnp.linalg.norm(common)
+    g_rows = jnp.concatenate([facet, jnp.array([[0.0, 0.0, 1.0]]), common[None]]) / jnp.concatenate(
+        [jnp.full(k, 1.0), jnp.full(2, h_half)])[:, None]  # [k + 2, 3]
+    k = k + 1  # the rows on g: k + 1
     n_max = shape.n_max
     rows = jnp.concatenate([
         jnp.concatenate([model.rows, jnp.zeros((n_max, model.rows.shape[1], 3))], -1),
@@ -191,8 +194,7 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, 
     lower = jnp.concatenate([model.lower, jnp.where(active, -1.0 - value, -inf)], 1)
     upper = jnp.concatenate([model.upper, jnp.where(active, 1.0 - value, inf)], 1)
     # Between the burns, just before the second: g_j + f d + (the first burn's impulse), f the second's place in
-    # the cycle (the momentum's extremes within a cycle are at its boundaries and here: it moves linearly
-    # with the other torques between the burns).
+    # the cycle (g's extremes within a cycle are at its boundaries and here: linear in between).
     first = jnp.argmin(past)
     f_second = jnp.max(past) / (2 * jnp.pi)
     first_columns = (jnp.arange(TILTS) // 2 == first).astype(impulse.dtype)
@@ -201,10 +203,14 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, 
     start = jnp.arange(n_max)
     mid_value = (g0 + (start[:, None] + f_second) * d) @ g_rows.T  # [n_max, k + 1]
     mid_active = (start < horizon)[:, None]
-    mid_lower = jnp.where(mid_active, -1.0 - mid_value, -inf)
-    mid_upper = jnp.where(mid_active, 1.0 - mid_value, inf)
+    mid_lower = jnp.where(mid_active, -1.0 - mid_value, -inf).at[:, -1].set(-inf)
+    mid_upper = jnp.where(mid_active, 1.0 - mid_value, inf).at[:, -1].set(inf)
+    priced = active[:, 0] & (leaves["momentum_line_price"] > 0)  # a price of 0: no row (the program without it)
+    lower = lower.at[:, -1].set(jnp.where(priced, -value[:, -1], -inf))
+    upper = upper.at[:, -1].set(jnp.where(priced, -value[:, -1], inf))
+    row_penalty = jnp.full(lower.shape[1], leaves["penalty_mps"]).at[-1].set(leaves["momentum_line_price"] * h_half)
     return Momentum(lines, across, effect, cycle_rows, cycle_lower, cycle_upper, rows, lower, upper, impulse,
-                    mid_x, mid_u, mid_lower, mid_upper)
+                    mid_x, mid_u, mid_lower, mid_upper, row_penalty)
 
 
 def operator(model: mpc.Model, momentum: Momentum, shape: mpc.Shape) -> lp.Operator:
@@ -295,8 +301,8 @@ def program(model: mpc.Model, momentum: Momentum, leaves: dict, shape: mpc.Shape
                              momentum.lower.reshape(-1)])
     upper = jnp.concatenate([jnp.tile(momentum.cycle_upper, n_max), momentum.mid_upper.reshape(-1),
                              momentum.upper.reshape(-1)])
-    soft = momentum.mid_lower.size + momentum.lower.size
-    penalty = jnp.concatenate([jnp.full(n_max * rc, jnp.inf), jnp.full(soft, 1.0) * leaves["penalty_mps"]])
+    penalty = jnp.concatenate([jnp.full(n_max * rc, jnp.inf), jnp.full(momentum.mid_lower.size, leaves["penalty_mps"]),
+                               jnp.tile(momentum.row_penalty, n_max)])
     return c, lower, upper, penalty
 
 
@@ -416,7 +422,7 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         excess = excess_of(boundary_rows, momentum.lower, momentum.upper)
         r_orbit = model.lower.shape[1]
         violation = jnp.max(excess[:, :r_orbit])
-        momentum_violation = jnp.maximum(jnp.max(excess[:, r_orbit:]), jnp.max(excess_of(
+        momentum_violation = jnp.maximum(jnp.max(excess[:, r_orbit:-1]), jnp.max(excess_of(
             between, momentum.mid_lower.reshape(-1), momentum.mid_upper.reshape(-1))))
         solved = (violation <= mpc.SOLVED_VIOLATION) & jnp.all(jnp.isfinite(solution.x))
         # the end the plan expects of what is flown (a burn shorter than ``thrusters.min_burn_s`` is not, nor its
