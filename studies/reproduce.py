@@ -1,7 +1,7 @@
 """Regenerate a paper's tables and figures with one command.
 
     python studies/reproduce.py li2022 [katz2025 ye2022 ma2023 bounds ablation longrun lifetime compare momentum
-                                         navigation contingencies ...]   # or: all
+                                         navigation contingencies collocation ...]   # or: all
     python studies/reproduce.py li2022 --only fig09 fig13         # scripts whose name contains a word
     python studies/reproduce.py all --list                         # the commands, without running them
 
@@ -41,7 +41,7 @@ STUDIES = {
     "lifetime": [("lifetime/lifetime.py", [])],
     "compare": [("compare/windows.py", []), ("compare/table.py", ["--stage", "all"])],
     "momentum": [("momentum/ye_accumulation.py", []), ("momentum/li_dumping.py", []),
-                 ("momentum/capacity_map.py", []), ("momentum/mpc.py", []), ("momentum/mpc_capacity.py", []),
+                 ("momentum/capacity_map.py", []), ("momentum/mpc.py", []), ("momentum/mpc_capacity.py", []), ("momentum/mpc_line_price.py", []),
                  ("momentum/tune_dump_gain.py", []),
                  ("momentum/ma_kong_transfer.py", ["--capacities", "50", "100"]), ("momentum/arm_mounts.py", [])],
     "navigation": [("navigation/consistency.py", []), ("navigation/tracking_cost.py", []),
@@ -53,6 +53,8 @@ STUDIES = {
                    ("navigation/tune_thrust_ranging.py", [])],
     "contingencies": [("contingencies/arm_lost.py", []), ("contingencies/missed_burns.py", []),
                       ("contingencies/degradation.py", []), ("contingencies/tables.py", [])],
+    "collocation": [("collocation/relative_motion.py", []), ("collocation/cluster_year.py", []),
+                    ("collocation/cluster_year.py", ["--navigation", "ranging"])],
 }
 
 

@@ -134,6 +134,7 @@ def test_without_wheels_the_controller_says_so():
         scenario.load("li2022-mpc", {"controller.kind": "mpc_momentum"})
 
 
+@pytest.mark.slow
 def test_a_larger_wheel_flies_the_same_plan_and_never_does_worse():
     """Li's satellite with its SRP force 0.2 m off along the array's axis (24 N m s a day), 5 days, 50 and 100 N m s
     wheels in one batch.  The capacity is a limit, not a target: the plan's band is ``momentum_band_nms`` (25 N m s,

@@ -1,4 +1,4 @@
-"""The momentum MPC with and without the price on the momentum along its burns' common line (issue 57's open case).
+"""The momentum MPC with and without the price on the momentum along its burns' common line (the operator's satellite of studies/momentum/mpc_capacity.py at 0.2-0.4 m offsets).
 
     python studies/momentum/mpc_line_price.py [--days 365.25] [--out studies/momentum/results]
 
