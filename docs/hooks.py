@@ -9,7 +9,7 @@ A generated part sits between two lines of its own, ``<!-- generated: NAME -->``
 * ``scenario-keys``: every table and key of a scenario file from ``geojax.scenario.SCHEMA`` (the ``Field``
   declarations the loader validates with): type, default, allowed range or choices, the ``Params`` leaf it becomes
   and whether ``geojax tune`` can move it;
-* ``controller-keys``: the ``[controller]`` keys of every registered controller, from each module's ``FIELDS``;
+* ``controller-keys``: the ``[controller]`` keys of every registered controller, from each module's ``SPEC.fields``;
 * ``tuning-keys``: the keys of a tuning file, from ``geojax.tune.FIELDS``, each with its one-line meaning;
 * ``metrics``: the names, units and meanings of the results files' datasets (``geojax.results``);
 * ``cli-help``: every command and option of ``geojax`` with its help, from the command's own parser;
@@ -142,7 +142,7 @@ def controller_keys() -> str:
     out = []
     for name in REGISTRY:
         module = lookup(name)
-        fields = dict(module.FIELDS)
+        fields = dict(module.SPEC.fields)
         out += [f"### `kind = \"{name}\"`", "", _first_paragraph(module.__doc__), ""]
         out += [*HEADER, *_field_rows("controller", fields), ""] if fields else ["No keys of its own.", ""]
     return "\n".join(out)

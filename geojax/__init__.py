@@ -15,8 +15,8 @@ The public API (shapes and units in each docstring):
   ``open_results`` reads any results file as an ``xarray.Dataset`` (named dimensions, coordinates, units),
   ``read_results`` as plain arrays.
 * ``load_tuning`` / ``tune_gains``: gains tuned by derivatives through rollouts.
-* ``Controller`` (``init``, ``plan``, ``thrust`` and their ``Field`` declarations), ``Thrust``, ``Params``:
-  to write a controller of one's own (see the README); ``StateModel`` (``init``, ``step``, ``summary``,
+* ``Controller`` (``init``, ``plan``, ``thrust``), its ``Spec`` (its ``Field`` declarations, checks, thrusters)
+  and ``Sizing`` (its width), ``Thrust``, ``Params``: to write a controller of one's own (see the README); ``StateModel`` (``init``, ``step``, ``summary``,
   ``metrics``, optional ``cycle``, ``thrust``, ``estimate``, ``columns``) and ``Part`` (its keys, leaves and
   descriptions): a part of one's own the loop carries, ``simulate(..., states=(model,))`` (docs/python.md).
 """
@@ -31,7 +31,7 @@ _use_compilation_cache()  # compiled programs kept between runs (geojax.compilat
 
 __version__ = "0.2.0"
 
-from geojax.control.base import Controller, Estimate  # noqa: E402
+from geojax.control.base import Controller, Estimate, Sizing, Spec  # noqa: E402
 from geojax.physics.dynamics import SpacecraftState, Thrust  # noqa: E402
 from geojax.loop.metrics import STATUS_MEANINGS  # noqa: E402
 from geojax.runner.rollout import Result, prepare_params, simulate, simulate_batch  # noqa: E402
@@ -48,7 +48,7 @@ from geojax.sweep import run_sweep  # noqa: E402
 
 __all__ = [
     "Controller", "CycleContext", "CycleStart", "Estimate", "Field", "LOG", "Params", "Part", "Result",
-    "STATUS_MEANINGS", "Scenario", "SpacecraftState", "StateModel", "StepContext", "StepEnvironment", "Thrust",
+    "STATUS_MEANINGS", "Scenario", "Sizing", "Spec", "SpacecraftState", "StateModel", "StepContext", "StepEnvironment", "Thrust",
     "ThrustContext", "available_scenarios", "load_scenario", "load_sweep",
     "load_tuning", "open_results", "prepare_params", "read_results", "run_sweep", "simulate", "simulate_batch", "tune_gains",
     "tuning_from_dict",

@@ -123,7 +123,7 @@ def parser() -> argparse.ArgumentParser:
                      help="integration steps per thrust slot (thrust constant in RSW over a slot; default 4: 1 h)")
     bnd.add_argument("--thrusters", choices=("arms", "gimbal", "fixed4", "axes"),
                      help="thruster geometry: Li's two arms, Katz's gimbal, Gazzino's four fixed NE/NW/SE/SW thrusters, "
-                          "Katz's per-axis pairs (default: the controller's, Controller.bound_geometry: axes for a "
+                          "Katz's per-axis pairs (default: the controller's, Spec.bound_geometry: axes for a "
                           "discrete lyapunov law, gimbal for another lyapunov or a zone_nssk scenario, else arms)")
     bnd.add_argument("--acquisition-days", type=float, default=0.0,
                      help="hold the box from this day on (a start the thrusters cannot hold at once; default 0)")

@@ -56,7 +56,7 @@ MIN_COMPILE_S = 0.0  # every program (JAX's default, 1 s, would leave the enviro
 # 9.5 and 8.9 s (LLVM's default level 2 and level 0 alternated, 2 idle cores, by hand): the compiling saved
 # outweighs the slower run (the year's loop took 0.7-0.9 s instead of 0.6-0.7 s; a single sample's run time is
 # the loop's overhead, a few small kernels per step, not arithmetic).  A controller whose cycle is arithmetic
-# (an interior-point solve) raises its closed loop's level (``Controller.one_sample_opt_level``).  A batch keeps
+# (an interior-point solve) raises its closed loop's level (``Sizing.one_sample_opt_level``).  A batch keeps
 # XLA's defaults: its run time is what counts there, and its numbers must not move (the classic emitters move the last
 # bit; across three runs they ran the 128-lane loop from 21 % faster to 13 % slower, level 0 3.4-3.8x slower,
 # ``benchmarks/results/compile_profile.md``).

@@ -1,7 +1,7 @@
 """How many samples one compiled call runs per device (docs/design.md, "Scale": the device decides the batch).
 
 On a CPU, a device is about one core and the best width is the one measured
-there per controller (``Controller.lanes_cpu``): wider batches gain little and
+there per controller (``Sizing.lanes_cpu``): wider batches gain little and
 pad small sweeps.  On an accelerator, a step is a handful of kernels whose
 launch cost is the same at any width, so the batch is as wide as the device's
 memory allows (up to ``ACCELERATOR_MAX_LANES``, and no wider than the sweep
@@ -10,19 +10,19 @@ needs), tens of thousands of lanes.
 The memory model, per lane, is stated so it can be checked (``benchmarks/accelerator.py`` prints it beside
 XLA's own ``memory_analysis`` of the compiled batch, and ``tests/test_lanes.py`` checks it covers the CPU's):
 
-    bytes per lane = MEMORY_MARGIN x (Controller.lane_bytes + n_cycles x (Controller.lane_bytes_per_cycle
-                                                                          + StateModel.bytes_per_cycle
-                                                                          + kept cycle records)
-                                      + reference cycles x REFERENCE_BYTES_PER_CYCLE)
+    bytes per lane = MEMORY_MARGIN x (Sizing.working_bytes + n_cycles x (record bytes per cycle
+                                                                        + kept cycle records)
+                                      + reference cycles x reference bytes per cycle)
 
-``lane_bytes`` is the controller's working set (the loop's state, a step's temporaries, the plan),
-``lane_bytes_per_cycle`` the per-cycle records the loop stacks (``loop.simulate.CycleRecord``) and the
-controller's own records, ``StateModel.bytes_per_cycle`` those of the further states the scenario carries (the
-wheels', the filter's: ``geojax.states``); the kept records (a sweep with ``cycles = true``: the orbit's series
-and the states' ``columns_per_cycle``) are an output on top, and a
-batch whose samples differ in what the predictor's reference depends on (a sweep over the station, the
-initial state or the forces) runs one uncontrolled reference per lane, whose cycle records count too.  The width
-is then the largest power of two whose lanes fit ``FREE_FRACTION`` of the device's free memory.
+``working_bytes`` is the controller's working set (the loop's state, a step's temporaries, the plan: measured with
+XLA's ``memory_analysis``, stated in its module); the record bytes per cycle are what one cycle of the loop
+stacks, the controller's records and every part's (``runner.rollout.record_bytes_per_cycle``: ``jax.eval_shape``
+of one lane's loop, nothing counted by hand); the kept records (a sweep with ``cycles = true``: the orbit's series
+and the states' ``columns_per_cycle``) are an output on top, and a batch whose samples differ in what the
+predictor's reference depends on (a sweep over the station, the initial state or the forces) runs one
+uncontrolled reference per lane, whose cycle records count too (``runner.setup.reference_shape``).  The width
+is then the largest power of two whose lanes fit ``FREE_FRACTION`` of the device's free memory.  On a CPU the
+measured width needs no memory model unless a width is requested: the record bytes are then not traced.
 
 A sample's numbers do not depend on the width (tested at 128 and 1024 lanes on the CPU), so a platform's
 width is a speed choice only; ``lanes`` (``--lanes``, a sweep file's ``lanes``) overrides it, refused in one
@@ -44,31 +44,40 @@ MEMORY_MARGIN = 2.0  # the stated per-lane bytes x this: XLA's GPU fusion can ke
 FREE_FRACTION = 0.8  # of the device's free memory a batch may plan to use
 MAX_LANES = 1 << 22  # anything above is a typo, whatever the memory
 BYTES_PER_RECORD_VALUE = 8  # a kept per-cycle record (float64) per name per cycle
-REFERENCE_BYTES_PER_CYCLE = 200  # a per-lane reference run's cycle records: the QFFC's per-cycle bytes, which hold them
+# Where the CPU's measured width would fit even at this many record bytes per cycle (the shipped parts stack
+# 0.45-0.6 kB), its records are not traced: the bound only decides whether to ask, never the width.
+CPU_RECORD_BYTES_CEILING = 4_096
 
 
 class LanePlan(NamedTuple):
     """The width of one compiled call and why."""
 
     lanes: int  # samples per device per call
-    bytes_per_lane: int  # the model above, margin included
+    bytes_per_lane: int | None  # the model above, margin included (None: the CPU's measured width, not modelled)
     free_bytes: int  # the device's free memory when planned
     platform: str  # "cpu", "gpu", "tpu"
     source: str  # "measured" (the CPU's per-controller width), "memory" (fits the device), "requested"
 
     def describe(self) -> str:
-        return (f"{self.lanes} lanes per {self.platform} device ({self.source}; "
-                f"{self.bytes_per_lane / 1e3:.0f} kB per lane, {_gb(self.free_bytes)} free)")
+        size = "" if self.bytes_per_lane is None else f"{self.bytes_per_lane / 1e3:.0f} kB per lane, "
+        return f"{self.lanes} lanes per {self.platform} device ({self.source}; {size}{_gb(self.free_bytes)} free)"
 
 
-def bytes_per_lane(controller, n_cycles: int, kept_records: int = 0, reference_cycles: int = 0,
-                   state_bytes_per_cycle: int = 0) -> int:
-    """The model's bytes of one lane over ``n_cycles`` cycles, margin included (``kept_records``: per-cycle
-    values per sample the call returns; ``reference_cycles``: cycles of a reference run per lane;
-    ``state_bytes_per_cycle``: the further states' cycle records, ``StateModel.bytes_per_cycle`` summed)."""
-    per_cycle = controller.lane_bytes_per_cycle + state_bytes_per_cycle + kept_records * BYTES_PER_RECORD_VALUE
-    return math.ceil(MEMORY_MARGIN * (controller.lane_bytes + n_cycles * per_cycle
-                                      + reference_cycles * REFERENCE_BYTES_PER_CYCLE))
+class RecordBytes(NamedTuple):
+    """What each cycle adds to a lane, bytes (``runner.rollout.record_bytes_per_cycle``, from ``jax.eval_shape``)."""
+
+    loop: int  # the closed loop's cycle records: the orbit's, the controller's, every part's
+    reference: int = 0  # a reference run's, where each lane runs its own
+
+
+def bytes_per_lane(controller, n_cycles: int, records: RecordBytes, kept_records: int = 0,
+                   reference_cycles: int = 0) -> int:
+    """The model's bytes of one lane over ``n_cycles`` cycles, margin included (``records``: the bytes each cycle
+    stacks; ``kept_records``: per-cycle values per sample the call returns; ``reference_cycles``: cycles of a
+    reference run per lane)."""
+    per_cycle = records.loop + kept_records * BYTES_PER_RECORD_VALUE
+    return math.ceil(MEMORY_MARGIN * (controller.sizing.working_bytes + n_cycles * per_cycle
+                                      + reference_cycles * records.reference))
 
 
 def free_bytes(device=None) -> int:
@@ -81,26 +90,35 @@ def free_bytes(device=None) -> int:
     return _host_available_bytes() // max(1, jax.local_device_count())
 
 
-def plan(controller, n_cycles: int, samples_per_device: int, *, kept_records: int = 0, reference_cycles: int = 0,
-         requested: int | None = None, platform: str | None = None, available: int | None = None,
-         state_bytes_per_cycle: int = 0) -> LanePlan:
+def plan(controller, n_cycles: int, samples_per_device: int, records, *, kept_records: int = 0,
+         reference_cycles: int = 0, requested: int | None = None, platform: str | None = None,
+         available: int | None = None) -> LanePlan:
     """The width for ``controller`` over ``n_cycles`` cycles when each device has ``samples_per_device`` to
     run; ``requested`` fixes it (``ValueError`` naming ``lanes`` if it cannot fit or is out of range).
 
-    ``platform`` and ``available`` (free bytes) default to the first local device's.
+    ``records``: the ``RecordBytes`` of a cycle, or a function of no arguments that returns them (called only
+    where the width depends on memory: an accelerator, or a requested width).  ``platform`` and ``available``
+    (free bytes) default to the first local device's.
     """
     platform = platform or jax.local_devices()[0].platform
     available = free_bytes() if available is None else available
-    per_lane = bytes_per_lane(controller, n_cycles, kept_records, reference_cycles, state_bytes_per_cycle)
+    lanes_cpu = controller.sizing.lanes_cpu
+    if platform == "cpu" and checked(requested) is None and callable(records):
+        ceiling = bytes_per_lane(controller, n_cycles, RecordBytes(CPU_RECORD_BYTES_CEILING, CPU_RECORD_BYTES_CEILING),
+                                 kept_records, reference_cycles)
+        if lanes_cpu * ceiling <= FREE_FRACTION * available:  # fits whatever the records: nothing to trace
+            return LanePlan(lanes_cpu, None, available, platform, "measured")
+    per_lane = bytes_per_lane(controller, n_cycles, records() if callable(records) else records, kept_records,
+                              reference_cycles)
     fit = int(FREE_FRACTION * available) // per_lane
+    if platform == "cpu" and requested is None:
+        return LanePlan(max(1, min(lanes_cpu, fit)), per_lane, available, platform, "measured")
     if checked(requested) is not None:
         if requested > fit:
             raise ValueError(f"lanes: {requested} lanes need about {_gb(requested * per_lane)} on each {platform} "
                              f"device ({per_lane / 1e3:.0f} kB per lane over {n_cycles} cycles), which has "
                              f"{_gb(available)} free; at most {max(fit, 0)} fit")
         return LanePlan(requested, per_lane, available, platform, "requested")
-    if platform == "cpu":
-        return LanePlan(max(1, min(controller.lanes_cpu, fit)), per_lane, available, platform, "measured")
     wanted = max(ACCELERATOR_MIN_LANES, _next_power_of_two(samples_per_device))
     lanes = min(ACCELERATOR_MAX_LANES, wanted, _power_of_two_below(fit))
     if lanes < 1:

@@ -293,31 +293,29 @@ def _validate(raw: dict, controller=None) -> dict:
     _check_orbit(config["orbit"])
     _check_gravity(config["forces"])
     config["errors"] = absolute_errors(config["errors"])
-    module = None if controller is not None else _lookup(config["controller"]["kind"])
-    validate = getattr(module, "validate", None)
-    if validate is not None:
-        validate(config)
-    _check_honoured(config, module)
+    spec = controller.spec if controller is not None else _lookup(config["controller"]["kind"]).SPEC
+    if spec.validate is not None:
+        spec.validate(config)
+    _check_honoured(config, spec)
     parts.validate(config)
     t = config["thrusters"]
     arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
-    _check_propellant(config, module)
+    _check_propellant(config, spec)
     return config
 
 
-def _check_honoured(config: dict, module) -> None:
+def _check_honoured(config: dict, spec) -> None:
     """Every key is honoured or refused: ``thrusters.count`` equals the number of thrusters the controller flies
-    (its module's ``THRUSTERS``), and a key its rollout never reads (``UNREAD``) keeps its default -- the arms'
-    limits excepted where ``thrusters.layout = "arms"``, as ``geojax bound`` then reads them (``control.base``).
-    ``module``: the registry entry of ``controller.kind`` (None: a user's ``Controller``, not checked)."""
+    (its ``Spec.thrusters``; None: not checked), and a key its rollout never reads (``Spec.unread``) keeps its
+    default -- the arms' limits excepted where ``thrusters.layout = "arms"``, as ``geojax bound`` then reads them."""
     kind, count = config["controller"]["kind"], config["thrusters"]["count"]
-    flown, why = getattr(module, "THRUSTERS", (None, ""))
-    redundant = getattr(module, "REDUNDANT_THRUSTERS", None)  # e.g. 4: two per arm, one flown per arm
+    flown, why = spec.thrusters or (None, "")
+    redundant = spec.redundant_thrusters  # e.g. 4: two per arm, one flown per arm
     if count is not None and flown is not None and count not in (flown, redundant):
         also = f" or {redundant} (two per arm, the planner flying one of each)" if redundant else ""
         raise ValueError(f"thrusters.count: the {kind} controller flies {flown} thruster{'s' * (flown > 1)} ({why}), "
                          f"got {count}; leave it out or set {flown}{also}")
-    for key in getattr(module, "UNREAD", ()):
+    for key in spec.unread:
         table, name = key.split(".")
         if key in ARM_LIMIT_KEYS and config["thrusters"]["layout"] == "arms":
             continue
@@ -388,7 +386,7 @@ def _check_gravity(forces: dict) -> None:
         raise ValueError(f"forces.gravity_order: must be <= forces.gravity_degree = {degree}, got {order}")
 
 
-def _check_propellant(config: dict, module) -> None:
+def _check_propellant(config: dict, spec) -> None:
     """The propellant (mass less dry mass) must last at least one step of every thruster at full thrust: a run
     that cannot is a typo (an Isp in hours, a mass in tonnes), not a scenario.  Running out later is data
     (status 5, the thrusters stop)."""
@@ -397,7 +395,7 @@ def _check_propellant(config: dict, module) -> None:
     if propellant_kg <= 0:
         raise ValueError(f"spacecraft.dry_mass_kg: must be less than spacecraft.mass_kg = {craft['mass_kg']:g}, "
                          f"got {craft['dry_mass_kg']:g}")
-    count = t["count"] or getattr(module, "THRUSTERS", (1,))[0]
+    count = t["count"] or (spec.thrusters or (1,))[0]
     per_step_kg = count * t["thrust_n"] * config["integration"]["step_s"] / (t["isp_s"] * c.G0_MPS2)
     if per_step_kg >= propellant_kg:
         raise ValueError(f"thrusters.isp_s: {count} thrusters of {t['thrust_n']:g} N at Isp {t['isp_s']:g} s "
@@ -425,7 +423,7 @@ def controller_fields(table, controller=None) -> dict[str, Field]:
     kind = table.get("kind", "none") if isinstance(table, dict) else "none"
     if kind == OWN_KIND:
         return {"kind": Field(str, OWN_KIND)}
-    return {**SCHEMA["controller"], **_lookup(kind).FIELDS}
+    return {**SCHEMA["controller"], **_lookup(kind).SPEC.fields}
 
 
 def _check_orbit(orbit: dict) -> None:

@@ -21,8 +21,8 @@ def thrust(params, plan, t, state, environment):
     return geojax.Thrust(accel / norm, magnitude * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
 
 
-DAMPER = geojax.Controller(stateless_init, no_plan, thrust, lanes_cpu=16, bound_geometry="gimbal", fields={
+DAMPER = geojax.Controller(stateless_init, no_plan, thrust, geojax.Spec(fields={
     "k_inc_per_s": geojax.Field(float, 1e-5, lower=0.0, si="k_inc", transform=geojax.LOG, alias="k_inc",
                                 symbol="k_inc", unit="1/s", doc="inclination damping gain")},
-    tuned_fields=("k_inc_per_s",))
+    tuned_fields=("k_inc_per_s",), bound_geometry="gimbal"), sizing=geojax.Sizing(lanes_cpu=16))
 NOT_A_CONTROLLER = 3

@@ -217,7 +217,7 @@ def test_one_sample_compiled_for_start_up_is_the_batch_sample_to_rounding(qffc, 
     unoptimized, the reference's segments one after another): second method, the same sample in the two-lane
     batch (vmapped, XLA's defaults, the reference's segments side by side): every metric and cycle record to 1e-9
     relative (the programs' own rounding, ~1e-13).  A controller that solves a program each cycle keeps LLVM's
-    optimization for its closed loop (``Controller.one_sample_opt_level``)."""
+    optimization for its closed loop (``Sizing.one_sample_opt_level``)."""
     from geojax.control import qffc as qffc_law
     from geojax.runner.setup import controller_of
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from geojax import scenario, sweep, tune
-from geojax.control import Controller
+from geojax.control import Controller, Spec
 from geojax.control.base import no_plan, stateless_init
 from geojax.physics.dynamics import Thrust
 from geojax.physics.elements import wrap_angle
@@ -32,10 +32,10 @@ def proportional_thrust(params, plan, t, state, environment):
     return Thrust(accel / norm, magnitude * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
 
 
-MINE = Controller(stateless_init, no_plan, proportional_thrust, fields={
+MINE = Controller(stateless_init, no_plan, proportional_thrust, Spec(fields={
     "k_lon_mps2_per_rad": Field((int, float), 1e-3, lower=0.0, si="k_lon", transform=LOG),
     "k_inc_per_s": Field((int, float), 1e-5, lower=0.0, si="k_inc", transform=LOG),
-})
+}))
 
 
 @pytest.mark.slow
@@ -213,7 +213,7 @@ LAW = geojax.Controller(stateless_init, no_plan, coast)  # no keys of its own
 
 
 def test_a_controller_without_keys_runs_when_passed_in_python():
-    """A controller of one's own with ``fields={}`` runs (no error naming a controller kind the user never
+    """A controller of one's own with no fields runs (no error naming a controller kind the user never
     typed): a coasting one flies the uncontrolled orbit, no propellant used."""
     ns = {}
     exec(OWN_MODULE, ns)

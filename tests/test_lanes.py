@@ -16,6 +16,7 @@ import pytest
 
 from geojax import cli, lanes, store, sweep
 from geojax.control import qffc
+from geojax.control.base import Sizing
 from geojax.runner.rollout import keys_of
 
 SPEC = """
@@ -54,7 +55,7 @@ def test_the_memory_model_covers_what_xla_allocates():
     """The model's bytes per lane (margin taken off) against ``memory_analysis`` of the compiled QFFC batch on
     the CPU (temporaries, arguments, outputs): at least what XLA plans, and not wildly more."""
     from geojax import scenario
-    from geojax.runner.rollout import rollout_fn
+    from geojax.runner.rollout import record_bytes_per_cycle, rollout_fn
     from geojax.runner.setup import prepare
 
     width, days = 64, 12
@@ -64,28 +65,34 @@ def test_the_memory_model_covers_what_xla_allocates():
     compiled = jax.jit(jax.vmap(lambda p, k: one(p, k)[2])).lower(params, keys_of(np.arange(width))).compile()
     use = compiled.memory_analysis()
     measured = (use.temp_size_in_bytes + use.argument_size_in_bytes + use.output_size_in_bytes) / width
-    model = lanes.bytes_per_lane(batch.controller, batch.n_cycles) / lanes.MEMORY_MARGIN
+    model = lanes.bytes_per_lane(batch.controller, batch.n_cycles, record_bytes_per_cycle(batch)) / lanes.MEMORY_MARGIN
     assert measured <= model <= 3 * measured
 
 
 def test_the_width_follows_the_platform_and_the_memory():
     gib = 1 << 30
-    per_lane = lanes.bytes_per_lane(qffc.CONTROLLER, 366)
-    assert lanes.plan(qffc.CONTROLLER, 366, 10_000, platform="cpu", available=8 * gib).lanes == 128
-    narrow = dataclasses.replace(qffc.CONTROLLER, lanes_cpu=32)
-    assert lanes.plan(narrow, 366, 3, platform="cpu", available=8 * gib)[::4] == (32, "measured")
-    gpu = lanes.plan(qffc.CONTROLLER, 366, 131_072, platform="gpu", available=70 * gib)
-    assert gpu.lanes == lanes.ACCELERATOR_MAX_LANES  # 65,536 lanes x 2 x 89 kB = 11.7 GB: fits 80 % of 70 GiB
-    small = lanes.plan(qffc.CONTROLLER, 366, 131_072, platform="gpu", available=2 * gib)
+    records = lanes.RecordBytes(450, 256)  # li2022-qffc's, record_bytes_per_cycle
+    per_lane = lanes.bytes_per_lane(qffc.CONTROLLER, 366, records)
+    assert lanes.plan(qffc.CONTROLLER, 366, 10_000, records, platform="cpu", available=8 * gib).lanes == 128
+    narrow = dataclasses.replace(qffc.CONTROLLER, sizing=Sizing(lanes_cpu=32))
+    asked = []
+    assert lanes.plan(narrow, 366, 3, lambda: asked.append(1) or records, platform="cpu",
+                      available=8 * gib)[::4] == (32, "measured")
+    assert not asked  # fits at any record size: nothing traced
+    assert lanes.plan(narrow, 36_600, 3, records, platform="cpu", available=gib // 4).lanes < 32  # capped by memory
+    gpu = lanes.plan(qffc.CONTROLLER, 366, 131_072, records, platform="gpu", available=70 * gib)
+    assert gpu.lanes == lanes.ACCELERATOR_MAX_LANES  # 65,536 lanes x 361 kB = 23.7 GB: fits 80 % of 70 GiB
+    small = lanes.plan(qffc.CONTROLLER, 366, 131_072, records, platform="gpu", available=2 * gib)
     assert small.lanes * per_lane <= lanes.FREE_FRACTION * 2 * gib < 2 * small.lanes * per_lane  # the widest power of 2
     assert small.lanes & (small.lanes - 1) == 0
-    few = lanes.plan(qffc.CONTROLLER, 366, 3000, platform="gpu", available=70 * gib)
+    few = lanes.plan(qffc.CONTROLLER, 366, 3000, records, platform="gpu", available=70 * gib)
     assert few.lanes == 4096  # no wider than the sweep needs (rounded up to a power of two)
-    assert lanes.plan(qffc.CONTROLLER, 366, 5, platform="gpu", available=70 * gib).lanes == lanes.ACCELERATOR_MIN_LANES
+    assert lanes.plan(qffc.CONTROLLER, 366, 5, records, platform="gpu", available=70 * gib).lanes == \
+        lanes.ACCELERATOR_MIN_LANES
     with pytest.raises(ValueError, match="lanes: 65536 lanes need about .* at most"):
-        lanes.plan(qffc.CONTROLLER, 366, 10, platform="gpu", available=2 * gib, requested=65536)
+        lanes.plan(qffc.CONTROLLER, 366, 10, records, platform="gpu", available=2 * gib, requested=65536)
     with pytest.raises(ValueError, match="lanes: must be an integer"):
-        lanes.plan(qffc.CONTROLLER, 366, 10, requested=0)
+        lanes.plan(qffc.CONTROLLER, 366, 10, records, requested=0)
 
 
 def test_controllers_declare_their_widths():
@@ -93,8 +100,8 @@ def test_controllers_declare_their_widths():
     from geojax.runner.setup import controller_of
 
     made = {name: controller_of([scenario.load(f"li2022-{name}")]) for name in ("qffc", "fompc", "mpc")}
-    assert {name: c.lanes_cpu for name, c in made.items()} == {"qffc": 128, "fompc": 32, "mpc": 8}
-    assert made["mpc"].lane_bytes > 50 * made["qffc"].lane_bytes  # the interior point's matrices
+    assert {name: c.sizing.lanes_cpu for name, c in made.items()} == {"qffc": 128, "fompc": 32, "mpc": 8}
+    assert made["mpc"].sizing.working_bytes > 50 * made["qffc"].sizing.working_bytes  # the interior point's matrices
 
 
 def test_a_batch_that_cannot_fit_is_refused_before_anything_is_written(tmp_path, capsys):
@@ -133,26 +140,27 @@ def test_a_sweep_runs_on_as_few_devices_as_its_samples_fill():
 
 @pytest.mark.parametrize("name, changes", [("li2022-momentum", {}), ("li2022-qffc-ranging", {}),
                                            ("li2022-qffc-ranging", {"navigation.estimate_biases": True})])
-def test_the_states_stated_bytes_and_columns_are_their_records(name, changes):
-    """Second method: the bytes per cycle and the kept columns per cycle that each further state states for the
-    memory model (``StateModel.bytes_per_cycle``, ``columns_per_cycle``) against the shapes of the records the
-    closed loop returns (``jax.eval_shape`` of one sample's loop: traced, not compiled) and of the columns a
-    sweep keeps of them (``loop.metrics.state_columns``)."""
+def test_the_record_bytes_are_those_a_run_returns(name, changes):
+    """Second method: the memory model's bytes per cycle (``record_bytes_per_cycle``, ``jax.eval_shape`` over a
+    ``Batch`` of shapes, nothing computed) against the records one sample's run returns (its arrays' bytes, two
+    cycles); and the kept columns per cycle each further state states (``StateModel.columns_per_cycle``) against
+    the columns a sweep keeps of its records (``loop.metrics.state_columns``)."""
     from geojax import scenario
     from geojax.loop.metrics import state_columns
-    from geojax.runner.rollout import loop
+    from geojax.runner.rollout import loop, record_bytes_per_cycle
     from geojax.runner.setup import prepare
 
-    batch = prepare([scenario.load(name, {"duration.days": 2, **changes})])
+    sc = scenario.load(name, {"duration.days": 2, **changes})
+    batch = prepare([sc])
     params = jax.tree_util.tree_map(lambda x: x[0], batch.params)
-    _, records = jax.eval_shape(lambda p, k: loop(p, k, batch.shared, controller=batch.controller,
-                                                  step_s=batch.step_s, dynamics=batch.dynamics,
-                                                  states=batch.states), params, jax.random.key(0))
+    _, records = jax.jit(lambda p, k: loop(p, k, batch.shared, controller=batch.controller, step_s=batch.step_s,
+                                           dynamics=batch.dynamics, states=batch.states))(params, jax.random.key(0))
+    n_cycles = records.cycles.dv_mps.shape[0]
+    returned = sum(np.asarray(x).nbytes for x in jax.tree_util.tree_leaves(records.cycles)) // n_cycles
+    assert record_bytes_per_cycle(prepare([sc], shapes_only=True)).loop == returned
     assert batch.states
     for model in batch.states:
         record = records.cycles.states[model.name]
-        stated = sum(int(np.prod(x.shape[1:])) * x.dtype.itemsize for x in jax.tree_util.tree_leaves(record))
-        assert model.bytes_per_cycle == stated, (model.name, model.bytes_per_cycle, stated)
         columns = jax.eval_shape(lambda r: state_columns({model.name: r}), record)
         assert model.columns_per_cycle == len(columns), (model.name, model.columns_per_cycle, len(columns))
 

@@ -256,9 +256,9 @@ def test_axis_labels_come_from_the_fields(tmp_path, monkeypatch):
     (tmp_path / "laws_with_units.py").write_text(
         "import geojax\n"
         "from geojax.control.base import no_plan, stateless_init, coast\n"
-        "LAW = geojax.Controller(stateless_init, no_plan, coast, fields={\n"
+        "LAW = geojax.Controller(stateless_init, no_plan, coast, geojax.Spec(fields={\n"
         "    'thrust_frac_n': geojax.Field(float, 0.5, lower=0.0, si='frac', unit=''),\n"
-        "    'gain_x': geojax.Field(float, 1.0, si='gain', symbol='g', unit='1/s')})\n")
+        "    'gain_x': geojax.Field(float, 1.0, si='gain', symbol='g', unit='1/s')}))\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     assert label_for("thrusters.beta_max_deg") == "β_max (deg)"
     assert label_for("controller.horizon", ["fompc"]) == "horizon N (cycles)"

@@ -94,12 +94,12 @@ def test_unknown_scenario_lists_the_names():
 
 def _unread_cases():
     """(scenario, controller kind, key, a value other than its default) for every key a registered controller
-    declares it does not read (``control.base``, ``UNREAD``)."""
+    declares it does not read (``control.base.Spec.unread``)."""
     from geojax.control import REGISTRY
 
     shipped = {"lyapunov": "katz2025-continuous", "zone_nssk": "ye2022-ex1", "mpc_momentum": "li2022-momentum-mpc"}
     for kind, module in REGISTRY.items():
-        for key in getattr(module, "UNREAD", ()):
+        for key in module.SPEC.unread:
             table, name = key.split(".")
             field = scenario.SCHEMA[table][name]
             default = field.default
@@ -125,7 +125,7 @@ def test_every_controller_declares_what_it_flies_and_the_count_must_match():
     1), a different count is refused, and an unset count takes the controller's."""
     from geojax.control import REGISTRY
 
-    flown = {kind: getattr(module, "THRUSTERS", (None,))[0] for kind, module in REGISTRY.items()}
+    flown = {kind: (module.SPEC.thrusters or (None,))[0] for kind, module in REGISTRY.items()}
     assert flown == {"none": None, "qffc": 2, "fompc": 2, "mpc": 2, "mpc_momentum": 2, "lyapunov": 1, "zone_nssk": 1}
     for name, count in [("li2022-qffc", 1), ("li2022-fompc", 3), ("katz2025-continuous", 2), ("ye2022-ex1", 2)]:
         with pytest.raises(ValueError, match=r"^thrusters\.count: the \w+ controller flies \d thrusters? \(.*\), "

@@ -154,7 +154,7 @@ def geometry_of(config: dict, name: str | None = None) -> Geometry:
     if name is None:
         from geojax.control import lookup
 
-        name = lookup(config["controller"]["kind"]).make([config["controller"]]).bound_geometry
+        name = lookup(config["controller"]["kind"]).make([config["controller"]]).spec.bound_geometry
     if name not in GEOMETRIES:
         raise ValueError(f"bound.thrusters: must be one of {', '.join(GEOMETRIES)}, got {name!r}")
     if name == "arms":

@@ -1,23 +1,23 @@
 """Station-keeping controllers (docs/design.md: controllers and parts): one module per controller, on the protocol of ``control.base``.
 
 ``REGISTRY`` maps a scenario's ``controller.kind`` to its module; each module
-defines ``FIELDS`` (its ``[controller]`` keys), ``make(tables) -> Controller``
-(``tables``: the validated ``[controller]`` tables of every scenario in a
-batch, so a factory can size what is static, e.g. the FOMPC's padded horizon)
-and optionally ``validate(config)`` (checks across tables at load).
+defines ``SPEC`` (``control.base.Spec``: its ``[controller]`` keys, checks and
+thrusters) and ``make(tables) -> Controller`` (``tables``: the validated
+``[controller]`` tables of every scenario in a batch, so a factory can size
+what is static, e.g. the FOMPC's padded horizon).
 
 A user's own controller needs no registration: ``controller.kind =
 "package.module:NAME"`` (in a scenario, or a sweep's ``controllers``) imports
 ``NAME`` from ``package.module`` -- a ``Controller``, or a module-like object
-with ``FIELDS`` and ``make`` -- and ``lookup`` serves it like a shipped one.
+with ``SPEC`` and ``make`` -- and ``lookup`` serves it like a shipped one.
 """
 
 import functools
 import importlib
-from typing import Any, Callable, Mapping, NamedTuple
+from typing import Callable, NamedTuple
 
 from geojax.control import fompc, lyapunov, mpc, mpc_momentum, none, qffc, zone_nssk
-from geojax.control.base import Controller
+from geojax.control.base import Controller, Spec
 
 REGISTRY = {
     "none": none,
@@ -31,10 +31,10 @@ REGISTRY = {
 
 
 class Imported(NamedTuple):
-    """A user's ``Controller`` as a registry entry: its fields, and a factory that returns it (the same object
+    """A user's ``Controller`` as a registry entry: its spec, and a factory that returns it (the same object
     every time, so its compiled rollouts are reused)."""
 
-    FIELDS: Mapping[str, Any]
+    SPEC: Spec
     make: Callable
 
 
@@ -58,11 +58,11 @@ def _imported(path: str):
         raise ValueError(f"controller.kind: cannot import {module_name!r} for {path!r} ({err})") from None
     found = getattr(module, name, None)
     if isinstance(found, Controller):
-        return Imported(found.fields, lambda tables: found)
-    if callable(getattr(found, "make", None)) and isinstance(getattr(found, "FIELDS", None), Mapping):
+        return Imported(found.spec, lambda tables: found)
+    if callable(getattr(found, "make", None)) and isinstance(getattr(found, "SPEC", None), Spec):
         return found
     raise ValueError(f"controller.kind: {path!r} is not a geojax Controller (found {type(found).__name__}); "
-                     f"define NAME = geojax.Controller(init, plan, thrust, fields=...)")
+                     f"define NAME = geojax.Controller(init, plan, thrust, geojax.Spec(fields=...))")
 
 
-__all__ = ["Controller", "REGISTRY", "lookup"]
+__all__ = ["Controller", "REGISTRY", "Spec", "lookup"]

@@ -1,50 +1,20 @@
 """The controller protocol (docs/design.md: controllers and parts): data plus pure functions, in the optax manner.
 
-A controller is a ``Controller(init, plan, thrust)`` of pure functions that the
-one closed loop (``geojax.loop.simulate``) calls:
+A ``Controller`` is three things kept apart.  Its **protocol**, the pure functions the one closed loop
+(``geojax.loop.simulate``) calls: ``init(params, context) -> state`` once; ``plan(params, state, estimate,
+context, key) -> (plan, state)`` once per cycle, from the on-board ``Estimate`` (never the truth); ``thrust(params,
+plan, t, spacecraft, environment) -> Thrust`` once per integration step; optionally ``record(plan) -> {name:
+array}`` (per-cycle records: ``"solved"`` counts cycles without a solution, ``control.burns.record`` feeds the
+burn metrics), ``reference_cycles`` (> 0: the loop provides the uncontrolled reference that many boundaries ahead,
+Li 2022 eqs. (24)-(27)) and ``surrogate`` (a smooth stand-in for derivatives, ``geojax.tune``; its sharpness the
+leaf ``params.controller[SURROGATE_TEMPERATURE]``).  Its **spec** (``Spec``), what it asks of a scenario, read at
+load: its ``[controller]`` keys (a field with a ``transform`` is tunable), its checks, the thrusters it flies and
+the keys it leaves unread (each honoured or refused), the bound's geometry.  Its **sizing** (``Sizing``), how
+the orchestration batches and compiles it; the bytes of its per-cycle records come from ``jax.eval_shape``.
 
-* ``init(params, context) -> controller_state``: once, before the first cycle
-  (``context`` is the first cycle's ``CycleContext``);
-* ``plan(params, controller_state, estimate, context, key) -> (plan, controller_state)``:
-  once per control cycle, from the on-board ``Estimate`` (never the true state);
-* ``thrust(params, plan, t, state, environment) -> Thrust``: once per
-  integration step; ``t`` is the step's start (s since the start of the run),
-  ``state`` the true ``SpacecraftState`` and ``environment`` a ``StepEnvironment``
-  (a feedback law reads its sensors here; a planner flies its plan).
-
-``params`` is the sample's ``geojax.params.Params`` pytree: the controller's own
-settings are ``params.controller`` (a dict of SI array leaves named by
-``fields``), and everything else (thrusters, station, errors) is there too.
-
-Optional parts: ``fields`` declares the keys of the scenario's ``[controller]``
-table (TOML key, unit conversion, bounds, tuning transform: ``params.Field``);
-``lanes_cpu``, ``lane_bytes`` and ``lane_bytes_per_cycle`` tell the orchestration how wide
-to batch it (``geojax.lanes``: the width measured on one CPU core, and the memory model that sizes a
-GPU's batch); ``keeps_steps`` whether a single run keeps per-step records; ``bound_geometry`` the
-thruster geometry ``geojax bound`` assumes for it; ``reference_cycles`` > 0 asks the loop for the shared uncontrolled reference and
-the mean-element estimate it enables (Li 2022 eqs. (24)-(27)), that many cycle
-boundaries from the cycle's start on; ``record(plan) -> {name: array}`` adds
-per-cycle records (a ``"solved"`` bool counts cycles without a solution, the
-burn records of ``control.burns`` feed the burn metrics); ``surrogate`` is a
-smooth stand-in used for derivatives (``geojax.tune``): its sharpness, where it has one, is the leaf
-``params.controller[SURROGATE_TEMPERATURE]``, which the tuner anneals (the exact law ignores it).
-
-What a tuning may move is declared here too: a field with a ``transform`` is tunable (named by its key,
-``"controller.k_h_per_km2_s"``, or its ``alias``, ``"k_h"``), and its ``unit`` labels the figures.  The
-tuner (``geojax.tune``) reads nothing else of a controller.
-
-What a registered controller's module declares beside ``FIELDS`` and ``make`` (read at load, by
-``geojax.scenario``, so that every key of a scenario is honoured or refused): ``THRUSTERS``, the thrusters it
-flies and why (``(2, "Li 2022's two robotic arms, one burn each per cycle")``), which ``thrusters.count``
-must then equal; and ``UNREAD``, the keys of the other tables its rollout never reads (``ARM_LIMIT_KEYS``
-for a law that does not fly the arms), each refused at any value but its default.  A module without them
-(the null controller, a user's) is not checked.
-
-No controller name is compared inside the traced loop: the loop only calls
-these functions.  A new controller is one module under ``control/`` that
-defines ``FIELDS`` and ``make(tables) -> Controller`` and one line in
-``control.REGISTRY`` -- or, in a user's own script, a ``Controller`` passed to
-``geojax.simulate`` / ``sweep`` / ``tune`` directly.
+A new controller is one module under ``control/`` defining ``SPEC`` and ``make(tables) -> Controller`` and one
+line in ``control.REGISTRY``; or, in a user's script, a ``Controller`` passed to ``geojax.simulate`` / ``sweep``
+/ ``tune`` (or named ``"package.module:NAME"``).  No controller name is compared inside the traced loop.
 """
 
 from __future__ import annotations
@@ -82,53 +52,68 @@ class Estimate(NamedTuple):
     states: dict = {}
 
 
+@dataclasses.dataclass(frozen=True)
+class Spec:
+    """What a controller asks of a scenario, read at load before anything is traced: its keys, its checks, the
+    thrusters it flies, what it leaves unread, and what the tools around the loop take from it."""
+
+    fields: Mapping[str, Any] = dataclasses.field(default_factory=dict)  # the ``[controller]`` keys (``params.Field``)
+    validate: Callable | None = None  # ``validate(config)``: checks across tables, ``ValueError`` naming the key
+    # (count, why): the thrusters it flies, which ``thrusters.count`` must equal (None: not checked).
+    thrusters: tuple[int, str] | None = None
+    redundant_thrusters: int | None = None  # a count it also takes (e.g. 4: two per arm, the planner allocating)
+    unread: tuple[str, ...] = ()  # keys of other tables its rollout never reads: refused at any value but the default
+    tuned_fields: tuple[str, ...] = ()  # what a tuning moves when its file names no ``parameters``
+    # The thruster geometry of the fuel bound when ``thrusters.layout`` is unset (``geojax.bound.directions``).
+    bound_geometry: str = "arms"
+    # Whether a single run keeps its per-step records; None: a feedback law (no reference) keeps them.
+    keeps_steps: bool | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Sizing:
+    """How the orchestration runs a controller (``geojax.lanes``, ``geojax.compilation``): never read by the loop.
+
+    The per-cycle records a lane stacks are not declared: ``geojax.lanes`` takes them from ``jax.eval_shape``
+    of the loop.  What cannot be known without compiling is stated, each measured in the controller's module."""
+
+    lanes_cpu: int = 128  # samples per CPU device per call, measured on one pinned core
+    # The working set per lane beside the stacked records, bytes: XLA's ``memory_analysis`` of the compiled batch
+    # on the CPU (temporaries, arguments).  The default is twice the QFFC's, for a controller that does not say.
+    working_bytes: int = 32_000
+    # LLVM's optimization level for a single sample's closed loop (``compilation.ONE_SAMPLE_OPTIONS``): 0 for a
+    # feedback law or a planner of a few small kernels, 1 for one that solves a program every cycle (its
+    # arithmetic runs 2-3x slower unoptimized; docs/speed.md).  A batch keeps XLA's defaults.
+    one_sample_opt_level: int = 0
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class Controller:
-    """A controller: pure functions and what the loop must know about them (static under ``jit``).
+    """A controller: the protocol's pure functions, its ``Spec`` and its ``Sizing`` (static under ``jit``).
 
-    Compared and hashed by identity, so a compiled rollout is reused for as long as the same
-    ``Controller`` object is passed (the factories of ``control.REGISTRY`` return the same object for
-    the same static settings).
+    Compared and hashed by identity, so a compiled rollout is reused for as long as the same ``Controller``
+    object is passed (the factories of ``control.REGISTRY`` return the same object for the same settings).
     """
 
     init: Callable
     plan: Callable
     thrust: Callable
-    fields: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    spec: Spec = Spec()
     reference_cycles: int = 0
     record: Callable | None = None
     surrogate: Any = None  # a Controller, or None: the controller is its own surrogate
-    # The ``fields`` a tuning moves when its file names no ``parameters`` (each with a ``transform``).
-    tuned_fields: tuple[str, ...] = ()
-    # How wide to batch it (``geojax.lanes``).  Samples per CPU device per compiled call, measured on one pinned
-    # core; the step is also compiled for this many lanes on every platform (``physics.propagate.for_lanes``), so a
-    # wider batch gives the same numbers bit for bit.
-    lanes_cpu: int = 128
-    # Working memory per lane, bytes: XLA's ``memory_analysis`` of the compiled batch on the CPU (temporaries,
-    # arguments and outputs per lane), split into what a run needs whatever its length and what each cycle adds
-    # (the stacked ``CycleRecord``s).  These defaults are twice the QFFC's (li2022, 64 lanes, 10 and 40 cycles:
-    # 15.6 and 21.3 kB per lane), for a user's controller that does not say.
-    lane_bytes: int = 32_000
-    lane_bytes_per_cycle: int = 400
-    # LLVM's optimization level for a single sample's closed loop (XLA's ``xla_backend_optimization_level``, beside
-    # ``compilation.ONE_SAMPLE_OPTIONS``; a batch keeps XLA's defaults).  What ``geojax simulate`` waits for is that
-    # program's compilation, and a feedback law's or a planner's cycle is a few small kernels whose run time the
-    # loop's own overhead sets: unoptimized code (0) saves more compiling than it costs a year's run.  A controller
-    # that solves a program every cycle spends its run time in arithmetic, which runs 2-3x slower unoptimized: it
-    # says 1 (measured in ``docs/speed.md``).
-    one_sample_opt_level: int = 0
-    # Whether a single run keeps its per-step records (``geojax simulate``'s ``/steps/`` and the ground-track
-    # figures): a feedback law has no plan to record per cycle, so its story is in the steps.  None: a controller
-    # without the predictor's reference (``reference_cycles == 0``: a feedback law) keeps them.
-    keeps_steps: bool | None = None
-    # The thruster geometry of the fuel bound when the scenario's ``thrusters.layout`` is unset
-    # (``geojax.bound.directions.GEOMETRIES``): Li's two robotic arms, or a gimbal that points anywhere.
-    bound_geometry: str = "arms"
+    sizing: Sizing = Sizing()
+
+    @property
+    def fields(self) -> Mapping[str, Any]:
+        """The ``[controller]`` keys (``spec.fields``), the one part of the spec the loop's set-up reads."""
+        return self.spec.fields
 
 
 def keeps_steps(controller: Controller) -> bool:
-    """Whether a single run of ``controller`` keeps its per-step records (``Controller.keeps_steps``)."""
-    return controller.reference_cycles == 0 if controller.keeps_steps is None else controller.keeps_steps
+    """Whether a single run of ``controller`` keeps its per-step records (``Spec.keeps_steps``)."""
+    keeps = controller.spec.keeps_steps
+    return controller.reference_cycles == 0 if keeps is None else keeps
 
 
 def stateless_init(params, context):

@@ -43,7 +43,7 @@ import numpy as np
 
 from geojax.control import burns as burns_mod
 from geojax.control import qffc
-from geojax.control.base import Controller
+from geojax.control.base import Controller, Sizing, Spec
 from geojax.control.qffc import model_cycle
 
 THRUSTERS = qffc.THRUSTERS
@@ -187,6 +187,9 @@ def validate(config: dict) -> None:
     qffc.validate(config)
 
 
+SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS)
+
+
 def make(tables: list[dict]) -> Controller:
     """The FOMPC for a batch of ``[controller]`` tables: its horizon padded to their largest N (so a sweep over
     N compiles once; a single run plans over exactly its N: padded cycles are masked out of J but still
@@ -227,5 +230,5 @@ def controller(annealing: Annealing = Annealing(), around_passes: bool = False) 
     # per CPU core reach most of its throughput (4 days, one pinned core: 2.8 simulated years/s at 8 lanes, 3.8 at 32,
     # 4.1 at 64) and a small sweep pads less; XLA's memory_analysis at 32 lanes, 10 and 40 cycles (li2022's
     # annealing): 16.7 and 22.7 kB per lane.
-    return Controller(init, plan_cycle, burns_mod.thrust, FIELDS, reference_cycles=annealing.n_max + 2,
-                      record=burns_mod.record, lanes_cpu=32, lane_bytes=16_000, lane_bytes_per_cycle=200)
+    return Controller(init, plan_cycle, burns_mod.thrust, SPEC, reference_cycles=annealing.n_max + 2,
+                      record=burns_mod.record, sizing=Sizing(lanes_cpu=32, working_bytes=16_000))

@@ -47,6 +47,7 @@ accelerations, so the mass only enters the thrust bookkeeping.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from typing import NamedTuple
@@ -56,7 +57,8 @@ import numpy as np
 
 from geojax.physics import thrust_laws
 from geojax.physics.constants import OMEGA_EARTH_RAD_S
-from geojax.control.base import ARM_LIMIT_KEYS, BURN_KEYS, SURROGATE_TEMPERATURE, Controller, no_plan, stateless_init
+from geojax.control.base import (ARM_LIMIT_KEYS, BURN_KEYS, SURROGATE_TEMPERATURE, Controller, Spec, no_plan,
+                                 stateless_init)
 from geojax.physics.dynamics import Thrust
 from geojax.physics.elements import wrap_angle
 from geojax.physics.frames import rotate_z, rsw_basis
@@ -120,6 +122,11 @@ def validate(config: dict) -> None:
         thrust_laws.check_thresholds(ctl["u0_km_per_s2"], ctl["sigma_km_per_s2"])
 
 
+# Katz 2025 tunes (k_h, k_e) (Sec. 3, fmincon), k_lambda and lambda_b fixed at Sec. 3.1's values.
+SPEC = Spec(FIELDS, validate, THRUSTERS, unread=UNREAD, tuned_fields=("k_h_per_km2_s", "k_e_km2_per_s3"),
+            bound_geometry="gimbal")
+
+
 def make(tables: list[dict], smooth: bool = False) -> Controller:
     """The feedback law for ``[controller]`` tables sharing one thrust mode; ``smooth``: the sigmoid surrogate
     of the on/off laws (the continuous-clipped law is smooth already and is its own surrogate)."""
@@ -147,10 +154,8 @@ def controller(mode: str, smooth: bool = False) -> Controller:
         return Thrust(u_rsw / u_norm, u_norm * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
 
     surrogate = None if smooth or mode == "continuous-clipped" else controller(mode, smooth=True)
-    # Katz 2025 tunes (k_h, k_e) (Sec. 3, fmincon), k_lambda and lambda_b fixed at Sec. 3.1's values.
-    return Controller(stateless_init, no_plan, thrust, FIELDS, surrogate=surrogate,
-                      bound_geometry="axes" if mode == "discrete" else "gimbal",  # eq. (6): per-axis pairs
-                      tuned_fields=("k_h_per_km2_s", "k_e_km2_per_s3"))
+    spec = dataclasses.replace(SPEC, bound_geometry="axes") if mode == "discrete" else SPEC  # eq. (6): per axis
+    return Controller(stateless_init, no_plan, thrust, spec, surrogate=surrogate)
 
 
 def gains(controller: dict) -> "LyapunovGains":

@@ -47,7 +47,7 @@ import jax.numpy as jnp
 
 from geojax.control import burns as burns_mod
 from geojax.control import lp
-from geojax.control.base import Controller
+from geojax.control.base import Controller, Sizing, Spec
 from geojax.control.effects import V_SYNC_MPS, cycle_coast_s, effect_matrix
 from geojax.control.predictor import predict_next
 from geojax.control.qffc import BurnPair
@@ -382,6 +382,9 @@ def validate(config: dict) -> None:
                          f"+-{station['box_half_width_deg']:g} deg longitude box")
 
 
+SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS)
+
+
 @functools.lru_cache(maxsize=None)
 def controller(shape: Shape = Shape()) -> Controller:
     """The MPC with static sizes ``shape`` (stateless: the interior-point method starts afresh every cycle)."""
@@ -418,6 +421,5 @@ def controller(shape: Shape = Shape()) -> Controller:
     # Widths and memory (``geojax.lanes``): the interior point's matrices dominate (10 days, 2 loaded cores: 7.5-8.9e-3 s
     # per orbit per sample at 8 lanes, 1.0e-2 at 32 and 64), so 8 lanes per CPU core; XLA's memory_analysis at 8
     # lanes, 4 and 12 cycles (li2022-mpc's horizon): 1.73 MB per lane and 0.33 kB more per cycle.
-    return Controller(init, plan_cycle, thrust, FIELDS, reference_cycles=shape.n_max + 1, record=record,
-                      lanes_cpu=8, lane_bytes=1_750_000, lane_bytes_per_cycle=400,
-                      one_sample_opt_level=1)
+    return Controller(init, plan_cycle, thrust, SPEC, reference_cycles=shape.n_max + 1, record=record,
+                      sizing=Sizing(lanes_cpu=8, working_bytes=1_750_000, one_sample_opt_level=1))

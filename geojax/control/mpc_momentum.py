@@ -60,7 +60,7 @@ import jax.numpy as jnp
 
 from geojax.control import burns as burns_mod
 from geojax.control import lp, mpc
-from geojax.control.base import Controller
+from geojax.control.base import Controller, Sizing, Spec
 from geojax.control.effects import V_SYNC_MPS, cycle_coast_s, effect_matrix
 from geojax.control.predictor import predict_next
 from geojax.states.momentum import NAME as WHEELS
@@ -372,6 +372,9 @@ def validate(config: dict) -> None:
                          f"it; must be > 0, got {attitude['dump_angle_max_deg']:g}")
 
 
+SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS, UNREAD)
+
+
 @functools.lru_cache(maxsize=None)
 def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
     """The momentum MPC with static sizes ``shape``."""
@@ -444,6 +447,5 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
     # Widths and memory as the MPC's (``mpc.controller``: 8 lanes per CPU core, its interior point's matrices
     # dominating); the lane's bytes scaled from the MPC's measured 1.73 MB by the decisions per cycle (20 against
     # 12), an estimate, not measured: the GPU's batch sizing is its only reader.
-    return Controller(init, plan_cycle, thrust, FIELDS, reference_cycles=shape.n_max + 1, record=record,
-                      lanes_cpu=8, lane_bytes=2_500_000, lane_bytes_per_cycle=400,
-                      one_sample_opt_level=1)
+    return Controller(init, plan_cycle, thrust, SPEC, reference_cycles=shape.n_max + 1, record=record,
+                      sizing=Sizing(lanes_cpu=8, working_bytes=2_500_000, one_sample_opt_level=1))

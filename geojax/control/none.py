@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-from geojax.control.base import Controller, coast, no_plan, stateless_init
+from geojax.control.base import Controller, Spec, coast, no_plan, stateless_init
 
 FIELDS: dict = {}
+SPEC = Spec(FIELDS)
 CONTROLLER = Controller(stateless_init, no_plan, coast)
 
 

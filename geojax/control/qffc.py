@@ -8,11 +8,13 @@ N times per candidate sequence of north-south corrections.  The solver's names a
 
 from __future__ import annotations
 
+import dataclasses
+
 import jax.numpy as jnp
 
 from geojax.control import around_passes
 from geojax.control import burns as burns_mod
-from geojax.control.base import Controller, stateless_init
+from geojax.control.base import Controller, Sizing, Spec, stateless_init
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_columns, remaining_fraction
 from geojax.control.predictor import predict_next
 from geojax.navigation.schedule import station_schedules
@@ -25,7 +27,7 @@ from geojax.control.qffc_solve import (ArmTrig, BurnPair, _log_at_least_one, _st
                                        default_vdt_raises, full_correction_mps, solve)
 
 # The solver's names (``qffc_solve``) are the QFFC's too: ``qffc.solve``, ``qffc.BurnPair`` ...
-__all__ = ["ArmTrig", "BurnPair", "CONTROLLER", "FIELDS", "_log_at_least_one", "arm_trig", "default_raise_index",
+__all__ = ["ArmTrig", "BurnPair", "CONTROLLER", "FIELDS", "SPEC", "_log_at_least_one", "arm_trig", "default_raise_index",
            "default_vdt_raises", "effect", "estimated_drift_rad_s", "full_correction_mps", "make", "model_cycle",
            "model_inputs", "solve", "validate", "around_passes_plan", "around_passes_of"]
 
@@ -160,11 +162,23 @@ def _plan(params, controller_state, estimate, context, key):
     return burns_mod.fly(params, burns, prediction, jnp.asarray(1.0), estimate, context, key), controller_state
 
 
+def validate(config: dict) -> None:
+    """``controller.around_passes`` needs passes to plan around: the filter (``navigation.model = "ekf"``) and at
+    least one station (``ValueError`` naming the key)."""
+    nav = config["navigation"]
+    if config["controller"]["around_passes"] and (nav["model"] != "ekf" or not nav["stations"]):
+        raise ValueError(f"controller.around_passes: plans the burns around the stations' passes, so it needs "
+                         f"navigation.model = \"ekf\" with [[navigation.stations]], got model {nav['model']!r} with "
+                         f"{len(nav['stations'])} station(s)")
+
+
+SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS)
+
 # Reads the reference at the cycle's start boundary and the two after it (``model_cycle``).
 # Widths and memory (``geojax.lanes``): 128 lanes per CPU core (simulated years/s over 30 days on one pinned core: 77 at
 # 64 lanes, 89 at 128, 100 at 256); XLA's memory_analysis at 64 lanes, 10 and 40 cycles: 15.6 and 21.3 kB per lane.
-CONTROLLER = Controller(stateless_init, _plan, burns_mod.thrust, FIELDS, reference_cycles=3, record=burns_mod.record,
-                        lanes_cpu=128, lane_bytes=16_000, lane_bytes_per_cycle=200)
+CONTROLLER = Controller(stateless_init, _plan, burns_mod.thrust, SPEC, reference_cycles=3, record=burns_mod.record,
+                        sizing=Sizing(lanes_cpu=128, working_bytes=16_000))
 
 
 def around_passes_plan(params, estimate, context, inputs, plain: BurnPair, v_n_fraction=None):
@@ -188,9 +202,7 @@ def _plan_around_passes(params, controller_state, estimate, context, key):
     return plan, controller_state
 
 
-CONTROLLER_AROUND_PASSES = Controller(stateless_init, _plan_around_passes, burns_mod.thrust, FIELDS,
-                                      reference_cycles=3, record=burns_mod.record, lanes_cpu=128, lane_bytes=16_000,
-                                      lane_bytes_per_cycle=200)
+CONTROLLER_AROUND_PASSES = dataclasses.replace(CONTROLLER, plan=_plan_around_passes)
 
 
 def around_passes_of(tables: list[dict]) -> bool:
@@ -204,13 +216,3 @@ def around_passes_of(tables: list[dict]) -> bool:
 def make(tables: list[dict]) -> Controller:
     """The QFFC, or the QFFC planning around the passes (``around_passes``)."""
     return CONTROLLER_AROUND_PASSES if around_passes_of(tables) else CONTROLLER
-
-
-def validate(config: dict) -> None:
-    """``controller.around_passes`` needs passes to plan around: the filter (``navigation.model = "ekf"``) and at
-    least one station (``ValueError`` naming the key)."""
-    nav = config["navigation"]
-    if config["controller"]["around_passes"] and (nav["model"] != "ekf" or not nav["stations"]):
-        raise ValueError(f"controller.around_passes: plans the burns around the stations' passes, so it needs "
-                         f"navigation.model = \"ekf\" with [[navigation.stations]], got model {nav['model']!r} with "
-                         f"{len(nav['stations'])} station(s)")

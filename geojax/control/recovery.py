@@ -190,7 +190,8 @@ def with_recovery(controller: Controller) -> Controller:
 
     surrogate = None if controller.surrogate is None else with_recovery(controller.surrogate)
     return dataclasses.replace(controller, init=init, plan=plan, thrust=thrust, record=record, surrogate=surrogate,
-                               fields={**controller.fields, "recovery": FIELD})
+                               spec=dataclasses.replace(controller.spec,
+                                                        fields={**controller.spec.fields, "recovery": FIELD}))
 
 
 def recovery_metrics(rec: dict, dv_mps) -> dict:

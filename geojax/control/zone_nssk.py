@@ -70,7 +70,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 
 from geojax.control import burns as burns_mod
-from geojax.control.base import ARM_LIMIT_KEYS, Controller, stateless_init
+from geojax.control.base import ARM_LIMIT_KEYS, Controller, Spec, stateless_init
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS
 from geojax.control.qffc import BurnPair
 from geojax.physics.constants import MU_MOON_M3_S2, MU_SUN_M3_S2, OMEGA_EARTH_RAD_S, SECONDS_PER_DAY, SIDEREAL_DAY_S
@@ -365,8 +365,8 @@ def _record(plan: ZonePlan) -> dict:
 
 
 # Reads the reference at the cycle's start and end boundaries (the drift of eq. (56)).
-CONTROLLER = Controller(stateless_init, _plan, _thrust, FIELDS, reference_cycles=2, record=_record,
-                        bound_geometry="gimbal")  # the manipulator points its one thruster anywhere
+SPEC = Spec(FIELDS, validate, THRUSTERS, unread=UNREAD, bound_geometry="gimbal")  # the manipulator points anywhere
+CONTROLLER = Controller(stateless_init, _plan, _thrust, SPEC, reference_cycles=2, record=_record)
 
 
 def make(tables: list[dict]) -> Controller:

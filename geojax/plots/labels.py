@@ -39,7 +39,7 @@ def field_of(key: str, controllers=()):
         return SCHEMA.get(table, {}).get(name)
     for controller in controllers or REGISTRY:
         with contextlib.suppress(ValueError):
-            fields = lookup(controller).FIELDS
+            fields = lookup(controller).SPEC.fields
             if name in fields:
                 return fields[name]
     return None

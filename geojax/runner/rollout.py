@@ -9,6 +9,7 @@ numpy arrays.
 from __future__ import annotations
 
 import functools
+import math
 import threading
 import time
 from typing import NamedTuple
@@ -25,9 +26,10 @@ from geojax.export import maneuvers, recorder, trajectory
 from geojax.runner import report
 from geojax import compilation, traced
 from geojax import states as parts
+from geojax.lanes import RecordBytes
 from geojax.parallel import Background
 from geojax.runner.setup import (Batch, controller_of, cycle_slots, padded, prepare, program_identity, reference,
-                                 unstack)
+                                 reference_shape, unstack)
 from geojax.params import static_settings
 from geojax.loop.simulate import Records, Shared, simulate as closed_loop
 from geojax.params import Params
@@ -114,6 +116,25 @@ def rollout_fn(batch: Batch, keep_steps: bool = False, controller: Controller | 
                              states=batch.states)
 
 
+def record_bytes_per_cycle(batch: Batch) -> RecordBytes:
+    """What each cycle adds to one lane of ``batch`` (a ``Batch`` of shapes will do, ``prepare(shapes_only=True)``):
+    the bytes of the loop's stacked cycle records, from ``jax.eval_shape`` of one lane's loop (a trace, no
+    compilation: 1-3 s on a CPU), and of a reference run's, from its shapes."""
+    params = jax.tree_util.tree_map(lambda x: jax.ShapeDtypeStruct(x.shape[1:], x.dtype), batch.params)
+    key = jax.eval_shape(lambda: jax.random.key(0))
+    one = functools.partial(loop, controller=batch.controller, step_s=batch.step_s, dynamics=batch.dynamics,
+                            states=batch.states)
+    _, records = jax.eval_shape(one, params, key, batch.shared, _reference_env(batch))
+    n_cycles = batch.shared.env.earth_angle_rad.shape[0]
+    width = batch.controller.reference_cycles
+    reference = reference_shape(n_cycles, width, jnp.float64) if width else ()
+    return RecordBytes(_nbytes(records.cycles) // n_cycles, _nbytes(reference) // n_cycles)
+
+
+def _nbytes(tree) -> int:
+    return sum(math.prod(x.shape) * x.dtype.itemsize for x in jax.tree_util.tree_leaves(tree))
+
+
 def _reference_env(batch: Batch):
     return batch.reference_env if batch.reference_per_sample else None
 
@@ -156,7 +177,7 @@ def simulate(scenario: Scenario, seed: int = 0, *, controller: Controller | None
     ``seed`` (or a ``jax.random`` ``key``) draws the orbit-determination and attitude errors
     and any randomness of the controller; same seed, same result.  ``keep_steps`` also returns
     the per-step records (``records.steps``, leaves [n_cycles, n_steps, ...]); by default as the controller says
-    (``Controller.keeps_steps``: a feedback law's are kept, its figures are drawn per step; a planner's are not).
+    (``Spec.keeps_steps``: a feedback law's are kept, its figures are drawn per step; a planner's are not).
     ``ephemeris`` also returns the true state at every step start and, with a navigation filter, its estimate and
     covariance there (``Result.ephemeris``, ``export.recorder``; every other number as without it), what
     ``Result.save_oem`` writes at step resolution.
@@ -314,12 +335,12 @@ def _compiled_programs(args, static, identity, per_duration, summarized, n, lowe
 def compiler_options(lanes: int, controller: Controller | None = None) -> dict | None:
     """XLA's options for the programs of a batch compiled for ``lanes`` samples (None: XLA's defaults; one sample:
     ``compilation.ONE_SAMPLE_OPTIONS``, and for the closed loop of ``controller`` its
-    ``Controller.one_sample_opt_level``)."""
+    ``Sizing.one_sample_opt_level``)."""
     if lanes != 1:
         return None
     options = dict(compilation.ONE_SAMPLE_OPTIONS)
     if controller is not None:
-        options["xla_backend_optimization_level"] = controller.one_sample_opt_level
+        options["xla_backend_optimization_level"] = controller.sizing.one_sample_opt_level
     return options
 
 

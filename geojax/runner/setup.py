@@ -110,7 +110,7 @@ def controller_of(scenarios: list[Scenario]) -> Controller:
 
 def prepare(scenarios: list[Scenario], controller: Controller | None = None,
             segment_cycles: int = REFERENCE_SEGMENT_CYCLES, pad: bool = False, on_shapes=None,
-            one_sample: bool = False, states: tuple = (), slots=None) -> Batch:
+            one_sample: bool = False, states: tuple = (), slots=None, shapes_only: bool = False) -> Batch:
     """The ``Batch`` of ``scenarios`` (``controller``: a user's, else the registered one of their kind).
 
     ``segment_cycles``: cycles between re-starts of the predictor's reference (``REFERENCE_SEGMENT_CYCLES``).
@@ -128,6 +128,8 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     ``states``: a user's own parts (``StateModel`` s or ``Part`` s) carried beside the scenario's.
     ``one_sample``: the batch is one sample's (``simulate``), whose reference is compiled for start-up rather than
     run speed (``reference(sequential=True)`` with ``compilation.ONE_SAMPLE_OPTIONS``).
+    ``shapes_only``: return that ``Batch`` of shapes at once (what ``runner.rollout.record_bytes_per_cycle``
+    traces), computing nothing.
     ``slots(layout, n_slots)``, with ``pad``: the slot count to compile for instead of ``n_slots``
     (``cycle_slots(n_cycles)``), given ``layout(count)``, the ``Batch`` of shapes (as ``on_shapes`` gets it) for a
     loop of ``count`` slots: a larger one already compiled serves the run as well (``rollout.simulate_batch``).
@@ -162,6 +164,8 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     if pad and slots is not None:
         n_slots = slots(layout, n_slots)
     sharing = functools.partial(_shared, n_cycles=n_cycles, n_slots=n_slots if pad else None)
+    if shapes_only:
+        return layout(n_slots if pad else None)
     before_reference = None
     if on_shapes is not None:
         before_reference = on_shapes(layout(n_slots if pad else None))

@@ -127,9 +127,8 @@ class StateModel(NamedTuple):
     thrust: Callable | None = None
     estimate: Callable | None = None
     box_metrics: Callable | None = None
-    # For the lanes' memory model (``geojax.lanes``): the bytes its cycle record adds per cycle, and the values per
-    # cycle its ``columns`` add to a sweep's kept records (``tests/test_lanes.py`` checks both against the records)
-    bytes_per_cycle: int = 0
+    # For the lanes' memory model (``geojax.lanes``): the values per cycle its ``columns`` add to a sweep's kept
+    # records (``tests/test_lanes.py`` checks it against the columns); its records' bytes come from jax.eval_shape
     columns_per_cycle: int = 0
     stream: int | None = None  # its random stream's id (``stream_id``); None: a stable hash of its name
 

@@ -239,8 +239,7 @@ def leaves(table: dict) -> dict:
 
 
 MODEL = StateModel(NAME, init, step, summary, metrics, cycle=cycle, columns=columns, thrust=thrust, estimate=estimate,
-                   box_metrics=box_metrics,
-                   bytes_per_cycle=(3 * TRACKED + 2) * 8, columns_per_cycle=2 * TRACKED)
+                   box_metrics=box_metrics, columns_per_cycle=2 * TRACKED)
 DESCRIPTIONS = {
     "burns_total": "burns flown (with the faults part: as flown; burns_planned beside it)",
     "burns_planned": "burns the controller commanded (a burn: a thruster's firing within one cycle)",

@@ -344,7 +344,7 @@ def columns(cycles: WheelCycle) -> dict:
 
 
 MODEL = StateModel(NAME, init, step, summary, metrics, cycle=cycle, status=SATURATED, columns=columns,
-                   thrust=thrust, estimate=estimate, bytes_per_cycle=17 * 8, columns_per_cycle=6)  # WheelCycle's
+                   thrust=thrust, estimate=estimate, columns_per_cycle=6)
 
 DESCRIPTIONS = {
     "max_wheel_momentum_nms": "largest |momentum| of any reaction wheel at any step start (body axes)",

@@ -203,7 +203,7 @@ def model(layout: Layout) -> StateModel:
     return StateModel(NAME, functools.partial(init, layout), functools.partial(step, layout), summary, metrics,
                       cycle=functools.partial(cycle, layout), columns=columns,
                       thrust=functools.partial(thrust, layout), estimate=estimate,
-                      bytes_per_cycle=(16 + 2 * n_b) * 8, columns_per_cycle=15 + 2 * n_b, stream=NAVIGATION_STREAM)
+                      columns_per_cycle=15 + 2 * n_b, stream=NAVIGATION_STREAM)
 
 
 # The registry's entry (metrics and columns, which do not depend on the layout).

@@ -66,8 +66,7 @@ def columns(cycles: Wear) -> dict:
     return {"wear_firing_hours": cycles.firing_s / 3600.0, "wear_starts": cycles.starts}
 
 
-MODEL = StateModel(NAME, init, step, summary, metrics, status=WORN, columns=columns, bytes_per_cycle=3 * 8,
-                   columns_per_cycle=2)
+MODEL = StateModel(NAME, init, step, summary, metrics, status=WORN, columns=columns, columns_per_cycle=2)
 DESCRIPTIONS = {
     "wear_firing_hours": "the thrusters' firing time: over the run in /metrics, since its start in /cycles",
     "wear_starts": "the thrusters' starts (a firing step after one without): over the run, or since its start",

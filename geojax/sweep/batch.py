@@ -13,7 +13,7 @@ from geojax import lanes as lanes_mod
 from geojax.sweep import epochs as epoch_axis
 from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.loop.metrics import CYCLE_NAMES, cycle_series
-from geojax.runner.rollout import rollout_fn
+from geojax.runner.rollout import record_bytes_per_cycle, rollout_fn
 from geojax.control import REGISTRY
 from geojax.runner.setup import (Batch, controller_of, cycle_count, disperse, prepare, program_identity,
                                reference_per_sample)
@@ -96,10 +96,14 @@ def lane_plan(sweep: Sweep, controller: str, chunk: int | None = None) -> lanes_
     samples = math.ceil(min(chunk or math.inf, sweep.n_points * sweep.repetitions) / jax.local_device_count())
     n_cycles = cycle_count(scenarios[0].days)
     own_reference = reference_per_sample(scenarios, ctrl)
-    states = states_of(scenarios[0].config, sweep.parts)  # the parts' records, and their kept columns
+    states = states_of(scenarios[0].config, sweep.parts)  # the parts' kept columns
     kept = len(CYCLE_NAMES) + sum(m.columns_per_cycle for m in states) if sweep.cycles else 0
-    plan = lanes_mod.plan(ctrl, n_cycles, samples * n_satellites, kept_records=kept,
-                          state_bytes_per_cycle=sum(m.bytes_per_cycle for m in states),
+
+    def records():  # traced only where the width depends on memory (``lanes.plan``)
+        return record_bytes_per_cycle(prepare(scenarios[:1], sweep.custom.get(controller), states=sweep.parts,
+                                              shapes_only=True))
+
+    plan = lanes_mod.plan(ctrl, n_cycles, samples * n_satellites, records, kept_records=kept,
                           reference_cycles=n_cycles + ctrl.reference_cycles if own_reference else 0,
                           requested=None if sweep.lanes is None else sweep.lanes * n_satellites)
     return plan if n_satellites == 1 else plan._replace(lanes=max(1, plan.lanes // n_satellites))
@@ -125,9 +129,9 @@ def _compiled_batch(sweep: Sweep, controller: str, width: int, on_phase, devices
     batch = batches[0]
     if any(b.reference_per_sample != batch.reference_per_sample for b in batches):
         raise ValueError(f"grid.{epoch_axis.KEY}: the other axes must vary the same leaves at every epoch")
-    # The step compiled for the controller's CPU width whatever the batch (``Controller.lanes_cpu``): the
+    # The step compiled for the controller's CPU width whatever the batch (``Sizing.lanes_cpu``): the
     # fusion boundaries it sets move the last bit, so every width gives the same numbers.
-    one_rollout = rollout_fn(batch, lanes=batch.controller.lanes_cpu)
+    one_rollout = rollout_fn(batch, lanes=batch.controller.sizing.lanes_cpu)
     base_key = jax.random.key(sweep.seed)
     dispersion = (jnp.asarray(sweep.dispersion["mee_1sigma"]) * jnp.array([1e3, 1, 1, 1, 1, 1]),
                   jnp.asarray(sweep.dispersion["offset_ecef_1sigma_km"]) * 1e3)
@@ -168,7 +172,7 @@ def _identity(sweep: Sweep, controller: str, sc, batch: Batch):
     if sweep.custom.get(controller) is not None or controller not in REGISTRY or sweep.parts or sc.config["states"]:
         return None  # a user's code (a controller's, a part's) is not in traced's digest
     settings = repr(sorted(static_settings(sc.config["controller"], batch.controller.fields).items()))
-    return program_identity(sc, controller, settings, batch.controller.lanes_cpu, batch.step_s, batch.n_cycles,
+    return program_identity(sc, controller, settings, batch.controller.sizing.lanes_cpu, batch.step_s, batch.n_cycles,
                             batch.reference_per_sample, sweep.seed, sweep.dispersed, repr(sweep.dispersion),
                             sweep.cycles)
 

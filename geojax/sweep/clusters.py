@@ -57,7 +57,7 @@ def compiled_cluster_batch(sweep, controller: str, width: int, on_phase, devices
                                                batch.dynamics))(p, keys)
         _, _, _, satellites, cluster = cluster_rollout(
             p, keys, shared, reference_env, alert_m, controller=batch.controller, step_s=batch.step_s,
-            dynamics=for_lanes(batch.dynamics, batch.controller.lanes_cpu), keep_steps=False, states=batch.states,
+            dynamics=for_lanes(batch.dynamics, batch.controller.sizing.lanes_cpu), keep_steps=False, states=batch.states,
             steps_per_cycle=steps_per_cycle)
         return named_metrics(satellites, cluster, names, pair_names, alert_m)
 

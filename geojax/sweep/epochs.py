@@ -20,7 +20,7 @@ Making the environment a per-sample leaf instead would carry a year of Sun and M
 evaluate the force model's ephemeris inputs per sample per stage, and break the fusion of what the batch
 shares; chunks and resume are unchanged because the grouping is inside a chunk's calls, not in its cut.
 A call's lanes beyond an epoch's samples are padded with its last sample, so an epoch with fewer samples than
-the width (the CPU's ``Controller.lanes_cpu`` per device) wastes the rest: set ``lanes`` to about the samples of
+the width (the CPU's ``Sizing.lanes_cpu`` per device) wastes the rest: set ``lanes`` to about the samples of
 one epoch per device (a sample's numbers do not depend on the width).
 Everything here is host-side orchestration; the engine does not know about the axis.
 """

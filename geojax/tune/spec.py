@@ -120,10 +120,10 @@ def from_dict(raw: dict, text: str = "", controller: Controller | None = None) -
                  if config[k] is not None}
     sc = scenario_mod.load(config["scenario"], overrides, controller)
     if names is None:
-        names = [f"controller.{key}" for key in (controller or controller_of([sc])).tuned_fields]
+        names = [f"controller.{key}" for key in (controller or controller_of([sc])).spec.tuned_fields]
         if not names:
             raise ValueError(f"parameters: missing, and the controller of scenario {sc.name} declares no default "
-                             f"(Controller.tuned_fields); tunable: {', '.join(tunable(sc, controller))}")
+                             f"(Spec.tuned_fields); tunable: {', '.join(tunable(sc, controller))}")
     config["parameters"] = resolve(sc, controller, names)
     tuned(sc, controller, config["parameters"])  # every name tunable and set
     if len(set(config["parameters"])) != len(names):

@@ -151,7 +151,7 @@ def read_by_controller(row: Row, overrides: dict) -> dict:
     which a scenario refuses at any value but the default (``control.base``, ``UNREAD``).  A run's cache name
     keeps its full overrides: dropping a key the law never read changes none of its numbers."""
     kind = row.fixed.get("controller.kind") or geojax.load_scenario(row.base).controller
-    unread = getattr(lookup(kind), "UNREAD", ())
+    unread = lookup(kind).SPEC.unread
     return {k: v for k, v in overrides.items() if k not in unread}
 
 
