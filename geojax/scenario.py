@@ -314,7 +314,8 @@ def _check_honoured(config: dict, module) -> None:
     flown, why = getattr(module, "THRUSTERS", (None, ""))
     redundant = getattr(module, "REDUNDANT_THRUSTERS", None)  # e.g. 4: two per arm, one flown per arm
     if count is not None and flown is not None and count not in (flown, redundant):
-        also = f" or {redundant} (two per arm, the planner flying one of each)" if redundant else ""
+        why_redundant = getattr(module, "REDUNDANT_WHY", "two per arm, the planner flying one of each")
+        also = f" or {redundant} ({why_redundant})" if redundant else ""
         raise ValueError(f"thrusters.count: the {kind} controller flies {flown} thruster{'s' * (flown > 1)} ({why}), "
                          f"got {count}; leave it out or set {flown}{also}")
     for key in getattr(module, "UNREAD", ()):

@@ -84,7 +84,8 @@ SIGMA_WEIGHTS = Transform("log-weights", _sigma_to_theta, _sigma_from_theta)
 # What ``geojax.scenario`` holds a scenario of this law to (``control.base``): one thrust vector of any direction,
 # flown every step; no arms, no planned burns.
 THRUSTERS = (1, "one gimbaled thruster, Katz 2025")
-REDUNDANT_THRUSTERS = 2  # or a spare beside it, flown where the first is known out (``plan``)
+REDUNDANT_THRUSTERS = 2  # or a spare beside it, flown where the first is known out (``told_plan``)
+REDUNDANT_WHY = "a spare beside it, flown where the first is known out"
 UNREAD = ARM_LIMIT_KEYS + BURN_KEYS
 
 FIELDS = {

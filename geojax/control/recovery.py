@@ -206,7 +206,7 @@ def with_recovery(controller: Controller) -> Controller:
         t0 = t - environment.index * environment.step_s
         back = thrust_of(params, plan.command, t, t0)
         count = params.thrusters.get("count")
-        if arms and own.thruster is not None:  # a planner's arms: a push south (dv along -W) from arm 0, north from arm 1
+        if arms and own.thruster is not None:  # a planner's arms: a push south (dv along -W) from arm 0, north from 1
             back = back._replace(thruster=jnp.where(back.direction_rsw[2] > 0, 1, 0))
             if plan.levels is not None:
                 back = on_working_arm(back, *allocated(plan.levels, count))
