@@ -18,7 +18,6 @@ def run(told: bool, days: float = 20.0):
         "faults.planner_told": told}), seed=3)
 
 
-
 def test_a_stuck_arm_fires_along_one_body_direction_after_the_fault():
     """Not told, the planner keeps steering arm 0 (its planned directions move from cycle to cycle), but every
     cycle that starts after the fault delivers thruster 0's Delta-V along one direction in body (= RSW) axes: the
