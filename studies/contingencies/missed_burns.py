@@ -3,6 +3,7 @@
     python studies/contingencies/missed_burns.py [--samples 100] [--days 365.25]
         [--probabilities 0,0.05,0.1,0.15,0.2,0.25,0.3] [--katz-probabilities P,...]
         [--controllers qffc,fompc,mpc,katz] [--out studies/contingencies/results]
+    python studies/contingencies/missed_burns.py --merge A/missed_burns.json B/missed_burns.json [--note TEXT]
 
 Each controller's shipped scenario (``li2022-qffc``, ``li2022-fompc``, ``li2022-mpc``: Li's arms, no errors;
 ``katz2025-discrete``: Katz's discrete law, whose "burn" is a cycle of firing) flown ``--days`` with every planned
@@ -12,7 +13,8 @@ samples that keep the box at every step, the fraction of burns lost (``burns_mis
 p), and the mean Delta-V.  The threshold is the smallest p of the grid at which fewer than 99 % of the samples keep
 the box (at 100 samples: two or more lost); with fewer than 100 samples that is the first p that loses any sample,
 so the grid brackets it from below.  The results are written after every point (a long run stopped early keeps what
-it measured).  Writes ``missed_burns.json`` and ``missed_burns.md`` into ``--out``.
+it measured), and ``--merge`` joins runs of parts of the grid (one controller, a finer grid) into one file.
+Writes ``missed_burns.json`` and ``missed_burns.md`` into ``--out``.
 """
 
 from __future__ import annotations
@@ -57,9 +59,14 @@ def main() -> None:
                         help="Katz's law's own grid (default: --probabilities); it leaves the box without faults")
     parser.add_argument("--controllers", default="qffc,fompc,mpc,katz")
     parser.add_argument("--out", type=Path, default=HERE / "results")
-    parser.add_argument("--append", action="store_true",
-                        help="keep the other controllers of --out's results (same samples and days), replace these")
+    parser.add_argument("--merge", type=Path, nargs="+", default=None,
+                        help="no run: join these results files (same samples and days; rows per controller by p) "
+                             "into --out")
+    parser.add_argument("--note", default="", help="a sentence the table carries (why a grid is partial)")
     args = parser.parse_args()
+    if args.merge:
+        write(merged([json.loads(path.read_text()) for path in args.merge], args.note), args.out)
+        return
     grid = [float(x) for x in args.probabilities.split(",")]
     args.out.mkdir(parents=True, exist_ok=True)
     command = (f"python studies/contingencies/missed_burns.py --samples {args.samples} --days {args.days:g} "
@@ -67,12 +74,6 @@ def main() -> None:
                + (f" --katz-probabilities {args.katz_probabilities}" if args.katz_probabilities else ""))
     payload = {"samples": args.samples, "days": args.days, "geojax": geojax.__version__, "controllers": {},
                "command": command}
-    if args.append and (args.out / "missed_burns.json").exists():
-        payload = json.loads((args.out / "missed_burns.json").read_text())
-        if (payload["samples"], payload["days"]) != (args.samples, args.days):
-            parser.error(f"--append: {args.out / 'missed_burns.json'} has {payload['samples']} samples and "
-                         f"{payload['days']:g} days")
-        payload["command"] = f"{payload['command']}; {command} --append"
     rows = payload["controllers"]
     for name in args.controllers.split(","):
         grid_of = [float(x) for x in args.katz_probabilities.split(",")] if name == "katz" and \
@@ -85,14 +86,41 @@ def main() -> None:
                   flush=True)
             # written after every point: a long run stopped early keeps what it measured
             (args.out / "missed_burns.json").write_text(json.dumps(payload, indent=1))
-    (args.out / "missed_burns.md").write_text(table(payload))
+    write(payload, args.out)
+
+
+def write(payload: dict, out: Path) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "missed_burns.json").write_text(json.dumps(payload, indent=1))
+    (out / "missed_burns.md").write_text(table(payload))
     print(table(payload))
+
+
+def merged(payloads: list[dict], note: str = "") -> dict:
+    """One results payload of several runs of the same samples and days: each controller's points of every run,
+    by p (a later run's point replaces an earlier one's), the runs' commands joined."""
+    first = payloads[0]
+    if any((p["samples"], p["days"]) != (first["samples"], first["days"]) for p in payloads):
+        raise SystemExit("--merge: the results files differ in samples or days")
+    rows: dict = {}
+    for payload in payloads:
+        for name, points in payload["controllers"].items():
+            rows.setdefault(name, {}).update({r["p"]: r for r in points})
+    return {**first, "controllers": {name: [at[p] for p in sorted(at)] for name, at in rows.items()},
+            "command": "; ".join(p["command"] for p in payloads), "note": note}
 
 
 def threshold(points: list[dict]) -> str:
     """The smallest p of the grid at which fewer than 99 % of the samples keep the box ("> the grid" if none)."""
     below = [r["p"] for r in points if r["kept"] < 0.99]
     return f"{min(below):g}" if below else f"> {max(r['p'] for r in points):g}"
+
+
+def held_to(points: list[dict]) -> str:
+    """The largest p of the grid below the threshold at which at least 99 % keep the box ("–" if none)."""
+    below = [r["p"] for r in points if r["kept"] < 0.99]
+    held = [r["p"] for r in points if r["kept"] >= 0.99 and (not below or r["p"] < min(below))]
+    return f"{max(held):g}" if held else "–"
 
 
 def table(payload: dict) -> str:
@@ -108,13 +136,13 @@ def table(payload: dict) -> str:
                 if payload["days"] < 365.25 else "")
              + (f" {payload['note']}" if payload.get("note") else ""), ""]
     grid = sorted({r["p"] for points in payload["controllers"].values() for r in points})
-    lines += ["| controller | " + " | ".join(f"p = {p:g}" for p in grid) + " | fewer than 99 % kept from | wall (s) |",
-              "|---|" + "---:|" * len(grid) + "---:|---:|"]
+    lines += ["| controller | " + " | ".join(f"p = {p:g}" for p in grid) + " | ≥ 99 % kept to | fewer than 99 % kept from "
+              "| wall (s) |", "|---|" + "---:|" * len(grid) + "---:|---:|---:|"]
     for name, points in payload["controllers"].items():
         at = {r["p"]: r for r in points}
         cells = [f"{at[p]['kept']:.2f} / {at[p]['lost_fraction']:.3f} / {at[p]['dv_per_year_mps_mean']:.1f} / "
                  f"{at[p]['days_out_of_box_mean']:.1f}" if p in at else "–" for p in grid]
-        lines.append(f"| {name} | " + " | ".join(cells) + f" | {threshold(points)} | "
+        lines.append(f"| {name} | " + " | ".join(cells) + f" | {held_to(points)} | {threshold(points)} | "
                      f"{sum(r['wall_s'] for r in points):.0f} |")
     return "\n".join(lines) + "\n"
 
