@@ -51,7 +51,8 @@ DESCRIPTIONS = {
     "max_abs_de": "largest |mean e vector (MEE f, g) - target| after the first cycle; dimensionless (e)",
     "max_abs_di": "largest |mean i vector (MEE h, k) - target| after the first cycle; dimensionless (tan(i/2), "
                   "so 1e-4 is 0.0115 deg of inclination)",
-    "duty_fraction": "fraction of the run's time a thruster fires (a planner's burns, eclipse suspensions left out)",
+    "duty_fraction": "fraction of the run's time a thruster fires (a planner's burns, eclipse suspensions left out; "
+                     "with [faults], as flown: missed burns and thrusters out count nothing)",
     **{f"duty_{axis}": f"fraction of the steps whose thrust has an ECEF {axis} component (Katz 2025's duty of "
                        f"per-axis thrusters; for thrust in any other direction, the firing fraction)"
        for axis in "xyz"},
@@ -62,7 +63,8 @@ DESCRIPTIONS = {
                           "burn's delta-V): the east-west control of drift and eccentricity",
     "dv_ns_per_year_mps": "cross-track (RTN N) component of the delta-V per year (a planner's burns, |N| of each "
                           "burn's delta-V): the north-south control of inclination; the three components add up to "
-                          "more than dv_per_year_mps where a burn is not along one axis",
+                          "more than dv_per_year_mps where a burn is not along one axis; with [faults], all three "
+                          "as flown (per thruster, step by step)",
     "cpu_s_per_orbit": "wall seconds per cycle of the compiled closed loop and its metrics alone (no set-up, no "
                        "compilation; with them where a result carries no run time of its own)",
     "burns_total": "burns fired in the run",

@@ -312,7 +312,7 @@ def _check_honoured(config: dict, spec) -> None:
     flown, why = spec.thrusters or (None, "")
     redundant = spec.redundant_thrusters  # e.g. 4: two per arm, one flown per arm
     if count is not None and flown is not None and count not in (flown, redundant):
-        also = f" or {redundant} (two per arm, the planner flying one of each)" if redundant else ""
+        also = f" or {redundant} ({spec.redundant_why})" if redundant else ""
         raise ValueError(f"thrusters.count: the {kind} controller flies {flown} thruster{'s' * (flown > 1)} ({why}), "
                          f"got {count}; leave it out or set {flown}{also}")
     for key in spec.unread:

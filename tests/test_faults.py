@@ -260,7 +260,9 @@ def test_a_drawn_outage_start_is_uniform_over_its_spread():
     from types import SimpleNamespace
 
     def first(scenario, key):
-        params = SimpleNamespace(states={"faults": faults.leaves(scenario.config["faults"])})
+        params = SimpleNamespace(states={"faults": faults.leaves(scenario.config["faults"])},
+                                 thrusters={f"{name}_rad": math.radians(scenario.config["thrusters"][f"{name}_deg"])
+                                            for name in ("beta_max", "beta_min", "alpha_max", "alpha_min")})
         zero = jax.numpy.zeros(3)
         start = CycleStart(jax.numpy.asarray(0), jax.numpy.asarray(0.0), zero, zero, jax.numpy.asarray(1.0), key)
         state = faults.init(params, zero, zero, None, None)

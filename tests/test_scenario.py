@@ -127,12 +127,14 @@ def test_every_controller_declares_what_it_flies_and_the_count_must_match():
 
     flown = {kind: (module.SPEC.thrusters or (None,))[0] for kind, module in REGISTRY.items()}
     assert flown == {"none": None, "qffc": 2, "fompc": 2, "mpc": 2, "mpc_momentum": 2, "lyapunov": 1, "zone_nssk": 1}
-    for name, count in [("li2022-qffc", 1), ("li2022-fompc", 3), ("katz2025-continuous", 2), ("ye2022-ex1", 2)]:
+    for name, count in [("li2022-qffc", 1), ("li2022-fompc", 3), ("katz2025-continuous", 3), ("ye2022-ex1", 2)]:
         with pytest.raises(ValueError, match=r"^thrusters\.count: the \w+ controller flies \d thrusters? \(.*\), "
-                                             rf"got {count}; leave it out or set \d( or 4 \(two per arm.*\))?$"):
+                                             rf"got {count}; leave it out or set \d"
+                                             r"( or [24] \((two per arm|a spare).*\))?$"):
             scenario.load(name, {"thrusters.count": count})
     # the arms' planners also fly two thrusters per arm (``control.burns.allocated``)
     assert scenario.load("li2022-fompc", {"thrusters.count": 4}).config["thrusters"]["count"] == 4
     assert scenario.load("katz2025-continuous", {"thrusters.count": 1}).config["thrusters"]["count"] == 1
+    assert scenario.load("katz2025-continuous", {"thrusters.count": 2}).config["thrusters"]["count"] == 2  # a spare
     # The arms' limits are the fuel bound's where the layout is the arms, whatever flies the rollout.
     scenario.load("katz2025-continuous", {"thrusters.layout": "arms", "thrusters.beta_max_deg": 50.0})

@@ -62,6 +62,7 @@ class Spec:
     # (count, why): the thrusters it flies, which ``thrusters.count`` must equal (None: not checked).
     thrusters: tuple[int, str] | None = None
     redundant_thrusters: int | None = None  # a count it also takes (e.g. 4: two per arm, the planner allocating)
+    redundant_why: str = "two per arm, the planner flying one of each"
     unread: tuple[str, ...] = ()  # keys of other tables its rollout never reads: refused at any value but the default
     tuned_fields: tuple[str, ...] = ()  # what a tuning moves when its file names no ``parameters``
     # The thruster geometry of the fuel bound when ``thrusters.layout`` is unset (``geojax.bound.directions``).

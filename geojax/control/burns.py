@@ -109,6 +109,15 @@ def allocated(levels, count):
     return jnp.arange(2) + 2 * use_redundant, jnp.where(use_redundant, redundant, primary)
 
 
+def one_thruster(levels, count):
+    """(thruster [] int, level []) a law of one thruster along any direction flies (a gimbal, Katz 2025; the
+    re-acquisition law): of the ``thrusters.count`` on board (unset: one), the one with the highest level as
+    told (``levels`` [4], ``states.faults``), the first where they tie; level 0 where none works."""
+    levels = jnp.where(jnp.arange(levels.shape[0]) < (1 if count is None else count), levels, 0.0)
+    k = jnp.argmax(levels)
+    return k, levels[k]
+
+
 def one_arm(burns, keeper, limits):
     """The pair ``burns`` [qffc.BurnPair] flown by arm ``keeper`` alone ([] int 0 or 1, the other lost): Ye 2022's
     one-node north-south keeping and the east-west keeping it can.

@@ -55,7 +55,9 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
+from geojax.control.burns import one_thruster
 from geojax.physics import thrust_laws
+from geojax.states.faults import NAME as FAULTS
 from geojax.physics.constants import OMEGA_EARTH_RAD_S
 from geojax.control.base import (ARM_LIMIT_KEYS, BURN_KEYS, SURROGATE_TEMPERATURE, Controller, Spec, no_plan,
                                  stateless_init)
@@ -84,6 +86,8 @@ SIGMA_WEIGHTS = Transform("log-weights", _sigma_to_theta, _sigma_from_theta)
 # What ``geojax.scenario`` holds a scenario of this law to (``control.base``): one thrust vector of any direction,
 # flown every step; no arms, no planned burns.
 THRUSTERS = (1, "one gimbaled thruster, Katz 2025")
+REDUNDANT_THRUSTERS = 2  # or a spare beside it, flown where the first is known out (``told_plan``)
+REDUNDANT_WHY = "a spare beside it, flown where the first is known out"
 UNREAD = ARM_LIMIT_KEYS + BURN_KEYS
 
 FIELDS = {
@@ -123,8 +127,8 @@ def validate(config: dict) -> None:
 
 
 # Katz 2025 tunes (k_h, k_e) (Sec. 3, fmincon), k_lambda and lambda_b fixed at Sec. 3.1's values.
-SPEC = Spec(FIELDS, validate, THRUSTERS, unread=UNREAD, tuned_fields=("k_h_per_km2_s", "k_e_km2_per_s3"),
-            bound_geometry="gimbal")
+SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS, redundant_why=REDUNDANT_WHY, unread=UNREAD,
+            tuned_fields=("k_h_per_km2_s", "k_e_km2_per_s3"), bound_geometry="gimbal")
 
 
 def make(tables: list[dict], smooth: bool = False) -> Controller:
@@ -148,14 +152,36 @@ def controller(mode: str, smooth: bool = False) -> Controller:
         r_ecef = rotate_z(r_eci, angle)
         u_cmd = accel(gains(c), station(params, angle), r_ecef, rotate_z(v_eci, angle))
         limits = thrust_laws.ThrustLimits(c["u0_mps2"], c.get("sigma_mps2", jnp.zeros(3)))
+        if isinstance(plan, Told):  # the thruster's level as told: the acceleration it can give, scaled by it
+            limits = thrust_laws.ThrustLimits(limits.u0_mps2 * plan.level, limits.sigma_mps2 * plan.level)
         u_ecef = deliver(u_cmd, limits, smooth, c[SURROGATE_TEMPERATURE])
         u_rsw = rsw_basis(r_eci, v_eci) @ rotate_z(u_ecef, -angle)
         u_norm = thrust_laws.safe_norm(u_rsw)
-        return Thrust(u_rsw / u_norm, u_norm * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
+        if not isinstance(plan, Told):
+            return Thrust(u_rsw / u_norm, u_norm * state.mass_kg, params.thrusters["isp_s"], jnp.asarray(1.0))
+        # commanded at 1 / level of the acceleration wanted, so that the thruster delivers it; none known working:
+        # nothing commanded
+        working = plan.level > 0
+        return Thrust(u_rsw / u_norm, u_norm * state.mass_kg / jnp.where(working, plan.level, 1.0),
+                      params.thrusters["isp_s"], jnp.where(working, 1.0, 0.0), thruster=plan.thruster)
 
     surrogate = None if smooth or mode == "continuous-clipped" else controller(mode, smooth=True)
     spec = dataclasses.replace(SPEC, bound_geometry="axes") if mode == "discrete" else SPEC  # eq. (6): per axis
-    return Controller(stateless_init, no_plan, thrust, spec, surrogate=surrogate)
+    return Controller(stateless_init, told_plan, thrust, spec, surrogate=surrogate)
+
+
+class Told(NamedTuple):
+    """What the law knows of its thrusters at a cycle start where the faults part tells it (``states.faults``)."""
+
+    thruster: jnp.ndarray  # [] int: the one it flies (``burns.one_thruster``: the best known working)
+    level: jnp.ndarray  # [] its level as told (0: none works)
+
+
+def told_plan(params, controller_state, estimate, context, key):
+    """``plan`` of the law: nothing planned (``no_plan``), or, told of the thrusters' levels, the one to fly."""
+    if FAULTS not in estimate.states:
+        return no_plan(params, controller_state, estimate, context, key)
+    return Told(*one_thruster(estimate.states[FAULTS], params.thrusters.get("count"))), controller_state
 
 
 def gains(controller: dict) -> "LyapunovGains":

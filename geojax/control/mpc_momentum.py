@@ -372,7 +372,7 @@ def validate(config: dict) -> None:
                          f"it; must be > 0, got {attitude['dump_angle_max_deg']:g}")
 
 
-SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS, UNREAD)
+SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS, unread=UNREAD)
 
 
 @functools.lru_cache(maxsize=None)

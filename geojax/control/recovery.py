@@ -47,12 +47,14 @@ import jax
 import jax.numpy as jnp
 
 from geojax.control.base import Controller, Estimate
+from geojax.control.burns import allocated, one_thruster
 from geojax.physics.constants import J2, OMEGA_EARTH_RAD_S, R_EARTH_M, SECONDS_PER_DAY
 from geojax.physics.dynamics import Thrust
 from geojax.physics.elements import wrap_angle
 from geojax.physics.trig import sincos
 from geojax.reductions import sum_over_cycles
 from geojax.params import Field
+from geojax.states.faults import NAME as FAULTS
 
 # The re-acquisition law's stated constants (see the module docstring).
 TAU_CYCLES = 4.0  # the longitude offset's time constant, cycles
@@ -81,6 +83,7 @@ class Command(NamedTuple):
 class Plan(NamedTuple):
     inner: object  # the controller's own plan
     command: Command
+    levels: jnp.ndarray | None = None  # [4] the thrusters' levels as told (``states.faults``); None: not told
 
 
 def view(estimate: Estimate, earth_angle_rad, station: dict, mu, use_mean: bool):
@@ -108,15 +111,16 @@ def along_track_dv_mps(a_m, drift_rad_s, drift_goal_rad_s):
     return -a_m * (drift_goal_rad_s - drift_rad_s) / 3.0
 
 
-def command(params, estimate: Estimate, context, recovering, use_mean: bool) -> Command:
-    """The cycle's re-acquisition command (``recovering``: whether it is flown; ``use_mean``: see ``view``)."""
+def command(params, estimate: Estimate, context, recovering, use_mean: bool, level=1.0) -> Command:
+    """The cycle's re-acquisition command (``recovering``: whether it is flown; ``use_mean``: see ``view``;
+    ``level``: the fraction of ``thrusters.thrust_n`` its thrusters deliver, as told)."""
     mu = context.force_model.mu_m3_s2
     station = params.station
     dlon, drift, a, _ = view(estimate, context.env.earth_angle_rad[0, 0], station, mu, use_mean)
     cycle_s = context.cycle_s
     drift_max = math.radians(DRIFT_MAX_DEG_DAY) / SECONDS_PER_DAY
     goal = -jnp.clip(dlon / (TAU_CYCLES * cycle_s), -drift_max, drift_max)
-    accel = params.thrusters["thrust_n"] / estimate.mass_kg
+    accel = params.thrusters["thrust_n"] * level / estimate.mass_kg
     on_t = jnp.clip(along_track_dv_mps(a, drift, goal) / (accel * cycle_s), -1.0, 1.0)
     h, k = estimate.fix_mee[3] - station["ix"], estimate.fix_mee[4] - station["iy"]
     di = 2.0 * jnp.arctan(jnp.hypot(h, k))
@@ -151,6 +155,22 @@ def thrust_of(params, c: Command, t_s, t0_s) -> Thrust:
                   jnp.minimum(size, 1.0))
 
 
+def on_working_arm(back: Thrust, flying, level) -> Thrust:
+    """The re-acquisition thrust ``back`` (its arm chosen by the side of its push, ``Thrust.thruster`` 0 or 1)
+    flown by the thruster of that arm that works (``flying`` [2], ``level`` [2]: ``burns.allocated`` as told);
+    where that arm has none, the other arm flies the along-track part alone (either arm pushes along-track: the
+    law leaves the arms' limits aside) and the push to the lost arm's side is dropped; nothing where neither
+    works."""
+    arm = back.thruster
+    lost, other = level[arm] <= 0, 1 - arm
+    along = back.on_fraction * jnp.stack([back.direction_rsw[0], back.direction_rsw[1], jnp.zeros(())])
+    size = jnp.linalg.norm(along)
+    return back._replace(
+        direction_rsw=jnp.where(lost & (size > 0), along / jnp.maximum(size, 1e-300), back.direction_rsw),
+        on_fraction=jnp.where(lost, jnp.where(level[other] > 0, size, 0.0), back.on_fraction),
+        thruster=jnp.where(lost, flying[other], flying[arm]))
+
+
 def _masked(record: dict, recovering) -> dict:
     """The controller's records with everything but ``"solved"`` zero in a recovery cycle (its burns were not
     flown)."""
@@ -163,6 +183,7 @@ def _masked(record: dict, recovering) -> dict:
 def with_recovery(controller: Controller) -> Controller:
     """``controller`` with the re-acquisition law of this module (its ``fields`` gain ``recovery``)."""
     use_mean = controller.reference_cycles > 0
+    arms = controller.bound_geometry == "arms"  # Li's two arms (QFFC, FOMPC, MPC), else one thruster
     solved_of = (lambda plan: controller.record(plan).get("solved", jnp.asarray(True))) \
         if controller.record is not None else (lambda plan: jnp.asarray(True))
 
@@ -174,14 +195,28 @@ def with_recovery(controller: Controller) -> Controller:
         inner, inner_state = controller.plan(params, inner_state, estimate, context, key)
         inside, outside = settled(params, estimate, context, use_mean)
         recovering = jnp.where(was_recovering, ~inside, outside | ~solved_of(inner))
-        return Plan(inner, command(params, estimate, context, recovering, use_mean)), (inner_state, recovering)
+        levels = estimate.states.get(FAULTS)
+        # told of the thrusters' levels: sized for the best working one (1 where none works: nothing is flown)
+        level = 1.0 if levels is None else jnp.where(jnp.max(levels) > 0, jnp.max(levels), 1.0)
+        return (Plan(inner, command(params, estimate, context, recovering, use_mean, level), levels),
+                (inner_state, recovering))
 
     def thrust(params, plan: Plan, t, state, environment):
         own = controller.thrust(params, plan.inner, t, state, environment)
         t0 = t - environment.index * environment.step_s
         back = thrust_of(params, plan.command, t, t0)
-        if own.thruster is not None:  # a planner's arms: a push south (dv along -W) from arm 0, north from arm 1
+        count = params.thrusters.get("count")
+        if arms and own.thruster is not None:  # a planner's arms: a push south (dv along -W) from arm 0, north from 1
             back = back._replace(thruster=jnp.where(back.direction_rsw[2] > 0, 1, 0))
+            if plan.levels is not None:
+                back = on_working_arm(back, *allocated(plan.levels, count))
+        elif plan.levels is not None:  # one thruster along any direction: the best working one
+            k, level = one_thruster(plan.levels, count)
+            back = back._replace(on_fraction=jnp.where(level > 0, back.on_fraction, 0.0), thruster=k)
+        elif own.thruster is not None:  # a manipulator's one thruster (zone NSSK)
+            back = back._replace(thruster=jnp.zeros_like(own.thruster))
+        if own.thruster is None and back.thruster is not None:  # one structure for the choice below: None is 0
+            own = own._replace(thruster=jnp.zeros_like(back.thruster))
         return jax.tree_util.tree_map(lambda r, o: jnp.where(plan.command.recovering, r, o), back, own)
 
     def record(plan: Plan) -> dict:

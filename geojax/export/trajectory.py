@@ -40,7 +40,8 @@ Delta-V the rocket equation over it from the mass at its start); a run without a
 list.  With the faults part (``states.faults``) the list holds every burn the plan fired, each as flown by its
 thruster: ``status`` says whether it flew as planned (``flown``), not at all (``missed``: drawn lost or its thruster
 out; duration and Delta-V 0), shorter (``cut``: an outage began within it) or at a lower thrust (``degraded``:
-``faults.thrust_scale`` below 1), and ``planned_s`` the firing time commanded beside it.  The burns as a CCSDS
+``faults.thrust_scale`` below 1), and ``planned_s`` the firing time commanded beside it; its direction is the one
+flown (a stuck arm's frozen one, ``faults.stuck_arm``).  The burns as a CCSDS
 message: ``export.maneuvers`` (the burns flown).
 """
 
@@ -310,6 +311,10 @@ def run_burns(result) -> Burns | None:
         level = np.where(flown_s > 0, scale[flying], 0.0)
         status = np.select([flown_s <= 0, flown_s < commanded_s, level != 1.0], BURN_STATUSES[1:], BURN_STATUSES[0])
         fired_s = np.where(planned, flown_s, 0.0)
+        # the direction flown (a stuck arm's frozen one: ``faults.stuck_arm``), where the burn fired
+        flown_dv = np.take_along_axis(np.asarray(faults.flown_dv_rsw, float), flying[..., None], axis=1)
+        size = np.linalg.norm(flown_dv, axis=-1, keepdims=True)
+        directions = np.where(size > 0, flown_dv / np.where(size > 0, size, 1.0), directions)
     cycle_s = steps_per_cycle(sc.step_s) * result.step_s
     cycle = np.broadcast_to(np.arange(len(fired_s))[:, None], fired_s.shape)
     order = np.lexsort((start_s.ravel(), cycle.ravel()))

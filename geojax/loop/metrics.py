@@ -42,6 +42,7 @@ from geojax.control.recovery import recovery_metrics
 from geojax.params import station_target
 from geojax.reductions import mean_over_cycles, sum_in_order, sum_over_cycles
 from geojax import states as parts
+from geojax.states.faults import NAME as FAULTS
 
 SECONDS_PER_YEAR = 365.25 * SECONDS_PER_DAY
 YEAR_CYCLES = round(SECONDS_PER_YEAR / SIDEREAL_DAY_S)  # 366 sidereal-day cycles: the cycles of a one-year run
@@ -86,7 +87,9 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int, state
     out.update(duty_metrics(cycles, n_steps_total, n_cycles * cycle_s))
     if "fired_s" in cycles.controller:
         out.update(burn_metrics(cycles.controller, n_cycles))
-        out.update(dv_components_per_year(cycles.controller, cycles.dv_mps, n_cycles * cycle_s))
+        faults = cycles.states.get(FAULTS)
+        out.update(dv_components_per_year(cycles.controller, cycles.dv_mps, n_cycles * cycle_s) if faults is None
+                   else flown_dv_components_per_year(faults, own_cycles(cycles.controller), n_cycles * cycle_s))
     if "recovering" in cycles.controller:  # control.recovery: its cycles and Delta-V apart
         out.update(recovery_metrics(cycles.controller, cycles.dv_mps))
     lon_out, lat_out = box_exits(params, cycles)
@@ -159,8 +162,14 @@ def duty_metrics(cycles, n_steps_total: int, run_s: float) -> dict:
     controller's: ``duty_x``, ``duty_y``, ``duty_z``, the fraction of the steps whose delivered acceleration has
     an ECEF x, y, z component, Katz 2025's duty cycle of per-axis thrusters (its discrete law; thrust in any other
     direction has all three components, so the three are equal, its firing fraction).  A planner's burns are
-    along RSW directions, so their per-axis counts would only repeat its firing fraction: they are not given."""
+    along RSW directions, so their per-axis counts would only repeat its firing fraction: they are not given.
+    Where the faults part rode the loop (``states.faults``): ``duty_fraction`` as flown, the firing time delivered
+    per thruster (``Faults.flown_s``), not the planned, over the controller's own cycles (``own_cycles``)."""
     if "fired_s" in cycles.controller:
+        faults = cycles.states.get(FAULTS)
+        if faults is not None:  # ``states.faults``: the firing time delivered, not the planned
+            flown_s = jnp.where(own_cycles(cycles.controller), sum_in_order(faults.flown_s), 0.0)
+            return {"duty_fraction": sum_over_cycles(flown_s) / run_s}
         return {"duty_fraction": sum_over_cycles(jnp.sum(cycles.controller["fired_s"], axis=1)) / run_s}
     duty = jnp.sum(cycles.firing_steps, axis=0) / n_steps_total
     return {"duty_x": duty[0], "duty_y": duty[1], "duty_z": duty[2]}
@@ -186,6 +195,22 @@ def dv_components_per_year(rec: dict, dv_mps, run_s: float) -> dict:
     # the weighted parts stored before they are added (``geojax.reductions``: fused, the last bit depended on
     # the lane width, 1-2 of 40 QFFC samples an ulp apart at 64 and 1024 lanes)
     return {name: sum_over_cycles(dv_mps * sum_in_order(weight * jnp.abs(d[..., axis]))) * SECONDS_PER_YEAR / run_s
+            for axis, name in enumerate(DV_COMPONENTS)}
+
+
+def own_cycles(rec: dict):
+    """[n_cycles] bool: the cycles the controller flew its own burns in (not those flown by ``control.recovery``,
+    whose Delta-V ``dv_recovery_mps`` reports apart)."""
+    return ~rec["recovering"] if "recovering" in rec else jnp.ones(rec["fired_s"].shape[0], bool)
+
+
+def flown_dv_components_per_year(faults, own, run_s: float) -> dict:
+    """``dv_components_per_year`` as flown, where the faults part rode the loop (``states.faults``): each cycle's
+    Delta-V delivered per thruster and RSW axis, summed step by step as |component| (``Faults.flown_dv_abs_rsw``
+    [n_cycles, 4, 3]: a burn missed counts 0, a degraded one its delivered thrust, a stuck arm's its frozen
+    direction), over the cycles of the controller's own burns (``own`` [n_cycles]), per 365.25 days."""
+    per_cycle = jnp.where(own[:, None], jnp.sum(faults.flown_dv_abs_rsw, axis=1), 0.0)  # [n_cycles, 3]
+    return {name: sum_over_cycles(per_cycle[:, axis]) * SECONDS_PER_YEAR / run_s
             for axis, name in enumerate(DV_COMPONENTS)}
 
 

@@ -11,7 +11,12 @@ thrust otherwise.  With ``planner_told`` (the default) the planner learns at eac
 start what telemetry shows then (``estimate.states["faults"]``: each thruster's level; ``control.burns`` plans a
 degraded thruster's burns with its delivered level and fires no burn from a thruster it knows is out); without,
 it plans as if nothing were wrong, and the closed loop shows what that costs.  A "burn" is a thruster's
-firing within one control cycle (a planner's burn; a feedback law's cycle of firing).
+firing within one control cycle (a planner's burn; a feedback law's cycle of firing).  A stuck arm
+(``stuck_arm``, over the outage's window): thruster k sits on arm k mod 2, and the arm's thrusters keep firing
+what is commanded, but along the direction (body axes = RSW: the attitude is held nadir-pointing) its joints had
+when the fault started -- the arm's last firing direction, or the middle of its limits (Li 2022 eq. (1)) where it
+had not fired.  Told, the planner treats the stuck arm as lost (its thrusters' levels 0: the other arm flies
+Ye 2022's one-node plan, ``control.burns.one_arm``); fitting the plan to the frozen direction is not done.
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ import numpy as np
 
 from geojax.params import NUMBER, Field
 from geojax.physics.constants import SECONDS_PER_DAY
+from geojax.physics.propulsion import alpha_beta_bounds, arm_limits, delta_v_direction_rsw
 from geojax.states.base import Part, StateModel
 
 NAME = "faults"
@@ -56,6 +62,10 @@ FIELDS = {
     "thrust_scale": Field((*NUMBER, list), 1.0, lower=0.0, upper=2.0, unit="",
                           doc=f"the fraction of the commanded thrust every thruster delivers (degradation: < 1), "
                               f"or a list of {TRACKED}, one per thruster"),
+    "stuck_arm": Field(int, -1, lower=-1, lower_inclusive=True, upper=2, unit="",
+                       doc="the arm (0 or 1; thruster k sits on arm k mod 2) whose joints stick at their angles when "
+                           "the fault starts, from out_from_day for out_days: its thrusters fire along the direction "
+                           "they then give; -1: none"),
     "planner_told": Field(bool, True, si="planner_told",
                           doc="the planner learns of an outage or a degradation at the first cycle start after it "
                               "(from telemetry) and plans with what is left; false: it plans as if nothing were "
@@ -71,11 +81,22 @@ class Faults(NamedTuple):
     flown_s: jnp.ndarray  # [TRACKED] firing time delivered this cycle, per thruster
     impulse_lost_s: jnp.ndarray  # [] commanded firing time x (1 - the level delivered), summed: thrust lost
     out_from_s: jnp.ndarray  # [] when the outage starts, s from the run's start (drawn at the first cycle start)
+    pointing_rsw: jnp.ndarray  # [2, 3] each arm's last firing direction (unit, RSW); a stuck arm's is frozen
+    flown_dv_rsw: jnp.ndarray  # [TRACKED, 3] Delta-V delivered this cycle per thruster, m/s, RSW (signed)
+    flown_dv_abs_rsw: jnp.ndarray  # [TRACKED, 3] the same summed per step as |component|: the per-axis budget
 
 
 def init(params, r_eci_m, v_eci_mps, env, force_model) -> Faults:
     zero = jnp.zeros(TRACKED, r_eci_m.dtype) + 0.0 * r_eci_m[0]
-    return Faults(zero > 1.0, zero, zero, zero[0], zero[0] + params.states[NAME]["out_from_s"])
+    dv = jnp.zeros((TRACKED, 3)) + zero[:, None]
+    return Faults(zero > 1.0, zero, zero, zero[0], zero[0] + params.states[NAME]["out_from_s"],
+                  rest_pointing_rsw(params.thrusters) + zero[0], dv, dv)
+
+
+def rest_pointing_rsw(thrusters):
+    """[2, 3] each arm's direction before it has fired: the middle of its limits (Li 2022 eq. (1), (14))."""
+    (alpha_lo, alpha_hi), (beta_lo, beta_hi) = alpha_beta_bounds(arm_limits(thrusters))
+    return delta_v_direction_rsw((alpha_lo + alpha_hi) / 2, (beta_lo + beta_hi) / 2)
 
 
 def cycle(params, state: Faults, start) -> Faults:
@@ -87,17 +108,28 @@ def cycle(params, state: Faults, start) -> Faults:
     drawn_s = leaves["out_from_s"] + leaves["out_spread_s"] * jax.random.uniform(
         jax.random.fold_in(start.key, OUTAGE_DRAW), (), state.planned_s.dtype)
     zero = 0.0 * state.planned_s
-    return Faults(missed, zero, zero, zero[0], jnp.where(start.index == 0, drawn_s, state.out_from_s))
+    return Faults(missed, zero, zero, zero[0], jnp.where(start.index == 0, drawn_s, state.out_from_s),
+                  state.pointing_rsw, 0.0 * state.flown_dv_rsw, 0.0 * state.flown_dv_rsw)
+
+
+def in_window(params, state: Faults, t_s):
+    """Whether ``t_s`` lies in the outage's window [] (from its start, as drawn, for ``out_days``; 0: to the end)."""
+    leaves = params.states[NAME]
+    end_s = jnp.where(leaves["out_s"] > 0, state.out_from_s + leaves["out_s"], jnp.inf)
+    return (t_s >= state.out_from_s) & (t_s < end_s)
 
 
 def health(params, state: Faults, thruster, t_s):
     """The fraction [] of its commanded thrust that ``thruster`` can deliver at ``t_s``: 0 while it is out, else
     its ``thrust_scale`` (what telemetry shows; a burn drawn missed is not known ahead)."""
     leaves = params.states[NAME]
-    start_s = state.out_from_s
-    end_s = jnp.where(leaves["out_s"] > 0, start_s + leaves["out_s"], jnp.inf)
-    out = (leaves["out_mask"][thruster] > 0) & (t_s >= start_s) & (t_s < end_s)
+    out = (leaves["out_mask"][thruster] > 0) & in_window(params, state, t_s)
     return jnp.where(out, 0.0, leaves["thrust_scale"][thruster])
+
+
+def stuck(params, state: Faults, thruster, t_s):
+    """Whether ``thruster``'s arm (``thruster`` mod 2) is stuck at ``t_s`` []."""
+    return (params.states[NAME]["stuck_mask"][thruster % 2] > 0) & in_window(params, state, t_s)
 
 
 def delivered_level(params, state: Faults, thruster, t_s):
@@ -107,24 +139,37 @@ def delivered_level(params, state: Faults, thruster, t_s):
 
 def estimate(params, state: Faults, told):
     """What the planner is told at a cycle start (``estimate.states["faults"]``): each thruster's level [TRACKED]
-    as telemetry shows it then (``health``), or 1 for every thruster where ``planner_told`` is false."""
-    levels = jnp.stack([health(params, state, k, told.t_s) for k in range(TRACKED)])
+    as telemetry shows it then (``health``; 0 on a stuck arm: the planner treats it as lost), or 1 for every
+    thruster where ``planner_told`` is false."""
+    levels = jnp.stack([jnp.where(stuck(params, state, k, told.t_s), 0.0, health(params, state, k, told.t_s))
+                        for k in range(TRACKED)])
     known = jnp.where(params.states[NAME]["planner_told"] > 0, levels, 1.0)
     return told._replace(states={**told.states, NAME: known})
 
 
 def thrust(params, state: Faults, commanded, ctx):
-    """The thrust delivered over one step, and the commanded and delivered firing noted per thruster."""
+    """The thrust delivered over one step (a stuck arm's along its frozen direction), and the commanded and
+    delivered firing and the Delta-V delivered noted per thruster."""
     k = jnp.asarray(0) if commanded.thruster is None else commanded.thruster
     level = delivered_level(params, state, k, ctx.t_s)
     commanded_s = commanded.on_fraction * ctx.step_s
     flown_fraction = jnp.where(level > 0, commanded.on_fraction, 0.0)
     one_hot = jnp.arange(TRACKED) == k
+    frozen = stuck(params, state, k, ctx.t_s)
+    arm = (jnp.arange(2) == k % 2)[:, None]
+    direction = jnp.where(frozen, state.pointing_rsw[k % 2], commanded.direction_rsw)
+    # a free arm's joints follow what it fires (a time-shared direction of norm < 1 is not a pointing)
+    moved = arm & ~frozen & (commanded.on_fraction > 0) & (jnp.linalg.norm(commanded.direction_rsw) > 0.5)
+    pointing = jnp.where(moved, commanded.direction_rsw / jnp.maximum(jnp.linalg.norm(commanded.direction_rsw),
+                                                                       1e-300), state.pointing_rsw)
+    thrust_n = commanded.thrust_n * jnp.where(level > 0, level, 1.0)
+    dv_rsw = (flown_fraction * ctx.step_s * thrust_n / ctx.mass_kg) * direction
     state = Faults(state.missed, state.planned_s + jnp.where(one_hot, commanded_s, 0.0),
                    state.flown_s + jnp.where(one_hot, flown_fraction * ctx.step_s, 0.0),
-                   state.impulse_lost_s + commanded_s * (1.0 - level), state.out_from_s)
-    return state, commanded._replace(on_fraction=flown_fraction, thrust_n=commanded.thrust_n * jnp.where(
-        level > 0, level, 1.0))
+                   state.impulse_lost_s + commanded_s * (1.0 - level), state.out_from_s, pointing,
+                   state.flown_dv_rsw + jnp.where(one_hot[:, None], dv_rsw, 0.0),
+                   state.flown_dv_abs_rsw + jnp.where(one_hot[:, None], jnp.abs(dv_rsw), 0.0))
+    return state, commanded._replace(on_fraction=flown_fraction, thrust_n=thrust_n, direction_rsw=direction)
 
 
 def step(params, state: Faults, ctx):
@@ -155,9 +200,11 @@ def metrics(params, cycles: Faults, n_steps_total: int, run_s: float):
 
 
 def fault_start_s(params, cycles: Faults):
-    """When the faults start [] s from the run's start: the outage's start (as drawn) where a thruster is out,
-    else the run's start (a burn may be lost or thrust degraded from the first cycle)."""
-    return jnp.where(jnp.any(params.states[NAME]["out_mask"] > 0), cycles.out_from_s[0], 0.0)
+    """When the faults start [] s from the run's start: the outage's start (as drawn) where a thruster is out or
+    an arm stuck, else the run's start (a burn may be lost or thrust degraded from the first cycle)."""
+    leaves = params.states[NAME]
+    windowed = jnp.any(leaves["out_mask"] > 0) | jnp.any(leaves["stuck_mask"] > 0)
+    return jnp.where(windowed, cycles.out_from_s[0], 0.0)
 
 
 def box_metrics(params, cycles: Faults, out_of_box, cycle_s: float):
@@ -206,6 +253,11 @@ def validate(config: dict) -> dict:
         if count is not None and k >= count:
             raise ValueError(f"faults.thruster_out: thruster {k} is not on board (thrusters.count = {count}, "
                              f"indices from 0)")
+    arm = table["stuck_arm"]
+    if arm == 1 and (count or 2) < 2:  # thruster k on arm k mod 2: arm 1 needs two thrusters on board
+        raise ValueError(f"faults.stuck_arm: arm 1 is not on board (thrusters.count = {count}: arm 0 only)")
+    if arm == 1 and count is None:
+        raise ValueError("faults.stuck_arm: arm 1 needs thrusters.count set (the thrusters on board), got it unset")
     scale = table["thrust_scale"]
     if isinstance(scale, list) and (len(scale) != TRACKED or not all(
             isinstance(x, NUMBER) and not isinstance(x, bool) and 0.0 < x < 2.0 for x in scale)):
@@ -229,8 +281,12 @@ def leaves(table: dict) -> dict:
     ([TRACKED] each), so that every sample of a sweep has leaves of one shape."""
     mask = np.zeros(TRACKED)
     mask[thrusters_out(table["thruster_out"])] = 1.0
+    stuck_mask = np.zeros(2)
+    if table["stuck_arm"] >= 0:
+        stuck_mask[table["stuck_arm"]] = 1.0
     return {"missed_burn_probability": jnp.asarray(float(table["missed_burn_probability"])),
             "out_mask": jnp.asarray(mask),
+            "stuck_mask": jnp.asarray(stuck_mask),
             "out_from_s": jnp.asarray(float(table["out_from_day"]) * SECONDS_PER_DAY),
             "out_spread_s": jnp.asarray(float(table["out_from_spread_days"]) * SECONDS_PER_DAY),
             "out_s": jnp.asarray(float(table["out_days"]) * SECONDS_PER_DAY),
