@@ -90,6 +90,7 @@ def test_the_shift_is_the_least_that_clears_every_pass():
     assert float(shift) == 0.0
 
 
+@pytest.mark.slow
 def test_the_moved_pair_corrects_the_inclination_along_its_line():
     """Closed form: two burns on the line through l_2 + Delta change the inclination vector only along that line;
     with |V_N| = cos(Delta) 2 V_s |di| (``model_cycle``'s choice) eq. (29) holds for the in-plane rows (the drift row

@@ -166,6 +166,7 @@ def _predict(model, u):
     return np.array(out), dx
 
 
+@pytest.mark.slow
 def test_the_linear_model_over_one_cycle_against_the_nonlinear_propagation():
     # Stated: over one sidereal day, burns of 0.05 m/s (north and east, two slots) are predicted by the model
     # about the uncontrolled run to within 1e-8 rad (0.4 m at GEO) in longitude and latitude; the error is

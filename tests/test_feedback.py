@@ -72,6 +72,7 @@ def test_paper_discrete_gains_never_fire_the_x_axis():
     assert float(m["duty_z"]) > 0.1
 
 
+@pytest.mark.slow
 def test_gradient_of_delta_v_matches_central_differences():
     """Independent check: jax.grad of the 10-day Delta-V with respect to log k_h and log k_e (continuous
     clipped law, full force model) against central finite differences, 1e-4 relative."""

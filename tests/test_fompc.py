@@ -78,6 +78,7 @@ def test_fompc_cost_is_never_above_the_qffc(windows):
     assert bool(jnp.all(plans.burns.feasible))
 
 
+@pytest.mark.slow
 def test_cycles_beyond_the_horizon_are_masked(windows):
     x0 = start_states(1, seed=2)[0]
     w = jnp.asarray(np.random.default_rng(3).uniform(0.2, 1.5, ANNEALING.n_max))
@@ -98,6 +99,7 @@ def test_inclination_penalty_is_eq42(windows):
     assert lazy - free > 6 * 0.5 * 1e8 * (1e-4) ** 2 * 0.5  # six cycles, each at least ~1e-4 off
 
 
+@pytest.mark.slow
 def test_same_key_same_plan_other_key_other_search(windows):
     x0 = start_states(1, seed=4).repeat(16, 0)
     keys = jnp.concatenate([jnp.stack([jax.random.key(7)] * 8), jnp.stack([jax.random.key(8)] * 8)])
@@ -115,6 +117,7 @@ def test_warm_start_repeats_the_last_planned_cycle_whatever_the_padding():
     np.testing.assert_array_equal(fompc.shifted(w, 1), jnp.full(7, 0.5))
 
 
+@pytest.mark.slow
 def test_dv_exponent_one_scores_the_fuel_of_each_cycle(windows):
     """With ``dv_exponent`` = 1 and no penalty, J is half the sum over the horizon of V_1k + V_2k, the burns
     the QFFC model plans cycle by cycle (``qffc.model_cycle``, the model J is built on): a second,

@@ -138,8 +138,10 @@ def test_a_sweep_runs_on_as_few_devices_as_its_samples_fill():
         assert len(used) * lanes_per_device >= min(samples, len(local) * lanes_per_device)
 
 
-@pytest.mark.parametrize("name, changes", [("li2022-momentum", {}), ("li2022-qffc-ranging", {}),
-                                           ("li2022-qffc-ranging", {"navigation.estimate_biases": True})])
+@pytest.mark.parametrize("name, changes", [pytest.param("li2022-momentum", {}, marks=pytest.mark.slow),
+                                           ("li2022-qffc-ranging", {}),
+                                           pytest.param("li2022-qffc-ranging", {"navigation.estimate_biases": True},
+                                                        marks=pytest.mark.slow)])
 def test_the_record_bytes_are_those_a_run_returns(name, changes):
     """Second method: the memory model's bytes per cycle (``record_bytes_per_cycle``, ``jax.eval_shape`` over a
     ``Batch`` of shapes, nothing computed) against the records one sample's run returns (its arrays' bytes, two
@@ -166,7 +168,8 @@ def test_the_record_bytes_are_those_a_run_returns(name, changes):
 
 
 @pytest.mark.parametrize("name, overrides, n, days", [
-    ("li2022-qffc", {"errors.h_rv": 1.0, "errors.h_att": 1.0}, 40, 10),  # 1-2 of 40 an ulp apart before
+    pytest.param("li2022-qffc", {"errors.h_rv": 1.0, "errors.h_att": 1.0}, 40, 10,  # 1-2 of 40 an ulp apart before
+                 marks=pytest.mark.slow),  # the slow tier: the default tier's second longest test
     pytest.param("li2022-qffc-ranging", {}, 24, 6, marks=pytest.mark.slow),  # the filter's RMS and NEES: 5-12 of
     # 24 an ulp apart before (the slow tier: 112 s of the default tier's longest worker)
 ])

@@ -120,6 +120,7 @@ def test_planning_program_matches_highs(planning):
     assert float(solution.objective) == pytest.approx(highs(c, a, lower, upper, penalty), rel=1e-4)
 
 
+@pytest.mark.slow
 def test_rows_follow_the_qffc_burn_effect_and_the_drift(planning):
     """Independent model check: one cycle's burns change the first boundary's state by B_1 v_1 + B_2 v_2 as
     ``qffc.effect`` computes it (eq. (29)), and each later boundary adds the new drift times the cycle to the

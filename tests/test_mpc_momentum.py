@@ -37,6 +37,7 @@ def _program(planning, shape, g0, d):
     return model, momentum, leaves
 
 
+@pytest.mark.slow
 def test_program_matches_highs_and_its_dense_matrix(planning):
     """Second method: HiGHS on the program's explicit matrix.  The structured operator against that matrix: its
     transpose (adjoint identity) and its normal-matrix solve (the Riccati recursion with the between-burn rows'

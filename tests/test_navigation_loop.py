@@ -110,6 +110,7 @@ def test_error_state_prediction_is_the_direct_prediction():
     assert np.max(np.abs(np.asarray(got - direct)[3:])) < 5e-6
 
 
+@pytest.mark.slow
 def test_filter_in_the_loop_reaches_the_cramer_rao_bound():
     """Independent method: an uncontrolled satellite under point-mass gravity, ranged by
     li2022-qffc-ranging's two stations at every step end for three days (continuous passes, 5 m), no execution

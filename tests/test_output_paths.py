@@ -109,6 +109,7 @@ def test_force_replaces_and_figures_are_redrawn_in_place(tmp_path, capsys):
     assert (figures / "li2022-uncontrolled.png").stat().st_mtime_ns > before  # the same figure, redrawn
 
 
+@pytest.mark.slow
 def test_a_sweep_with_force_starts_afresh_and_force_with_resume_is_refused(tmp_path, capsys):
     spec = tmp_path / "s.toml"
     spec.write_text(SWEEP)

@@ -47,6 +47,7 @@ def test_off_in_the_papers_on_in_the_starting_point():
         controller_of([scenario.load("li2022-qffc"), scenario.load("li2022-qffc", {"controller.recovery": True})])
 
 
+@pytest.mark.slow
 def test_an_idle_recovery_changes_no_number():
     """A nominal run never leaves its box: recovery never flies, and every metric is the QFFC's, bit for bit, in
     the programs a sweep runs (two samples, XLA's defaults).  A single sample's programs are compiled for start-up
