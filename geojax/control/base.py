@@ -27,7 +27,11 @@ boundaries from the cycle's start on; ``record(plan) -> {name: array}`` adds
 per-cycle records (a ``"solved"`` bool counts cycles without a solution, the
 burn records of ``control.burns`` feed the burn metrics); ``surrogate`` is a
 smooth stand-in used for derivatives (``geojax.tune``): its sharpness, where it has one, is the leaf
-``params.controller[SURROGATE_TEMPERATURE]``, which the tuner anneals (the exact law ignores it).
+``params.controller[SURROGATE_TEMPERATURE]``, which the tuner anneals (the exact law ignores it);
+``plan_cluster(params, controller_state, estimate, context, key, min_separation_m) -> (plan,
+controller_state)`` plans a cluster's satellites together, once per cycle (every argument with a leading
+satellite axis but the separation to keep, m []): a cluster's loop (``loop.cluster``) calls it in place of
+each satellite's ``plan`` when ``[collocation] coordinated`` asks (the coordinated MPC, ``control.mpc_cluster``).
 
 What a tuning may move is declared here too: a field with a ``transform`` is tunable (named by its key,
 ``"controller.k_h_per_km2_s"``, or its ``alias``, ``"k_h"``), and its ``unit`` labels the figures.  The
@@ -124,6 +128,8 @@ class Controller:
     # The thruster geometry of the fuel bound when the scenario's ``thrusters.layout`` is unset
     # (``geojax.bound.directions.GEOMETRIES``): Li's two robotic arms, or a gimbal that points anywhere.
     bound_geometry: str = "arms"
+    # The plan of a whole cluster at once (the module's docstring), or None: each satellite plans alone.
+    plan_cluster: Callable | None = None
 
 
 def keeps_steps(controller: Controller) -> bool:
