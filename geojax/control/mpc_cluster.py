@@ -9,10 +9,11 @@ Riccati recursion then couples them), and adds for every pair (i, j), every boun
     n(L) . (r_i - r_j)(L) >= d_min,   r_i - r_j = a M(L) (x_i - x_j)  (``physics.relative.linear_relative_rtn``),
 
 with n(L) the unit vector of the relative position that the satellites' free drift (the program's own zero:
-each satellite's predicted mean elements without burns) gives at L.  By Cauchy-Schwarz each row implies
+each satellite's predicted mean elements without burns) gives at L, and M(L) carrying beside the e/i terms the
+drift's: the along-track a d(lambda_dot) tau (tau: the time from the boundary to L) and the radial
+-2/3 a d(lambda_dot) / omega of the semi-major axis that goes with it.  By Cauchy-Schwarz each row implies
 |r_i - r_j|(L) >= d_min in the linearised relative motion, whatever the burns turn the relative position to,
-so the rows are a convex inner approximation of the separation; they leave out the drift's radial term
-(-2/3 a d(lambda_dot) / omega) and the longitude's change within the day.  Rows are soft with the MPC's
+so the rows are a convex inner approximation of the separation.  Rows are soft with the MPC's
 exact penalty (``penalty_mps`` per d_min violated), so the program stays feasible; ``min_separation_m`` = 0
 leaves them out, and the program is then the satellites' own programs together (the same plans to the
 solver's tolerance).
@@ -32,6 +33,7 @@ from geojax.control import lp, mpc
 from geojax.control.base import Controller
 from geojax.control.effects import R_SYNC_M
 from geojax.params import station_target
+from geojax.physics.constants import OMEGA_EARTH_RAD_S
 from geojax.physics.elements import wrap_angle
 from geojax.physics.propulsion import arm_limits
 from geojax.physics.relative import linear_relative_rtn
@@ -47,25 +49,32 @@ class Coordinated(NamedTuple):
     separation_m: jnp.ndarray  # []
 
 
-def relative_rtn_matrix(angles_rad):
-    """[K, 6, 3] d(relative RTN position, m) / d(relative mean elements (lon, drift, e_x, e_y, i_x, i_y)) at the
-    sidereal angles ``angles_rad`` [K] (``linear_relative_rtn``, linear in the differences)."""
+def relative_rtn_matrix(angles_rad, tau_s):
+    """[K, 6, 3] d(relative RTN position, m) / d(relative mean elements (lon, drift, e_x, e_y, i_x, i_y) at a
+    boundary) at the sidereal angles ``angles_rad`` [K], ``tau_s`` [K] after the boundary: the e/i terms of
+    ``linear_relative_rtn`` (linear in the differences) and the drift's, along-track a tau and radial
+    -2/3 a / omega (the semi-major axis of the drift, lambda_dot = -3/2 omega da / a)."""
     basis = jnp.eye(6)
-    return jax.vmap(lambda angle: linear_relative_rtn(R_SYNC_M, basis[:, 0], basis[:, 2], basis[:, 3],
-                                                      basis[:, 4], basis[:, 5], angle))(angles_rad)
+    m = jax.vmap(lambda angle: linear_relative_rtn(R_SYNC_M, basis[:, 0], basis[:, 2], basis[:, 3],
+                                                   basis[:, 4], basis[:, 5], angle))(angles_rad)
+    drift = jnp.stack([jnp.full_like(tau_s, -2 / 3 * R_SYNC_M / OMEGA_EARTH_RAD_S), R_SYNC_M * tau_s,
+                       jnp.zeros_like(tau_s)], -1)
+    return m.at[:, 1].set(drift)
 
 
-def separation_rows(free, horizon, min_separation_m, n_max: int):
+def separation_rows(free, horizon, min_separation_m, n_max: int, l_start_rad=0.0):
     """The pairs' half-space rows: (rows [n_max, P K, 6 S] on the stacked change of the mean elements at
     boundaries 1..n_max, lower [n_max, P K] (upper: none), the free drift's relative positions [P, n_max, K, 3]
     m at the ``ANGLES`` angles and their matrix [K, 6, 3] (``relative_rtn_matrix``)), from every satellite's
-    free drift ``free`` [S, n_max + 1, 6] (absolute mean elements) and horizon [S]; scaled to d_min (1 m where
-    it is 0)."""
+    free drift ``free`` [S, n_max + 1, 6] (absolute mean elements), horizon [S] and the sidereal angle at the
+    boundaries ``l_start_rad`` (the cycle's start: cycles are sidereal days); scaled to d_min (1 m where it is
+    0)."""
     n_sat = free.shape[0]
     index_i, index_j = (jnp.array(side) for side in zip(*itertools.combinations(range(n_sat), 2)))
     relative = free[index_i, 1:] - free[index_j, 1:]  # [P, n_max, 6]
     relative = relative.at[..., 0].set(wrap_angle(relative[..., 0]))
-    m = relative_rtn_matrix(2 * jnp.pi * jnp.arange(ANGLES) / ANGLES)  # [K, 6, 3]
+    angles = 2 * jnp.pi * jnp.arange(ANGLES) / ANGLES
+    m = relative_rtn_matrix(angles, jnp.mod(angles - l_start_rad, 2 * jnp.pi) / OMEGA_EARTH_RAD_S)  # [K, 6, 3]
     r = jnp.einsum("pjc,kcr->pjkr", relative, m)
     distance = jnp.linalg.norm(r, axis=-1)  # [P, n_max, K]
     unit = r / jnp.where(distance > 0, distance, 1.0)[..., None]
@@ -128,7 +137,7 @@ def plan_cluster(params, estimate, context, min_separation_m, shape: mpc.Shape):
     free = jax.vmap(mpc.natural_deviations)(estimate.mean, target, context.reference, context.cycle_s) \
         + target[:, None]
     horizon = jnp.clip(params.controller["horizon"], 1, shape.n_max)
-    rows, lower, r, m = separation_rows(free, horizon, min_separation_m, shape.n_max)
+    rows, lower, r, m = separation_rows(free, horizon, min_separation_m, shape.n_max, estimate.fix_mee[0, 5])
     n_sat, (n_pairs, n_max) = free.shape[0], r.shape[:2]
     index_i, index_j = (jnp.array(side) for side in zip(*itertools.combinations(range(n_sat), 2)))
     penalty = jnp.maximum(params.controller["penalty_mps"][index_i], params.controller["penalty_mps"][index_j])
