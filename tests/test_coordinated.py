@@ -88,4 +88,4 @@ def test_the_coordinated_program_without_a_separation_plans_as_each_satellite_al
     cluster = np.asarray(zero.controller["planned_fuel_mps"])  # the cluster's, every satellite's the same
     assert np.allclose(cluster, own.sum(axis=0), rtol=1e-5)
     assert np.allclose(np.asarray(zero.dv_mps), np.asarray(alone.dv_mps), rtol=1e-4, atol=1e-6)
-    assert np.all(np.asarray(zero.dv_mps) > 0)
+    assert np.any(np.asarray(zero.dv_mps) > 0)  # a cycle with burns to compare
