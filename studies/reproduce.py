@@ -57,7 +57,7 @@ STUDIES = {
                     ("collocation/cluster_year.py", ["--navigation", "ranging"]),
                     ("collocation/cluster_year.py", ["--controller", "fompc", "--clusters", "16"]),
                     ("collocation/cluster_year.py", ["--controller", "mpc", "--clusters", "16"]),
-                    ("collocation/coordinated.py", [])],
+                    ("collocation/coordinated.py", []), ("collocation/qffc_dip.py", [])],
 }
 
 

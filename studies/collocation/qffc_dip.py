@@ -77,7 +77,7 @@ def main() -> None:
         for pair in ("A_B", "C_D", "A_D"):
             t = runs[label]["pairs"][pair]
             lines += ["", f"{label}, pair {pair}, per cycle (day = cycle start):", "",
-                      "| day | least separation (km) | a·|δe| (km) | 2a·|δi| (km) | angle δe to δi (deg) | "
+                      "| day | least separation (km) | a·‖δe‖ (km) | 2a·‖δi‖ (km) | angle δe to δi (deg) | "
                       "a·δλ (km) |",
                       "|---:|---:|---:|---:|---:|---:|"]
             lines += [f"| {c} | {t['separation_km'][c]:.3f} | {t['a_de_km'][c]:.3f} | {t['two_a_di_km'][c]:.3f} | "
