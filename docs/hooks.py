@@ -116,11 +116,14 @@ HEADER = ["| key | type | default | allowed | Params leaf (SI) | tunable |", "|-
 
 
 def scenario_keys() -> str:
+    from geojax import scenario_cluster
     from geojax.scenario import SCHEMA  # the loop's tables, then each registered part's
 
     out = []
     for table, fields in SCHEMA.items():
         out += [f"### `[{table}]`" if table else "### Top level", "", *HEADER, *_field_rows(table, fields), ""]
+    out += ["### `[collocation]` (a cluster's, with `[[satellites]]`: docs/collocation.md)", "", *HEADER,
+            *_field_rows("collocation", scenario_cluster.FIELDS), ""]
     return "\n".join(out)
 
 

@@ -269,6 +269,7 @@ def _cluster(raw: dict, controller=None) -> Scenario:
             flown.append(from_dict({**with_overrides(raw, overrides), "name": name}, controller))
         except ValueError as err:
             raise scenario_cluster.with_satellite_prefix(i, name, err) from None
+    scenario_cluster.check_coordinated(table, base.config["controller"]["kind"])
     config = {**base.config, "satellites": [dict(s) for s in satellites], "collocation": table}
     return dataclasses.replace(base, config=config, satellites=tuple(flown))
 

@@ -16,7 +16,14 @@ from geojax.params import NUMBER, Field, check_table
 FIELDS = {
     "alert_km": Field(NUMBER, 2.0, lower=0.0,
                       doc="the distance below which a pair's time counts as an alert (below_alert_h), km"),
+    "coordinated": Field(bool, False, doc="plan the cluster's satellites in one program that keeps them "
+                                          "min_separation_km apart (the MPC only: control.mpc_cluster)"),
+    "min_separation_km": Field(NUMBER, 0.0, lower=0.0, lower_inclusive=True,
+                               doc="the least distance a coordinated plan keeps between every pair over its "
+                                   "horizon (linearised relative motion), km; 0: none"),
 }
+# The controllers that plan a cluster as one program (``collocation.coordinated``).
+COORDINATED_KINDS = ("mpc",)
 
 # Tables whose keys every satellite of a cluster shares: one grid, one environment, one duration.
 SHARED_TABLES = ("epoch", "integration", "duration", "forces")
@@ -51,7 +58,19 @@ def member_overrides(satellites, collocation) -> tuple[list[tuple[str, dict]], d
                 raise ValueError(f"satellites[{i}].{key}: not a scenario key; give TABLE.KEY, quoted (e.g. "
                                  f"\"station.ex\" = 2.0e-4)")
         members.append((name, overrides))
-    return members, check_table("collocation.", collocation or {}, FIELDS)
+    table = check_table("collocation.", collocation or {}, FIELDS)
+    if "min_separation_km" in (collocation or {}) and not table["coordinated"]:
+        raise ValueError("collocation.min_separation_km: only a coordinated cluster keeps it; set "
+                         "collocation.coordinated = true (the MPC)")
+    return members, table
+
+
+def check_coordinated(table: dict, kind: str) -> None:
+    """``ValueError`` naming ``collocation.coordinated`` where it asks a controller that plans each satellite
+    alone."""
+    if table["coordinated"] and kind not in COORDINATED_KINDS:
+        raise ValueError(f"collocation.coordinated: only {', '.join(COORDINATED_KINDS)} plans a cluster as one "
+                         f"program; controller.kind is {kind!r}")
 
 
 def sets_cluster(raw: dict, dotted: str, value) -> bool:

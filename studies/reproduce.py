@@ -54,7 +54,10 @@ STUDIES = {
     "contingencies": [("contingencies/arm_lost.py", []), ("contingencies/missed_burns.py", []),
                       ("contingencies/degradation.py", []), ("contingencies/tables.py", [])],
     "collocation": [("collocation/relative_motion.py", []), ("collocation/cluster_year.py", []),
-                    ("collocation/cluster_year.py", ["--navigation", "ranging"])],
+                    ("collocation/cluster_year.py", ["--navigation", "ranging"]),
+                    ("collocation/cluster_year.py", ["--controller", "fompc", "--clusters", "16"]),
+                    ("collocation/cluster_year.py", ["--controller", "mpc", "--clusters", "16"]),
+                    ("collocation/coordinated.py", []), ("collocation/qffc_dip.py", [])],
 }
 
 

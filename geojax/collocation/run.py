@@ -16,6 +16,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from geojax.control import mpc, mpc_cluster
+from geojax.control.base import Controller
 from geojax.export import recorder
 from geojax.loop.cluster import SeparationRecord, pairs, separation_metrics, simulate_cluster as cluster_loop
 from geojax.loop.metrics import STATUS_TEXT, cycle_table, summarize
@@ -148,20 +150,33 @@ def _drifting(sc: Scenario) -> Scenario:
     return from_dict({**table, "controller": {"kind": "none"}})
 
 
+def coordinated(scenarios) -> Controller | None:
+    """The controller of clusters (``scenarios``) whose ``[collocation]`` asks for one program for all their
+    satellites (``coordinated``: the MPC's, ``control.mpc_cluster``); None where each satellite plans alone."""
+    asked = {sc.config["collocation"]["coordinated"] for sc in scenarios}
+    if len(asked) > 1:
+        raise ValueError("collocation.coordinated: sets the compiled program; one value per sweep")
+    if not asked.pop():
+        return None
+    return mpc_cluster.coordinated_controller(mpc.shape_of([m.config["controller"] for sc in scenarios
+                                                            for m in sc.satellites]))
+
+
 @functools.partial(jax.jit, static_argnames=("controller", "step_s", "dynamics", "keep_steps", "states",
                                              "steps_per_cycle", "ephemeris"))
-def cluster_rollout(params, keys, shared, reference_env, alert_m, *, controller, step_s, dynamics, keep_steps,
-                    states, steps_per_cycle, ephemeris: bool = False):
+def cluster_rollout(params, keys, shared, reference_env, alert_m, min_separation_m=None, *, controller, step_s,
+                    dynamics, keep_steps, states, steps_per_cycle, ephemeris: bool = False):
     """One cluster's closed loop, its satellites' metrics and its separations: (final, records, separation,
     satellite metrics, cluster metrics), and with ``ephemeris`` every satellite's ``export.recorder.Ephemeris``;
-    pure, vmappable over clusters."""
+    ``min_separation_m`` [] what a coordinated plan keeps (``loop.cluster``).  Pure, vmappable over clusters."""
     if ephemeris:
         states = recorder.with_recording(states)
     if reference_env is not None:  # each satellite its own uncontrolled reference (their targets differ)
         own = jax.vmap(lambda p: reference(p, reference_env, step_s, dynamics, controller.reference_cycles))(params)
         shared = shared._replace(reference=own)
     final, records, separation = cluster_loop(controller, params, shared, keys, step_s=step_s, alert_m=alert_m,
-                                              dynamics=dynamics, keep_steps=keep_steps, states=states)
+                                              dynamics=dynamics, keep_steps=keep_steps, states=states,
+                                              min_separation_m=min_separation_m)
     kept = None
     if ephemeris:
         records, kept = recorder.split(records)
@@ -181,12 +196,13 @@ def simulate_cluster(sc: Scenario, seed: int = 0, keep_steps: bool = False, unco
         raise ValueError(f"{sc.name}: not a cluster; give [[satellites]] tables (docs/collocation.md)")
     start = time.perf_counter()
     members = [_drifting(m) if uncontrolled else m for m in sc.satellites]
-    batch = prepare(members)
+    batch = prepare(members, None if uncontrolled else coordinated([sc]))
     names = tuple(member.name for member in sc.satellites)
     alert_km = float(sc.config["collocation"]["alert_km"])
     steps_per_cycle = batch.shared.env.earth_angle_rad.shape[1]
     args = (batch.params, satellite_keys(seed, names), batch.shared,
-            batch.reference_env if batch.reference_per_sample else None, jnp.asarray(alert_km * 1e3))
+            batch.reference_env if batch.reference_per_sample else None, jnp.asarray(alert_km * 1e3),
+            jnp.asarray(sc.config["collocation"]["min_separation_km"] * 1e3))
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, len(names)),
                   keep_steps=keep_steps, states=batch.states, steps_per_cycle=steps_per_cycle, ephemeris=ephemeris)
     # compiled as a single run's program is (its compilation is the wait: ``runner.rollout.compiler_options``)

@@ -104,6 +104,11 @@ class Controller:
     record: Callable | None = None
     surrogate: Any = None  # a Controller, or None: the controller is its own surrogate
     sizing: Sizing = Sizing()
+    # The plan of a whole cluster at once, or None: each satellite plans alone.  ``plan_cluster(params,
+    # controller_state, estimate, context, key, min_separation_m) -> (plan, controller_state)``, every argument with
+    # a leading satellite axis but the separation to keep (m, []): a cluster's loop (``loop.cluster``) calls it in
+    # place of each satellite's ``plan`` where ``[collocation] coordinated`` asks (``control.mpc_cluster``).
+    plan_cluster: Callable | None = None
 
     @property
     def fields(self) -> Mapping[str, Any]:

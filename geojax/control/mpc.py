@@ -189,19 +189,28 @@ def operator(model: Model, shape: Shape) -> lp.Operator:
     (the bounds' and the capacities' rows) and Q per boundary (rows' diag(rho) rows, 6 x 6), is the Hessian
     of a linear-quadratic problem over the horizon (x_{j+1} = Phi x_j + E w_j, x_0 = 0): ``riccati`` solves it
     with one 2G x 2G Cholesky per cycle, stably whatever the spread of the interior-point weights (a
-    Woodbury solve through an 8N x 8N matrix was measured to lose all accuracy once they span 1e8).
+    Woodbury solve through an 8N x 8N matrix was measured to lose all accuracy once they span 1e8).  A
+    cluster's program (``mpc_cluster``) is the same on its satellites' states and burns side by side.
     """
     n_max, g = shape.n_max, shape.generators
-    n, r = n_max * 2 * g, shape.rows_per_boundary
+    size, width = model.effect.shape[-2:]  # the state and one cycle's decisions: 6 and 2G, or a cluster's stacked
+    burns, r = width // g, model.rows.shape[-2]
+    n = n_max * width
     phi = transition(model.cycle_s)
+    if size > 6:  # a cluster's satellites side by side (``mpc_cluster``)
+        phi = jnp.kron(jnp.eye(size // 6), phi)
     effect = model.mask[:, None, None] * model.effect  # [n_max, 6, 2G]: no burns beyond the horizon
+    # each burn's capacity: one for every burn (a satellite's), or [burns] of each cycle (a cluster's)
+    cap = model.cap_scale if model.cap_scale.ndim == 0 else jnp.tile(model.cap_scale, n_max)
+    cap_column = cap if cap.ndim == 0 else jnp.repeat(cap.reshape(n_max, burns), g, -1)[:, :, None]
+    cap_row = cap if cap.ndim == 0 else cap[:, None]
 
     def state_change(w):  # [n] -> [n_max, 6] at boundaries 1..n_max
         def one(x, e_w):
             x = phi @ x + e_w
             return x, x
 
-        return jax.lax.scan(one, jnp.zeros(6), jnp.einsum("jsv,jv->js", effect, w.reshape(n_max, 2 * g)))[1]
+        return jax.lax.scan(one, jnp.zeros(size), jnp.einsum("jsv,jv->js", effect, w.reshape(n_max, width)))[1]
 
     # |state rows of A| [n_max R, n], for the equilibration's norms: the rows of every unit Delta-V.
     condensed = jax.vmap(state_change, out_axes=-1)(jnp.eye(n))  # [n_max, 6, n]
@@ -212,17 +221,17 @@ def operator(model: Model, shape: Shape) -> lp.Operator:
             lam = phi.T @ lam + v_j
             return lam, lam
 
-        lam = jax.lax.scan(one, jnp.zeros(6), v, reverse=True)[1]
+        lam = jax.lax.scan(one, jnp.zeros(size), v, reverse=True)[1]
         return jnp.einsum("jsv,js->jv", effect, lam).reshape(-1)
 
     def caps(w):  # [n] -> [2 n_max]
-        return jnp.sum(w.reshape(2 * n_max, g), -1) / model.cap_scale
+        return jnp.sum(w.reshape(burns * n_max, g), -1) / cap
 
     def caps_t(v):  # [2 n_max] -> [n]
-        return jnp.repeat(v / model.cap_scale, g)
+        return jnp.repeat(v / cap, g)
 
     def split(v):
-        return v[:n], v[n:n + 2 * n_max], v[n + 2 * n_max:].reshape(n_max, r)
+        return v[:n], v[n:n + burns * n_max], v[n + burns * n_max:].reshape(n_max, r)
 
     def matvec(w):
         rows = jnp.einsum("jrs,js->jr", model.rows, state_change(w))
@@ -235,14 +244,14 @@ def operator(model: Model, shape: Shape) -> lp.Operator:
     def factor(rho, sigma):
         rho_bound, rho_cap, rho_rows = split(rho)
         q = jnp.einsum("jrs,jr,jrt->jst", model.rows, rho_rows, model.rows)
-        ones = jnp.kron(jnp.eye(2), jnp.ones((g, g)))  # [2G, 2G] the capacity rows' Gram, per unit weight
-        theta = jax.vmap(jnp.diag)((sigma + rho_bound).reshape(n_max, 2 * g)) \
-            + ones * jnp.repeat(rho_cap.reshape(n_max, 2), g, -1)[:, :, None] / model.cap_scale**2
+        ones = jnp.kron(jnp.eye(burns), jnp.ones((g, g)))  # [2G, 2G] the capacity rows' Gram, per unit weight
+        theta = jax.vmap(jnp.diag)((sigma + rho_bound).reshape(n_max, width)) \
+            + ones * jnp.repeat(rho_cap.reshape(n_max, burns), g, -1)[:, :, None] / cap_column**2
         return riccati(phi, effect, theta, q, n_max)
 
     def norms(d, e):
         d_bound, d_cap, d_rows = split(d)
-        caps_abs = (d_cap[:, None] * e.reshape(2 * n_max, g)) / model.cap_scale
+        caps_abs = (d_cap[:, None] * e.reshape(burns * n_max, g)) / cap_row
         rows_abs = d_rows.reshape(-1, 1) * abs_rows * e
         row_norms = jnp.concatenate([d_bound * e, jnp.max(caps_abs, 1), jnp.max(rows_abs, 1)])
         col_norms = jnp.maximum(jnp.maximum(d_bound * e, caps_abs.reshape(-1)), jnp.max(rows_abs, 0))
@@ -350,6 +359,23 @@ def plan(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves:
     return first_burns(model, w, limits), solution, model
 
 
+def row_violation(model: Model, rows):
+    """The largest violation of the state rows ``rows`` [n_max R] (their values) of ``model``, in half-widths."""
+    return jnp.max(jnp.maximum(model.lower.reshape(-1) - rows, 0.0) + jnp.maximum(rows - model.upper.reshape(-1), 0.0))
+
+
+def flown_plan(params, target, burns: BurnPair, solution: lp.Solution, violation, estimate, context, key) -> Plan:
+    """The cycle's ``Plan``: the first cycle's ``burns`` flown by ``control.burns`` (as the QFFC's) from the
+    prediction of the next boundary, with what the program (``solution``, its rows' largest ``violation``) said."""
+    prediction = predict_next(estimate.mean, context.reference[0], context.reference[1], context.cycle_s)
+    prediction = prediction.at[0].set(wrap_angle(prediction[0]))
+    full = 2 * V_SYNC_MPS * jnp.hypot(target[4] - prediction[4], target[5] - prediction[5])
+    ns_fraction = jnp.sum(jnp.abs(burns.dv_rsw_mps[:, 2])) / jnp.maximum(full, 1e-12)
+    flown = burns_mod.fly(params, burns, prediction, ns_fraction, estimate, context, key)
+    solved = (violation <= SOLVED_VIOLATION) & jnp.all(jnp.isfinite(solution.x))
+    return Plan(flown, solved, solution.objective, violation, solution.iterations, solution.converged)
+
+
 def make(tables: list[dict]) -> Controller:
     """The MPC for a batch of ``[controller]`` tables: its horizon padded to their largest N (a sweep over N
     compiles once), the static sizes shared."""
@@ -398,17 +424,8 @@ def controller(shape: Shape = Shape()) -> Controller:
         accel = params.thrusters["thrust_n"] / estimate.mass_kg
         burns, solution, model = plan(estimate.mean, target, context.reference, estimate.fix_mee[5], limits, accel,
                                       context.cycle_s, params.controller, params.station, shape)
-        prediction = predict_next(estimate.mean, context.reference[0], context.reference[1], context.cycle_s)
-        prediction = prediction.at[0].set(wrap_angle(prediction[0]))
-        full = 2 * V_SYNC_MPS * jnp.hypot(target[4] - prediction[4], target[5] - prediction[5])
-        ns_fraction = jnp.sum(jnp.abs(burns.dv_rsw_mps[:, 2])) / jnp.maximum(full, 1e-12)
-        flown = burns_mod.fly(params, burns, prediction, ns_fraction, estimate, context, key)
-        rows = solution.ax[-model.lower.size:]
-        violation = jnp.max(jnp.maximum(model.lower.reshape(-1) - rows, 0.0)
-                            + jnp.maximum(rows - model.upper.reshape(-1), 0.0))
-        solved = (violation <= SOLVED_VIOLATION) & jnp.all(jnp.isfinite(solution.x))
-        plan_ = Plan(flown, solved, solution.objective, violation, solution.iterations, solution.converged)
-        return plan_, controller_state
+        violation = row_violation(model, solution.ax[-model.lower.size:])
+        return flown_plan(params, target, burns, solution, violation, estimate, context, key), controller_state
 
     def thrust(params, plan_: Plan, t, state, environment):
         return burns_mod.thrust(params, plan_.flown, t, state, environment)

@@ -7,7 +7,9 @@ environment.  Per cycle the satellites' true positions and velocities at every s
 give each pair's closest approach within every step (``physics.relative.closest_in_step``); a cycle's record keeps
 each pair's least distance, when, the time below the alert distance, and the separation the operator sees at the
 cycle start (from what the controllers were told: the fixes, or a filter's estimates) beside the true one.
-Nothing per step is kept beyond what a lone loop keeps.
+Nothing per step is kept beyond what a lone loop keeps.  A controller with ``plan_cluster`` (the coordinated
+MPC, ``control.mpc_cluster``) plans every satellite in one program: each satellite's cycle start (its estimate)
+and its flight stay vmapped (``loop.simulate.cycle_phases``), the plan between them is the cluster's.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import jax
 import jax.numpy as jnp
 
 from geojax.control.base import Controller
-from geojax.loop.simulate import Records, Shared, _scan_first, cycle_body, cycle_inputs, initial_carry
+from geojax.loop.simulate import Records, Shared, _scan_first, cycle_body, cycle_inputs, cycle_phases, initial_carry
 from geojax.params import Params
 from geojax.physics.constants import SECONDS_PER_DAY
 from geojax.physics.propagate import MEE, Dynamics
@@ -44,11 +46,13 @@ def pairs(n_satellites: int) -> tuple[tuple[int, int], ...]:
 
 def simulate_cluster(controller: Controller, params: Params, shared: Shared, keys, *, step_s: float,
                      alert_m, dynamics: Dynamics = MEE, keep_steps: bool = False,
-                     states: tuple[StateModel, ...] = ()):
+                     states: tuple[StateModel, ...] = (), min_separation_m=None):
     """The closed loop of a cluster (``params`` and ``keys``: a leading satellite axis; ``shared.reference``
     per satellite where given with one) over the cycles of ``shared.env``: (final states, ``Records`` of every
-    satellite, leading axis satellite, ``SeparationRecord``).  ``alert_m`` [] is the alert distance.  Pure and
-    vmappable over clusters; the static arguments are ``simulate``'s."""
+    satellite, leading axis satellite, ``SeparationRecord``).  ``alert_m`` [] is the alert distance;
+    ``min_separation_m`` [] the distance a coordinated plan keeps (with a controller's ``plan_cluster``, which
+    then plans the cluster once per cycle; None: each satellite plans alone).  Pure and vmappable over clusters;
+    the static arguments are ``simulate``'s."""
     n = jax.tree_util.tree_leaves(params)[0].shape[0]
     if n < 2:
         raise ValueError(f"a cluster needs at least two satellites, got {n}")
@@ -57,15 +61,33 @@ def simulate_cluster(controller: Controller, params: Params, shared: Shared, key
     per_satellite_reference = controller.reference_cycles > 0 and xs[3].ndim == 4
     ref_axis = 0 if per_satellite_reference else None
 
+    options = dict(step_s=step_s, dynamics=dynamics, keep_steps=keep_steps, states=states, positions=True)
+    axes = (0, 0, 0, ref_axis, ref_axis, None, None)
+
     def one(p, key, carry, osc_ref, window, k, env_steps):
-        body = cycle_body(controller, p, key, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps,
-                          states=states, positions=True)
-        return body(carry, (k, env_steps, osc_ref, window))
+        return cycle_body(controller, p, key, **options)(carry, (k, env_steps, osc_ref, window))
+
+    def begin(p, key, carry, osc_ref, window, k, env_steps):
+        return cycle_phases(controller, p, key, **options)[0](carry, (k, env_steps, osc_ref, window))
+
+    def fly(p, key, carry, osc_ref, window, k, env_steps, start, plan, controller_state):
+        return cycle_phases(controller, p, key, **options)[1](carry, (k, env_steps, osc_ref, window), start, plan,
+                                                              controller_state)
+
+    def coordinated(carry, xs):  # every satellite's estimate, the cluster's plan, every satellite's flight
+        start = jax.vmap(begin, in_axes=axes)(params, keys, carry, *xs[2:], *xs[:2])
+        plan, controller_state = controller.plan_cluster(params, carry[1], start.estimate, start.context, start.key,
+                                                         min_separation_m)
+        return jax.vmap(fly, in_axes=(*axes, 0, 0, 0))(params, keys, carry, *xs[2:], *xs[:2], start, plan,
+                                                       controller_state)
 
     def cycle(carry, xs):
         k, env_steps, osc_ref, window = xs
-        carry, (record, steps, told) = jax.vmap(one, in_axes=(0, 0, 0, ref_axis, ref_axis, None, None))(
-            params, keys, carry, osc_ref, window, k, env_steps)
+        if controller.plan_cluster is None or min_separation_m is None:
+            carry, (record, steps, told) = jax.vmap(one, in_axes=axes)(params, keys, carry, osc_ref, window, k,
+                                                                       env_steps)
+        else:
+            carry, (record, steps, told) = coordinated(carry, xs)
         rv = jnp.concatenate([told.steps_rv, told.end_rv[:, None]], axis=1)  # [satellite, n_steps + 1, 6]
         rel = rv[index_i] - rv[index_j]  # [pair, n_steps + 1, 6]
         distance, at_s, below_s = closest_in_step(rel[:, :-1, :3], rel[:, :-1, 3:], rel[:, 1:, :3], rel[:, 1:, 3:],

@@ -191,18 +191,44 @@ def initial_carry(controller: Controller, params: Params, env: Environment, wind
     return params.initial, initial_state, {m.name: m.init(params, r0, v0, env0, fm) for m in states}
 
 
+class Planning(NamedTuple):
+    """What a cycle's start gives its plan (``cycle_phases``): the estimate, the context, the cycle's key and the
+    further states after their cycle-start hooks."""
+
+    estimate: Estimate
+    context: CycleContext
+    key: jax.Array
+    extra: dict
+
+
 def cycle_body(controller: Controller, params: Params, key, *, step_s: float, dynamics: Dynamics = MEE,
                keep_steps: bool = False, states: tuple[StateModel, ...] = (), positions: bool = False):
     """One sample's control cycle, ``(carry, xs) -> (carry, (CycleRecord, StepRecord | None))`` over the
     inputs of ``cycle_inputs`` (one cycle's); with ``positions`` the outputs also hold the cycle's
     ``Positions`` (a cluster's separations, ``loop.cluster``)."""
+    begin, fly = cycle_phases(controller, params, key, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps,
+                              states=states, positions=positions)
+
+    def one_cycle(carry, xs):
+        start = begin(carry, xs)
+        plan, controller_state = controller.plan(params, carry[1], start.estimate, start.context, start.key)
+        return fly(carry, xs, start, plan, controller_state)
+
+    return one_cycle
+
+
+def cycle_phases(controller: Controller, params: Params, key, *, step_s: float, dynamics: Dynamics = MEE,
+                 keep_steps: bool = False, states: tuple[StateModel, ...] = (), positions: bool = False):
+    """``cycle_body``'s cycle in two parts around its plan, so that a cluster can plan its satellites together
+    (``loop.cluster``): ``begin(carry, xs) -> Planning``, and ``fly(carry, xs, start, plan, controller_state)
+    -> (carry, outputs)``, ``cycle_body``'s."""
     fm = params.forces
     mu = fm.mu_m3_s2
     width = controller.reference_cycles
     station_lon = params.station["lon_rad"]
 
-    def one_cycle(carry, xs):
-        state, controller_state, extra = carry
+    def begin(carry, xs):
+        state, _, extra = carry
         k, env_steps, osc_ref_k, window = xs
         n_steps = env_steps.earth_angle_rad.shape[0]
         cycle_s = n_steps * step_s
@@ -214,7 +240,14 @@ def cycle_body(controller: Controller, params: Params, key, *, step_s: float, dy
         if width:
             estimate = estimate._replace(mean=estimate_mean(
                 boundary_elements(estimate.fix_mee, env_steps.earth_angle_rad[0, 0]), osc_ref_k, window[0], mu))
-        plan, controller_state = controller.plan(params, controller_state, estimate, ctx, cycle_key)
+        return Planning(estimate, ctx, cycle_key, extra)
+
+    def fly(carry, xs, start: Planning, plan, controller_state):
+        state = carry[0]
+        estimate, ctx, extra = start.estimate, start.context, start.extra
+        env_steps = xs[1]
+        n_steps = env_steps.earth_angle_rad.shape[0]
+        cycle_s = n_steps * step_s
 
         def step(carry, xs):
             state, (fghk_sum, a_sum), extra = carry
@@ -277,7 +310,7 @@ def cycle_body(controller: Controller, params: Params, key, *, step_s: float, dy
                          mee_to_cartesian(estimate.fix_mee, mu)[0])
         return (final, controller_state, extra_end), (record, steps, told)
 
-    return one_cycle
+    return begin, fly
 
 
 def _cycle_start(states, params, extra: dict, dynamics, state, k, t_s, cycle_key, mu) -> dict:

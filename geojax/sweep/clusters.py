@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.collocation.run import cluster_rollout
+from geojax.collocation.run import cluster_rollout, coordinated
 from geojax.loop.cluster import pairs
 from geojax.physics.frames import earth_rotation_angle_rad
 from geojax.physics.propagate import for_lanes
@@ -38,8 +38,9 @@ def compiled_cluster_batch(sweep, controller: str, width: int, on_phase, devices
     n_sat = len(names)
     if any(tuple(m.name for m in sc.satellites) != names for sc in scenarios):
         raise ValueError("satellites: every grid point must fly the same satellites")
-    batches = [prepare([m for i in group for m in scenarios[i].satellites], sweep.custom.get(controller),
-                       states=sweep.parts) for group in groups]
+    own = coordinated(scenarios) or sweep.custom.get(controller)  # the cluster's one program, where asked
+    batches = [prepare([m for i in group for m in scenarios[i].satellites], own, states=sweep.parts)
+               for group in groups]
     batch = batches[0]
     ids = jnp.asarray([zlib.crc32(name.encode()) | (1 << 31) for name in names], dtype=jnp.uint32)
     base_key = jax.random.key(sweep.seed)
@@ -49,14 +50,14 @@ def compiled_cluster_batch(sweep, controller: str, width: int, on_phase, devices
     pair_names = [f"{names[i]}_{names[j]}" for i, j in pairs(n_sat)]
 
     def one(point, j, shared, reference_env, angle0):
-        p, alert_m = point
+        p, alert_m, min_separation_m = point
         key = jax.random.fold_in(base_key, j)
         keys = jax.vmap(lambda i: jax.random.fold_in(key, i))(ids)
         if sweep.dispersed:
             p = jax.vmap(lambda q, k: disperse(q, jax.random.fold_in(k, dispersion_stream), *dispersion, angle0,
                                                batch.dynamics))(p, keys)
         _, _, _, satellites, cluster = cluster_rollout(
-            p, keys, shared, reference_env, alert_m, controller=batch.controller, step_s=batch.step_s,
+            p, keys, shared, reference_env, alert_m, min_separation_m, controller=batch.controller, step_s=batch.step_s,
             dynamics=for_lanes(batch.dynamics, batch.controller.sizing.lanes_cpu), keep_steps=False, states=batch.states,
             steps_per_cycle=steps_per_cycle)
         return named_metrics(satellites, cluster, names, pair_names, alert_m)
@@ -74,7 +75,7 @@ def compiled_cluster_batch(sweep, controller: str, width: int, on_phase, devices
         lambda *xs: jnp.concatenate(xs).reshape((len(scenarios), n_sat) + xs[0].shape[1:])[np.argsort(order)],
         *[b.params for b in batches])
     alerts = jnp.asarray([sc.config["collocation"]["alert_km"] * 1e3 for sc in scenarios])
-    points = (params, alerts)
+    points = (params, alerts, jnp.asarray([sc.config["collocation"]["min_separation_km"] * 1e3 for sc in scenarios]))
     lanes = np.zeros(width, dtype=int)
     run, _ = per_device(jax.vmap(one, in_axes=(0, 0, None, None, None)), (lanes_of(points, lanes), lanes),
                         devices=devices, shared=shared[0])

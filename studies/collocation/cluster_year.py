@@ -190,6 +190,10 @@ def main() -> None:
              "The linearised closed form of the targets alone: neighbours a·1.5e-4·√2 = 8.94 km, opposite "
              "satellites a·3e-4 = 12.65 km apart at least (`relative_motion.md`); the controllers' errors and the "
              "forces' pull on the vectors between burns take the rest."]
+    if args.clusters < 64:
+        lines += ["", f"{args.clusters} clusters, not the study's 64: the run's time on 2 shared CPU cores. The "
+                  f"full study: `python studies/collocation/cluster_year.py --controller {args.controller} "
+                  f"--clusters 64`."]
     (args.out / f"cluster_year_{label}.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
