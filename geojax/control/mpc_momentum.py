@@ -78,10 +78,10 @@ FIELDS = {
     **mpc.FIELDS,
     # The momentum the plan may hold per wheel at the boundaries and between the burns: ``momentum_band_nms``, at
     # most ``momentum_fraction`` of the capacity (module docstring: not a share of it; docs/momentum.md).
-    "momentum_band_nms": Field(NUMBER, 25.0, lower=0.0, upper=1e6, si="momentum_band_nms"),
-    "momentum_fraction": Field(NUMBER, 0.5, lower=0.0, upper=1.0, si="momentum_fraction"),
+    "momentum_band_nms": Field(NUMBER, 35.0, lower=0.0, upper=1e6, si="momentum_band_nms"),
+    "momentum_fraction": Field(NUMBER, 0.7, lower=0.0, upper=1.0, si="momentum_fraction"),
     # The price of the momentum along the burns' common line, m/s per N m s at each boundary (module docstring).
-    "momentum_line_price": Field(NUMBER, 1e-4, lower=0.0, lower_inclusive=True, upper=1.0, si="momentum_line_price"),
+    "momentum_line_price": Field(NUMBER, 1e-3, lower=0.0, lower_inclusive=True, upper=1.0, si="momentum_line_price"),
     # The price of a tilt per m/s of |z|_1, against 1 per m/s of burn: at 1 the program tilts for the wheels alone
     # (a burn in the tilt's direction costs no more).
     "tilt_cost": Field(NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=100.0, si="tilt_cost"),
