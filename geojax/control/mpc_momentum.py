@@ -41,6 +41,16 @@ program on ``control.mpc``'s minimum-fuel LP (Gazzino 2016's Problem 3 on Li 202
   g over the cycle just flown less the impulse the plan commanded in it, smoothed by ``disturbance_gain`` per
   cycle (an exponential filter: the SRP torque turns with the Sun, 1 deg a day); 0 before the second cycle.
 
+* The lines: the torque is bilinear in a burn's line and its tilt, and the program takes the lines as given; it
+  solves ``line_solves`` times (2), first on last cycle's planned lines, then on the lines the solve before planned.
+  Why (docs/momentum.md, measured on a 3000 kg satellite at 0.3 m with 50 N m s wheels, a year): ``l . g`` is
+  reached only through the angle between the two lines, 3.5-5 deg on average, which moved by a median 1.0-1.4 deg
+  a cycle, so last cycle's lines misjudged that reach by tens of percent (around the autumn equinox, where the
+  SRP torque lies along l, the lines moved a median 9 deg a cycle); with one solve, a 25 N m s band and a price of
+  1e-4 the wheels saturated at cycle 262 (peak 115.6 N m s).  Two solves alone: 80.1; with a band of 35 N m s
+  (0.7 of 50; the dumping law swings up to 0.75 between the burns) alone 92.4, with a price of 1e-3 alone 72.8;
+  the three together held it (43.0).
+
 The first cycle's burns are flown as the MPC's, each with its planned tilt (``Thrust.tilt_rsw``, flown across the
 line actually flown, within ``attitude.dump_angle_max_deg``).  The solver: ``control.lp``'s interior point on a
 normal matrix factored by ``mpc.riccati`` over the state (elements, g) [9] and a cycle's decisions (w, z, t).
