@@ -1,5 +1,6 @@
-"""Why the momentum MPC saturated the wheels at the autumn equinox, and what holds them: the program's parts one by
-one over a year of the operator's satellite (3000 kg at 19.2° E, ``mpc_capacity.py``'s ``OPERATOR``).
+"""Why the momentum MPC saturated the wheels at the autumn equinox, and what holds them, part by part.
+
+A year of the operator's satellite (3000 kg at 19.2° E, ``mpc_capacity.py``'s ``OPERATOR``).
 
     python studies/momentum/mpc_equinox.py [--days 365.25] [--offset 0.3] [--capacity 50] [--out studies/momentum/results]
 
