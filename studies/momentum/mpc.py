@@ -98,6 +98,10 @@ def table(plain: dict, rows: list[dict], args, walls: dict) -> str:
         "ΔV ratio: the momentum MPC's ΔV over the MPC's without momentum (`li2022-mpc`, the torque-free satellite), "
         "draw by draw. Held: every draw in the box (status ok) and its wheels within their capacity all year.",
         "",
+    ] + ([f"A reduced grid (the full one: {8} draws, offsets {', '.join(f'{o:g}' for o in OFFSETS_M)} m, capacities "
+          f"{', '.join(f'{c:g}' for c in CAPACITIES_NMS)} N m s), to fit the time it was run in.", ""]
+         if (args.samples, tuple(args.offsets), tuple(args.capacities)) != (8, OFFSETS_M, CAPACITIES_NMS) else []) + [
+        "",
         f"The MPC without momentum (li2022-mpc): ΔV {dv.mean():.3f} m/s/yr (draws {dv.min():.3f} to {dv.max():.3f}), "
         f"statuses {sorted(set(plain['status']))}.",
         "",
