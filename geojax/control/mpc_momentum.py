@@ -44,7 +44,7 @@ program on ``control.mpc``'s minimum-fuel LP (Gazzino 2016's Problem 3 on Li 202
 * The lines: the torque is bilinear in a burn's line and its tilt, and the program takes the lines as given; it
   solves ``line_solves`` times (2), first on last cycle's planned lines, then on the lines the solve before planned.
   Why (docs/momentum.md, measured on a 3000 kg satellite at 0.3 m with 50 N m s wheels, a year): ``l . g`` is
-  reached only through the angle between the two lines, 3.5-5 deg on average, which moved by a median 1.0-1.4 deg
+  reached only through the angle between the two lines, 3.5-5 deg on average, which moved by a median 0.9-1.4 deg
   a cycle, so last cycle's lines misjudged that reach by tens of percent (around the autumn equinox, where the
   SRP torque lies along l, the lines moved a median 9 deg a cycle); with one solve, a 25 N m s band and a price of
   1e-4 the wheels saturated at cycle 262 (peak 115.6 N m s).  Two solves alone: 80.1; with a band of 35 N m s
