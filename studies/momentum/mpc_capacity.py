@@ -146,7 +146,7 @@ def table(rows: list[dict], args, walls: dict) -> str:
         "nozzles 2.0 m from the centre of mass, inertia (13157, 3214, 12221) kg m² principal "
         "(`OPERATOR` in the script).",
         "",
-    ] + ([f"Carried from the earlier run of this file (not flown again: their code is not the momentum MPC's): "
+    ] + ([f"Carried from the earlier run of this file (not flown again, to fit the time; the program as it was then): "
           f"{', '.join(args.carried)}.", ""] if args.carried else [])
     for sat in SATELLITES:
         lines += [f"## {sat}", "",
