@@ -87,6 +87,28 @@ def test_tilt_impulse_is_the_lever_times_the_crossed_delta_v(planning):
             assert abs(float(e @ np.asarray(momentum.lines[b]))) < 1e-14
 
 
+def test_a_second_solve_plans_on_the_lines_it_flies(planning):
+    """The tilts' torque is bilinear in a burn's line and its tilt; the program takes the lines as given.  Solved
+    on the rectangles' middles, the plan's burns leave them by degrees; solved again on the lines it planned
+    (``line_solves``), its lines move far less: the torque it plans is the one its burns' lines give."""
+    shape = mpc.Shape(n_max=8)
+    leaves = {**planning["leaves"], "horizon": planning["leaves"]["horizon"] * 0 + shape.n_max}
+    middles = jnp.mean(mpc.generators(planning["limits"], shape), axis=1)
+    middles = middles / jnp.linalg.norm(middles, axis=-1, keepdims=True)
+
+    def solve(lines):
+        burns = mpc_momentum.plan(planning["x0"], planning["target"], planning["ref"][:shape.n_max + 1], 0.3,
+                                  planning["limits"], planning["accel"], planning["cycle_s"], leaves,
+                                  planning["station"], lines, jnp.array([18.0, -24.0, 6.0]),
+                                  jnp.array([4.0, -11.0, 0.5]), planning["mass"], planning["attitude"], shape)[0]
+        return mpc_momentum.planned_lines(burns, lines)
+
+    first, second = (np.asarray(v) for v in jax.jit(lambda: (lambda a: (a, solve(a)))(solve(middles)))())
+    moved = lambda a, b: np.degrees(np.arccos(np.clip(np.sum(a * b, -1), -1.0, 1.0)))  # noqa: E731
+    assert moved(np.asarray(middles), first).max() > 1.0
+    assert moved(first, second).max() < 0.25 * moved(np.asarray(middles), first).max()
+
+
 @pytest.mark.slow
 def test_plan_predicts_the_wheels_the_loop_integrates():
     """Second method: the plan's linearised torque (the tilt's impulse at the burn's centre, the other torques
@@ -138,8 +160,8 @@ def test_without_wheels_the_controller_says_so():
 @pytest.mark.slow
 def test_a_larger_wheel_flies_the_same_plan_and_never_does_worse():
     """Li's satellite with its SRP force 0.2 m off along the array's axis (24 N m s a day), 5 days, 50 and 100 N m s
-    wheels in one batch.  The capacity is a limit, not a target: the plan's band is ``momentum_band_nms`` (25 N m s,
-    half of 50) for both, so the larger wheel flies the very same run (every record equal) and holds whatever the
+    wheels in one batch.  The capacity is a limit, not a target: the plan's band is ``momentum_band_nms`` (35 N m s,
+    0.7 of 50) for both, so the larger wheel flies the very same run (every record equal) and holds whatever the
     smaller one holds.  Independent check: the 50 N m s run's own peak, against which the larger wheel's may not
     exceed; a band that was half of each capacity parked the momentum at 50 N m s in the 100 N m s wheels by the
     third day (60.1 N m s against 32.9)."""
@@ -148,7 +170,7 @@ def test_a_larger_wheel_flies_the_same_plan_and_never_does_worse():
                              for c in (50.0, 100.0)])
     assert list(result.status) == [STATUS_OK, STATUS_OK]
     peak = np.asarray(result.metrics["max_wheel_momentum_nms"])
-    assert peak[1] <= peak[0] < 0.75 * 50.0
+    assert peak[1] <= peak[0] < 50.0
     wheels = result.records.cycles.states["wheels"]
     np.testing.assert_array_equal(np.asarray(wheels.max_abs_nms)[0], np.asarray(wheels.max_abs_nms)[1])
     dv = np.asarray(result.metrics["dv_per_year_mps"])
@@ -167,42 +189,43 @@ def _operator():
     return study
 
 
-# (SRP offset m, capacity N m s) flown on the operator's satellite; issue 57's check: held at 0.2 m with 75 N m s
-# and at 0.3 m with 50 N m s, a year long
-OPERATOR_CASES = ((0.2, 75.0), (0.2, 50.0), (0.3, 50.0))
+# (SRP offset m, capacity N m s) flown on the operator's satellite for a year: held at 0.2 m with 75 and 50 N m s
+# wheels, at 0.3 m and 0.35 m with 50 (what the QFFC's dumping law holds)
+OPERATOR_CASES = ((0.2, 75.0), (0.2, 50.0), (0.3, 50.0), (0.35, 50.0))
 
 
 @pytest.fixture(scope="module")
-def operator_spring():
-    """The operator's satellite with mpc_momentum and Li's nominal errors (seed 0), 90 days from Li's epoch
-    (2020-01-01): through the spring equinox, where the SRP torque lies along the burns' common line.  Before the
-    price on that line's momentum (``momentum_line_price`` 0), the same cases (a year, by hand): the wheels' first
-    excursion past 50 N m s at cycles 83 (0.2 m) and 81 (0.3 m), the year's peaks 61.6 N m s at 0.2 m and 123.9
-    at 0.3 m; 90 days is the shortest run that showed both (0.2 m peaked at 51.2 N m s by then, 0.3 m at 71.5)."""
+def operator_year():
+    """The operator's satellite with mpc_momentum and Li's nominal errors (seed 0), a year from Li's epoch
+    (2020-01-01): through both equinoxes, where the SRP torque (in the orbit's plane, across the Sun) has its
+    largest part along the burns' common line, which the tilts reach only through the small angle between the two
+    lines; per case the status, the largest wheel momentum and its per-cycle peaks."""
     study = _operator()
-    scenarios = [scenario.load("li2022-momentum-mpc", {"duration.days": 90.0, **study.ERRORS, **study.OPERATOR,
+    scenarios = [scenario.load("li2022-momentum-mpc", {"duration.days": 365.25, **study.ERRORS, **study.OPERATOR,
                                                        study.OFFSET: offset, study.CAPACITY: capacity})
                  for offset, capacity in OPERATOR_CASES]
     result = simulate_batch(scenarios, seeds=[0] * len(scenarios))
-    return {case: (int(result.status[k]), float(result.metrics["max_wheel_momentum_nms"][k]))
+    peaks = np.asarray(result.records.cycles.states["wheels"].max_abs_nms).max(-1)  # [case, cycle]
+    return {case: (int(result.status[k]), float(result.metrics["max_wheel_momentum_nms"][k]), peaks[k])
             for k, case in enumerate(OPERATOR_CASES)}
 
 
 @pytest.mark.slow
-def test_the_momentum_mpc_holds_the_operators_satellite_at_0_2_m_with_50_and_75_nms_wheels(operator_spring):
-    """0.2 m with 75 and with 50 N m s wheels: in the box and within the wheels through the equinox; both fly the
-    same plan (the band is 25 N m s either way), so the larger wheel holds whatever the smaller holds (before the
-    price: 75 N m s held at 51.2 N m s by day 90, 50 N m s saturated at cycle 83)."""
-    status, peak = operator_spring[0.2, 75.0]
-    assert status == STATUS_OK and peak < 50.0, (status, peak)
-    small_status, small_peak = operator_spring[0.2, 50.0]
-    assert small_status == STATUS_OK and small_peak == peak
+def test_a_year_of_the_operators_satellite_at_0_2_m_holds_and_the_larger_wheel_never_does_worse(operator_year):
+    """0.2 m with 75 and with 50 N m s wheels: in the box and within the wheels all year, and cycle by cycle the
+    larger wheel's peak never above the smaller's (both fly one plan: the band is ``momentum_band_nms`` for
+    both, a limit and not a share of the capacity)."""
+    for capacity in (75.0, 50.0):
+        status, peak, _ = operator_year[0.2, capacity]
+        assert status == STATUS_OK and peak < capacity, (capacity, status, peak)
+    assert np.all(operator_year[0.2, 75.0][2] <= operator_year[0.2, 50.0][2])
 
 
 @pytest.mark.slow
-def test_the_momentum_mpc_holds_the_operators_satellite_at_0_3_m_with_50_nms_wheels(operator_spring):
-    """0.3 m with 50 N m s wheels, which the dumping law holds (the QFFC's at 40.0 N m s a year,
-    studies/momentum/results/mpc_capacity.md): the MPC does too (before the price on the momentum along the
-    burns' common line: saturated at cycle 81, 71.5 N m s by day 90, 123.9 over the year)."""
-    status, peak = operator_spring[0.3, 50.0]
-    assert status == STATUS_OK and peak < 50.0, (status, peak)
+@pytest.mark.parametrize("offset", [0.3, 0.35])
+def test_a_year_of_the_operators_satellite_holds_what_the_dumping_law_holds(operator_year, offset):
+    """0.3 m and 0.35 m with 50 N m s wheels, which the QFFC's dumping law holds: in the box and within the wheels
+    all year, through the autumn equinox (about cycles 250 to 330, the lines' common line along the SRP torque)
+    where the program, planning on last cycle's lines alone within a 25 N m s band, saturated the wheels."""
+    status, peak, peaks = operator_year[offset, 50.0]
+    assert status == STATUS_OK and peak < 50.0, (status, peak, int(np.argmax(peaks)))

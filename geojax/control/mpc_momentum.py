@@ -41,6 +41,16 @@ program on ``control.mpc``'s minimum-fuel LP (Gazzino 2016's Problem 3 on Li 202
   g over the cycle just flown less the impulse the plan commanded in it, smoothed by ``disturbance_gain`` per
   cycle (an exponential filter: the SRP torque turns with the Sun, 1 deg a day); 0 before the second cycle.
 
+* The lines: the torque is bilinear in a burn's line and its tilt, and the program takes the lines as given; it
+  solves ``line_solves`` times (2), first on last cycle's planned lines, then on the lines the solve before planned.
+  Why (docs/momentum.md, measured on a 3000 kg satellite at 0.3 m with 50 N m s wheels, a year): ``l . g`` is
+  reached only through the angle between the two lines, 3.5-5 deg on average, which moved by a median 0.9-1.4 deg
+  a cycle, so last cycle's lines misjudged that reach by tens of percent (around the autumn equinox, where the
+  SRP torque lies along l, the lines moved a median 9 deg a cycle); with one solve, a 25 N m s band and a price of
+  1e-4 the wheels saturated at cycle 262 (peak 115.6 N m s).  Two solves alone: 80.1; with a band of 35 N m s
+  (0.7 of 50; the dumping law swings up to 0.75 between the burns) alone 92.4, with a price of 1e-3 alone 72.8;
+  the three together held it (43.0).
+
 The first cycle's burns are flown as the MPC's, each with its planned tilt (``Thrust.tilt_rsw``, flown across the
 line actually flown, within ``attitude.dump_angle_max_deg``).  The solver: ``control.lp``'s interior point on a
 normal matrix factored by ``mpc.riccati`` over the state (elements, g) [9] and a cycle's decisions (w, z, t).
@@ -62,6 +72,7 @@ from geojax.control import burns as burns_mod
 from geojax.control import lp, mpc
 from geojax.control.base import Controller, Sizing, Spec
 from geojax.control.effects import V_SYNC_MPS, cycle_coast_s, effect_matrix
+from geojax.control.momentum_frames import across_basis, body_to_rsw, rotate_to_start, rsw_basis
 from geojax.control.predictor import predict_next
 from geojax.states.momentum import NAME as WHEELS
 from geojax.params import NUMBER, Field, station_target
@@ -77,13 +88,15 @@ FIELDS = {
     **mpc.FIELDS,
     # The momentum the plan may hold per wheel at the boundaries and between the burns: ``momentum_band_nms``, at
     # most ``momentum_fraction`` of the capacity (module docstring: not a share of it; docs/momentum.md).
-    "momentum_band_nms": Field(NUMBER, 25.0, lower=0.0, upper=1e6, si="momentum_band_nms"),
-    "momentum_fraction": Field(NUMBER, 0.5, lower=0.0, upper=1.0, si="momentum_fraction"),
+    "momentum_band_nms": Field(NUMBER, 35.0, lower=0.0, upper=1e6, si="momentum_band_nms"),
+    "momentum_fraction": Field(NUMBER, 0.7, lower=0.0, upper=1.0, si="momentum_fraction"),
     # The price of the momentum along the burns' common line, m/s per N m s at each boundary (module docstring).
-    "momentum_line_price": Field(NUMBER, 1e-4, lower=0.0, lower_inclusive=True, upper=1.0, si="momentum_line_price"),
+    "momentum_line_price": Field(NUMBER, 1e-3, lower=0.0, lower_inclusive=True, upper=1.0, si="momentum_line_price"),
     # The price of a tilt per m/s of |z|_1, against 1 per m/s of burn: at 1 the program tilts for the wheels alone
     # (a burn in the tilt's direction costs no more).
     "tilt_cost": Field(NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=100.0, si="tilt_cost"),
+    # The program's solves per cycle, each on the lines the one before planned (the first on last cycle's lines).
+    "line_solves": Field(int, 2, lower=1, upper=9, lower_inclusive=True, si="line_solves"),
     # The gain per cycle of the external momentum's filter (1: the last cycle's; 0: none; stable below 2).
     "disturbance_gain": Field(NUMBER, 0.5, lower=0.0, lower_inclusive=True, upper=2.0, si="disturbance_gain"),
 }
@@ -107,37 +120,6 @@ class Momentum(NamedTuple):
     mid_lower: jnp.ndarray  # [n_max, F / 2 + 1]
     mid_upper: jnp.ndarray  # [n_max, F / 2 + 1]
     row_penalty: jnp.ndarray  # [R + F / 2 + 2] each boundary row's penalty (m/s per half-width)
-
-
-def rsw_basis(r_eci_m, v_eci_mps):
-    """Rows R, S, W [3, 3] of the RSW frame at (r, v) in ECI."""
-    radial = r_eci_m / jnp.linalg.norm(r_eci_m)
-    normal = jnp.cross(r_eci_m, v_eci_mps)
-    normal = normal / jnp.linalg.norm(normal)
-    return jnp.stack([radial, jnp.cross(normal, radial), normal])
-
-
-def body_to_rsw(h_body):
-    """A vector in the nadir body's axes (x = S, y = -W, z = -R, ``physics.attitude.nadir_frame``) in RSW."""
-    return jnp.stack([-h_body[2], h_body[0], -h_body[1]])
-
-
-def across_basis(lines):
-    """[2, 2, 3] two unit vectors across each line of ``lines`` [2, 3], (e_1, e_2, u) right-handed: e_1 across
-    the line from the axis least along it."""
-    axes = jnp.eye(3)[jnp.argmin(jnp.abs(lines), axis=-1)]
-    e1 = jnp.cross(lines, axes)
-    e1 = e1 / jnp.linalg.norm(e1, axis=-1, keepdims=True)
-    e2 = jnp.cross(lines, e1)
-    return jnp.stack([e1, e2], 1)
-
-
-def rotate_to_start(vectors_rsw, past_rad):
-    """Vectors [..., 3] given in the RSW axes at right ascensions ``past_rad`` [...] past the cycle's start, in
-    the RSW axes of the start (a turn about W)."""
-    c, s = jnp.cos(past_rad), jnp.sin(past_rad)
-    r, t, n = vectors_rsw[..., 0], vectors_rsw[..., 1], vectors_rsw[..., 2]
-    return jnp.stack([c * r - s * t, s * r + c * t, n], -1)
 
 
 def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, leaves: dict,
@@ -354,6 +336,12 @@ def plan(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves:
     return mpc.first_burns(model, w, limits), z, solution, model, momentum
 
 
+def planned_lines(burns, lines):
+    """[2, 3] each burn's planned direction (unit, RSW at the burn); ``lines`` for a burn not planned."""
+    fired = (burns.v_mps > 0)[:, None]
+    return jnp.where(fired, burns.dv_rsw_mps / jnp.where(fired, burns.v_mps[:, None], 1.0), lines)
+
+
 def make(tables: list[dict]) -> Controller:
     """The momentum MPC for a batch of ``[controller]`` tables (``mpc.shape_of``'s shapes)."""
     return controller(mpc.shape_of(tables))
@@ -393,10 +381,17 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         basis = rsw_basis(r, v)  # rows R0, S0, W0 in ECI
         g_eci = basis.T @ body_to_rsw(estimate.states[WHEELS])
         d_eci = disturbance(state, g_eci, params.controller["disturbance_gain"])
-        burns, z, solution, model, momentum = plan(
-            estimate.mean, target, context.reference, estimate.fix_mee[5], limits, accel, context.cycle_s,
-            params.controller, params.station, state.lines_rsw, basis @ g_eci, basis @ d_eci, mass, params.states[WHEELS],
-            shape)
+        def solve(lines):
+            return plan(estimate.mean, target, context.reference, estimate.fix_mee[5], limits, accel, context.cycle_s,
+                        params.controller, params.station, lines, basis @ g_eci, basis @ d_eci, mass,
+                        params.states[WHEELS], shape)
+
+        def again(i, out):  # the first solve on last cycle's lines, each next on the lines the one before planned
+            return solve(jnp.where(i == 0, state.lines_rsw, planned_lines(out[0], state.lines_rsw)))
+
+        blank = jax.tree_util.tree_map(lambda a: jnp.zeros(a.shape, a.dtype), jax.eval_shape(solve, state.lines_rsw))
+        burns, z, solution, model, momentum = jax.lax.fori_loop(
+            0, jnp.asarray(params.controller["line_solves"]).astype(int), again, blank)
         prediction = predict_next(estimate.mean, context.reference[0], context.reference[1], context.cycle_s)
         prediction = prediction.at[0].set(wrap_angle(prediction[0]))
         full = 2 * V_SYNC_MPS * jnp.hypot(target[4] - prediction[4], target[5] - prediction[5])
@@ -414,8 +409,7 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         flown_impulse = jnp.where(fired[:, None], impulse - jnp.sum(u * impulse, -1, keepdims=True) * u, 0.0)
         past = jnp.mod(model.l_rad - estimate.fix_mee[5], 2 * jnp.pi)
         impulse_eci = basis.T @ jnp.sum(rotate_to_start(flown_impulse, past), 0)
-        planned_v = jnp.where(burns.v_mps > 0, burns.v_mps, 1.0)[:, None]
-        lines = jnp.where((burns.v_mps > 0)[:, None], burns.dv_rsw_mps / planned_v, state.lines_rsw)
+        lines = planned_lines(burns, state.lines_rsw)
 
         def excess_of(values, lower, upper):  # each row's violation, in half-widths
             return jnp.maximum(lower - values, 0.0) + jnp.maximum(values - upper, 0.0)
@@ -442,7 +436,8 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
     def record(plan_: Plan) -> dict:
         return {**burns_mod.record(plan_.flown), "solved": plan_.solved, "planned_fuel_mps": plan_.fuel_mps,
                 "violation": plan_.violation, "iterations": plan_.iterations, "certified": plan_.certified,
-                "momentum_violation": plan_.momentum_violation, "wheels_rsw_nms": plan_.wheels_rsw_nms}
+                "momentum_violation": plan_.momentum_violation, "wheels_rsw_nms": plan_.wheels_rsw_nms,
+                "tilts_rsw": plan_.tilts_rsw}
 
     # Widths and memory as the MPC's (``mpc.controller``: 8 lanes per CPU core, its interior point's matrices
     # dominating); the lane's bytes scaled from the MPC's measured 1.73 MB by the decisions per cycle (20 against

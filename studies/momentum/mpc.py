@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
+import sys
 import time
 from pathlib import Path
 
@@ -39,11 +41,11 @@ METRICS = ("dv_per_year_mps", "max_wheel_momentum_nms", "max_abs_mean_dlon_deg",
            "thrust_torque_impulse_nms", "dump_cross_dv_mps", "cycles_without_solution")
 
 
-def cases() -> list[tuple[str, dict]]:
+def cases(offsets=OFFSETS_M, capacities=CAPACITIES_NMS) -> list[tuple[str, dict]]:
     """(label, overrides of li2022-momentum-mpc) of every momentum-MPC run: the torque-free satellite, then the map."""
     out = [("offset 0 m, 50 N m s", {"attitude.srp_offset_array_m[0]": 0.0})]
-    for offset in OFFSETS_M:
-        for capacity in CAPACITIES_NMS:
+    for offset in offsets:
+        for capacity in capacities:
             out.append((f"offset {offset:g} m, {capacity:g} N m s", {"attitude.srp_offset_array_m[0]": offset,
                                                                       "attitude.wheel_capacity_nms": capacity}))
     return out
@@ -91,10 +93,14 @@ def table(plain: dict, rows: list[dict], args, walls: dict) -> str:
     lines = [
         "# The MPC over orbit and wheel momentum on Li's satellite",
         "",
-        f"`python studies/momentum/mpc.py --samples {args.samples} --days {args.days:g}` (geojax {geojax.__version__}); "
+        f"`{args.command}` (geojax {geojax.__version__}); "
         f"{args.samples} draws of Li's nominal errors (h_rv = h_att = 1) per case, the same draws in every case. "
         "ΔV ratio: the momentum MPC's ΔV over the MPC's without momentum (`li2022-mpc`, the torque-free satellite), "
         "draw by draw. Held: every draw in the box (status ok) and its wheels within their capacity all year.",
+        "",
+    ] + ([f"A reduced grid (the full one: {8} draws, offsets {', '.join(f'{o:g}' for o in OFFSETS_M)} m, capacities "
+          f"{', '.join(f'{c:g}' for c in CAPACITIES_NMS)} N m s), to fit the time it was run in.", ""]
+         if (args.samples, tuple(args.offsets), tuple(args.capacities)) != (8, OFFSETS_M, CAPACITIES_NMS) else []) + [
         "",
         f"The MPC without momentum (li2022-mpc): ΔV {dv.mean():.3f} m/s/yr (draws {dv.min():.3f} to {dv.max():.3f}), "
         f"statuses {sorted(set(plain['status']))}.",
@@ -114,7 +120,7 @@ def table(plain: dict, rows: list[dict], args, walls: dict) -> str:
     held = [r["case"] for r in rows if r["held"]]
     lines += [
         "",
-        f"Issue 41's check (li2022-momentum-mpc, offset 0.1 m, 50 N m s): {'held' if nominal['held'] else 'NOT held'}, "
+        f"The shipped scenario's check (li2022-momentum-mpc, offset 0.1 m, 50 N m s): {'held' if nominal['held'] else 'NOT held'}, "
         f"largest wheel momentum {nominal['max_wheel_momentum_nms']:.1f} N m s, ΔV within "
         f"{100 * worst:.2f} % of the MPC without momentum on every draw (criterion 3 %: "
         f"{'met' if nominal['held'] and worst < 0.03 else 'NOT met'}).",
@@ -135,10 +141,14 @@ def main(argv=None) -> int:
     ap.add_argument("--samples", type=int, default=8)
     ap.add_argument("--days", type=float, default=365.25)
     ap.add_argument("--out", type=Path, default=HERE / "results")
+    ap.add_argument("--offsets", type=float, nargs="+", default=list(OFFSETS_M), help="the map's offsets (m)")
+    ap.add_argument("--capacities", type=float, nargs="+", default=list(CAPACITIES_NMS), help="and capacities")
     args = ap.parse_args(argv)
+    args.command = " ".join(["python studies/momentum/mpc.py"]
+                            + [shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv)])
     args.out.mkdir(parents=True, exist_ok=True)
     (plain,), wall_plain = batch("li2022-mpc", [{}], args.days, args.samples)
-    labels, overrides = zip(*cases(), strict=True)
+    labels, overrides = zip(*cases(args.offsets, args.capacities), strict=True)
     managed, wall_managed = batch("li2022-momentum-mpc", list(overrides), args.days, args.samples)
     capacities = [o.get("attitude.wheel_capacity_nms", 50.0) for o in overrides]
     rows = summarize(plain, managed, list(labels), capacities)

@@ -24,6 +24,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import shlex
+import sys
 import time
 from pathlib import Path
 
@@ -71,10 +73,13 @@ METRICS = ("dv_per_year_mps", "max_wheel_momentum_nms", "max_abs_mean_dlon_deg",
            "max_wheel_growth_per_day_nms", "time_above_80pct_capacity_fraction")
 
 
-def cases() -> list[dict]:
+def cases(capacities=CAPACITIES_NMS, offsets=None) -> list[dict]:
+    """Every (satellite, offset, capacity); ``offsets`` {satellite: offsets} in place of ``SATELLITES``' own."""
+    offsets = offsets or {}
     return [{"satellite": sat, "offset_m": offset, "capacity_nms": capacity,
              "overrides": {**overrides, OFFSET: offset, CAPACITY: capacity}}
-            for sat, (overrides, offsets) in SATELLITES.items() for offset in offsets for capacity in CAPACITIES_NMS]
+            for sat, (overrides, own) in SATELLITES.items() for offset in offsets.get(sat, own)
+            for capacity in capacities]
 
 
 def fly(base: str, planner: dict, all_cases: list[dict], days: float, samples: int) -> tuple[list[dict], float]:
@@ -132,8 +137,7 @@ def table(rows: list[dict], args, walls: dict) -> str:
     lines = [
         "# The momentum MPC beside the dumping law, over the SRP offset and the wheels' capacity",
         "",
-        f"`python studies/momentum/mpc_capacity.py --samples {args.samples} --days {args.days:g}` "
-        f"(geojax {geojax.__version__}); {args.samples} draw(s) of Li's nominal errors per case, the same draws in "
+        f"`{args.command}` (geojax {geojax.__version__}); {args.samples} draw(s) of Li's nominal errors per case, the same draws in "
         "every case; tilt limit 5°, the offset along the solar array's axis. Cells: held ✓ / ✗, the largest wheel "
         "momentum over the draws (N m s), the ΔV (m/s/yr, mean). Held: every draw in its box (status ok) and its "
         "wheels within their capacity all year.",
@@ -142,7 +146,8 @@ def table(rows: list[dict], args, walls: dict) -> str:
         "nozzles 2.0 m from the centre of mass, inertia (13157, 3214, 12221) kg m² principal "
         "(`OPERATOR` in the script).",
         "",
-    ]
+    ] + ([f"Carried from the earlier run of this file (not flown again, to fit the time; the program as it was then): "
+          f"{', '.join(args.carried)}.", ""] if args.carried else [])
     for sat in SATELLITES:
         lines += [f"## {sat}", "",
                   "| offset (m) | external momentum (N m s/day) | capacity (N m s) | " + " | ".join(PLANNERS) + " |",
@@ -154,7 +159,7 @@ def table(rows: list[dict], args, walls: dict) -> str:
                      f"{r[p]['dv_mean_mps']:.2f}" if p in r else "" for p in PLANNERS]
             lines.append(f"| {r['offset_m']:g} | {r['mpc_momentum']['external_momentum_per_day_nms']:.2f} | "
                          f"{r['capacity_nms']:g} | " + " | ".join(cells) + " |")
-        for capacity in CAPACITIES_NMS:
+        for capacity in args.capacities:
             lines.append("")
             held = {p: held_offsets(rows, p, sat, capacity) for p in PLANNERS}
             lines.append(f"Held with {capacity:g} N m s: " + "; ".join(
@@ -176,13 +181,33 @@ def main(argv=None) -> int:
     ap.add_argument("--samples", type=int, default=1)
     ap.add_argument("--days", type=float, default=365.25)
     ap.add_argument("--out", type=Path, default=HERE / "results")
+    ap.add_argument("--fly", nargs="+", choices=PLANNERS, default=list(PLANNERS),
+                    help="the planners to fly; the others' cells are read from the --out JSON of an earlier run")
+    ap.add_argument("--capacities", type=float, nargs="+", default=list(CAPACITIES_NMS))
+    ap.add_argument("--li-offsets", type=float, nargs="+", help="Li's satellite's offsets (m)")
+    ap.add_argument("--operator-offsets", type=float, nargs="+", help="the 3000 kg satellite's offsets (m)")
     args = ap.parse_args(argv)
+    args.command = " ".join(["python studies/momentum/mpc_capacity.py"]
+                            + [shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv)])
     args.out.mkdir(parents=True, exist_ok=True)
-    all_cases = cases()
+    sats = list(SATELLITES)
+    all_cases = cases(args.capacities, {sat: o for sat, o in zip(sats, (args.li_offsets, args.operator_offsets)) if o})
     rows = [{k: v for k, v in case.items() if k != "overrides"} for case in all_cases]
     runs, walls = {}, {}
+    earlier = json.loads((args.out / "mpc_capacity.json").read_text()) if set(args.fly) != set(PLANNERS) else None
+    args.carried = [p for p in PLANNERS if p not in args.fly]
     for planner, (base, overrides, flies) in PLANNERS.items():
         chosen = [k for k, case in enumerate(all_cases) if flies(case)]
+        if planner not in args.fly:  # the earlier run's cells, case by case
+            key = {(r["satellite"], r["offset_m"], r["capacity_nms"]): i for i, r in enumerate(earlier["rows"])}
+            at = {k: key.get((rows[k]["satellite"], rows[k]["offset_m"], rows[k]["capacity_nms"])) for k in chosen}
+            found = [k for k in chosen if at[k] is not None and planner in earlier["rows"][at[k]]]
+            order = [i for i, r in enumerate(earlier["rows"]) if planner in r]
+            runs[planner] = [earlier["runs"][planner][order.index(at[k])] for k in found]
+            walls[planner] = earlier["wall_s"][planner]
+            for k in found:
+                rows[k][planner] = earlier["rows"][at[k]][planner]
+            continue
         runs[planner], walls[planner] = fly(base, overrides, [all_cases[k] for k in chosen], args.days, args.samples)
         for k, run in zip(chosen, runs[planner], strict=True):
             rows[k][planner] = summary(run, rows[k]["capacity_nms"])
