@@ -183,7 +183,7 @@ def _masked(record: dict, recovering) -> dict:
 def with_recovery(controller: Controller) -> Controller:
     """``controller`` with the re-acquisition law of this module (its ``fields`` gain ``recovery``)."""
     use_mean = controller.reference_cycles > 0
-    arms = controller.bound_geometry == "arms"  # Li's two arms (QFFC, FOMPC, MPC), else one thruster
+    arms = controller.spec.bound_geometry == "arms"  # Li's two arms (QFFC, FOMPC, MPC), else one thruster
     solved_of = (lambda plan: controller.record(plan).get("solved", jnp.asarray(True))) \
         if controller.record is not None else (lambda plan: jnp.asarray(True))
 
