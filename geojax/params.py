@@ -124,7 +124,7 @@ class Params(NamedTuple):
     """One sample's parameters: every leaf is an array (vmapped over by a sweep, differentiated by a tuning).
 
     The table dicts hold the SI leaves declared by ``Field.si`` (``thrusters["beta_max_rad"]``,
-    ``station["lon_rad"]``, ``errors["h_rv"]``, ``controller["k_h_per_m2_s"]``).
+    ``station["lon_rad"]``, ``errors["sigma3_r_m"]``, ``controller["k_h_per_m2_s"]``).
     """
 
     initial: SpacecraftState  # the initial state, in the scenario's orbit representation

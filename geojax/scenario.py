@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from geojax import scenario_cluster, scenario_physics
+from geojax import nominal_errors, scenario_cluster, scenario_physics
 from geojax.physics import constants as c
 from geojax.physics.forces import ForceModel
 from geojax.physics.frames import earth_rotation_angle_rad
@@ -29,8 +29,7 @@ from geojax.params import Field, check_table
 from geojax.physics.propulsion import arm_limits_deg
 from geojax.physics.time import TT_MINUS_TAI_S, parse_utc, tai_minus_utc_s, tt_seconds_from_utc
 from geojax.control.base import ARM_LIMIT_KEYS
-from geojax.scenario_schema import (EPHEMERIS_UTC_RANGE, NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M,
-                                    NOMINAL_3SIGMA_V_MPS, ORBIT_KEYS)
+from geojax.scenario_schema import EPHEMERIS_UTC_RANGE, ORBIT_KEYS
 from geojax.scenario_schema import SCHEMA as CORE_SCHEMA
 from geojax.scenario_toml import to_toml
 from geojax import states as parts
@@ -293,7 +292,7 @@ def _validate(raw: dict, controller=None) -> dict:
             config.update(out)
     _check_orbit(config["orbit"])
     _check_gravity(config["forces"])
-    config["errors"] = absolute_errors(config["errors"])
+    nominal_errors.sigma3(config["errors"])  # a size and its preset agree
     spec = controller.spec if controller is not None else _lookup(config["controller"]["kind"]).SPEC
     if spec.validate is not None:
         spec.validate(config)
@@ -323,50 +322,6 @@ def _check_honoured(config: dict, spec) -> None:
         if config[table][name] != SCHEMA[table][name].default:
             raise ValueError(f"{key}: the {kind} controller does not read it ({why}), got {config[table][name]!r}; "
                              f"leave it out")
-# Each part of the determination and attitude errors: (its absolute key, its multiplier, its own scale, Li 2022's
-# nominal 3 sigma of eq. (48)); a part's 3 sigma is multiplier x scale x nominal (loop.simulate.measured_mee,
-# control.burns.attitude_error_rad).
-ERROR_PARTS = {
-    "rv": (("sigma3_r_m", "h_rv", "rv_r", NOMINAL_3SIGMA_R_M, "m"),
-           ("sigma3_v_mps", "h_rv", "rv_v", NOMINAL_3SIGMA_V_MPS, "m/s")),
-    "att": (("sigma3_att_deg", "h_att", "att_yaw", NOMINAL_3SIGMA_ATT_DEG, "deg"),
-            ("sigma3_att_deg", "h_att", "att_pitch", NOMINAL_3SIGMA_ATT_DEG, "deg")),
-}
-
-
-def absolute_errors(errors: dict) -> dict:
-    """The validated ``[errors]`` table with its 3-sigma keys (``sigma3_r_m``, ``sigma3_v_mps``,
-    ``sigma3_att_deg``) turned into the multipliers the loop reads, so the loop and every default number are
-    unchanged.  Where a group's multipliers are left at their defaults (``h_rv`` 0, ``rv_r`` and ``rv_v`` 1;
-    ``h_att`` 0, ``att_yaw`` and ``att_pitch`` 1), the multiplier becomes the largest given part's multiple of
-    its nominal (to 12 significant digits) and each part's scale its own multiple over that (1 where the parts
-    keep the nominal ratio, so ``sigma3_r_m = 0.6``, ``sigma3_v_mps = 1e-4`` is ``h_rv = 2`` exactly, the same
-    numbers bit for bit; a part not given is 0).  Where they are set
-    too, each given part must be what they make (1e-9 relative), else ``ValueError`` naming both."""
-    errors = dict(errors)
-    for parts in ERROR_PARTS.values():
-        given = [(part, errors[part[0]]) for part in parts if errors[part[0]] is not None]
-        if not given:
-            continue
-        multiplier = parts[0][1]
-        scales = sorted({part[2] for part in parts})
-        if errors[multiplier] != 0.0 or any(errors[scale] != 1.0 for scale in scales):
-            for (key, _, scale, nominal, unit), value in given:
-                implied = errors[multiplier] * errors[scale] * nominal
-                if not math.isclose(value, implied, rel_tol=1e-9, abs_tol=0.0):
-                    raise ValueError(f"errors.{key}: {value:g} {unit} contradicts errors.{multiplier} = "
-                                     f"{errors[multiplier]:g} x errors.{scale} = {errors[scale]:g} x the nominal "
-                                     f"{nominal:g} {unit} (Li 2022 eq. (48)) = {implied:g} {unit}; give one of them")
-            continue
-        ratios = {scale: 0.0 for scale in scales}
-        for (_, _, scale, nominal, _), value in given:  # 12 digits: 0.15 deg is H 3, not 2.9999999999999996
-            ratios[scale] = float(f"{value / nominal:.12g}")
-        errors[multiplier] = max(ratios.values())
-        if errors[multiplier] > 0:
-            errors.update({scale: ratio / errors[multiplier] for scale, ratio in ratios.items()})
-    return errors
-
-
 def _check_ephemeris_range(utc, config: dict) -> None:
     """The run (epoch to epoch + duration) within the dates of ``EPHEMERIS_UTC_RANGE`` for its ephemeris."""
     import datetime as dt

@@ -4,7 +4,7 @@ orbit keys each kind of initial elements needs.  ``geojax.scenario`` validates a
 
 from __future__ import annotations
 
-from geojax.nominal_errors import NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS
+from geojax.nominal_errors import AXES, NOMINAL_3SIGMA_ATT_DEG, NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS
 from geojax.params import LOG, NUMBER as _NUMBER, REQUIRED, Field, degrees
 from geojax.physics import constants as c
 from geojax.physics.forces import ForceModel
@@ -91,39 +91,35 @@ SCHEMA: dict[str, dict[str, Field]] = {
     # The [controller] table: `kind` here, `recovery` from geojax.control.recovery, the other keys from the
     # controller's module (control.REGISTRY); geojax.scenario joins them.
     "controller": {"kind": Field(str, "none")},
-    # Li 2022, eqs. (47)-(48): multiples H of the nominal 3-sigma errors per component (0.3 m, 5e-5 m/s, 0.05 deg),
-    # or the 3-sigma errors themselves (sigma3_*: they set the multipliers, ``geojax.scenario.absolute_errors``).
+    # Each error stated once (``geojax.nominal_errors``): its 3-sigma size (sigma3_*), or for Li 2022's errors
+    # (eqs. (47)-(48)) the multiple H of the paper's nominal 3-sigma errors (0.3 m, 5e-5 m/s, 0.05 deg).
     "errors": {
-        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_rv", symbol="H_rv", unit="",
-                      doc=f"orbit-determination error: a multiple of Li 2022's nominal 3-sigma per component, "
-                          f"{NOMINAL_3SIGMA_R_M:g} m and {NOMINAL_3SIGMA_V_MPS:g} m/s (eq. (48)); 0: none"),
-        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, si="h_att", symbol="H_att", unit="",
-                       doc=f"attitude (yaw and pitch) error of the burns: a multiple of Li 2022's nominal 3-sigma, "
-                           f"{NOMINAL_3SIGMA_ATT_DEG:g} deg (eq. (48)); 0: none"),
+        "h_rv": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, symbol="H_rv", unit="",
+                      doc=f"orbit-determination error as a multiple of Li 2022's nominal 3-sigma per component, "
+                          f"{NOMINAL_3SIGMA_R_M:g} m and {NOMINAL_3SIGMA_V_MPS:g} m/s (eq. (48)): a preset of "
+                          f"sigma3_r_m and sigma3_v_mps; 0: none"),
+        "h_att": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=1e6, symbol="H_att", unit="",
+                       doc=f"attitude (yaw and pitch) error of the burns as a multiple of Li 2022's nominal 3-sigma, "
+                           f"{NOMINAL_3SIGMA_ATT_DEG:g} deg (eq. (48)): a preset of sigma3_att_deg; 0: none"),
         "sigma3_r_m": Field(_NUMBER, None, lower=0.0, lower_inclusive=True, upper=1e6, symbol="3σ_r",
-                            doc="orbit-determination position error, 3-sigma per component, in m: sets errors.h_rv "
-                                "(and rv_r, rv_v) instead of giving them"),
+                            doc="orbit-determination (Gaussian fix) position error, 3-sigma per component, in m "
+                                "(unset: errors.h_rv's)"),
         "sigma3_v_mps": Field(_NUMBER, None, lower=0.0, lower_inclusive=True, upper=1e3, symbol="3σ_v",
-                              doc="orbit-determination velocity error, 3-sigma per component, in m/s: sets "
-                                  "errors.h_rv (and rv_r, rv_v) instead of giving them"),
+                              doc="orbit-determination (Gaussian fix) velocity error, 3-sigma per component, in m/s "
+                                  "(unset: errors.h_rv's)"),
         "sigma3_att_deg": Field(_NUMBER, None, lower=0.0, lower_inclusive=True, upper=1e4, symbol="3σ_att",
-                                doc="attitude error of the burns, 3-sigma in yaw and in pitch, in deg: sets "
-                                    "errors.h_att instead of giving it"),
+                                doc="pointing error of every burn, 3-sigma in yaw and in pitch, in deg (unset: "
+                                    "errors.h_att's)"),
         "sigma3_dv_pct": Field(_NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=100.0, si="sigma3_dv_frac",
                                to_si=0.01, symbol="3σ_ΔV", unit="%",
-                               doc="execution error of each burn's magnitude (its thrust level, the plan "
-                                   "unaware), 3-sigma in % of the planned; 0: none"),
-        # How the attitude error enters (control.burns; studies/ablation/li_attitude_error.py): its yaw and pitch
-        # parts scaled (1: eq. (47) as printed), one draw shared by a cycle's two burns instead of one each, and
-        # the burns' magnitudes re-fitted to the directions flown (the plan knows the error) instead of kept.
-        "att_yaw": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="att_yaw"),
-        "att_pitch": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="att_pitch"),
+                               doc="thrust-level error of every burn (the plan unaware), 3-sigma in % of the "
+                                   "planned; 0: none"),
+        # How the attitude error enters (physics.execution; studies/ablation/li_attitude_error.py): on both axes (Li's
+        # eq. (47) as printed) or one, one draw shared by a cycle's two burns instead of one each, and the burns'
+        # magnitudes re-fitted to the directions flown (the plan knows the error) instead of kept.
+        "att_axes": Field(str, "yaw_pitch", choices=tuple(AXES)),
         "att_shared": Field(bool, False, si="att_shared"),
         "att_known": Field(bool, False, si="att_known"),
-        # How the determination error enters (loop.simulate.measured_mee; studies/ablation/li_fig17_width.py): its
-        # position and velocity parts scaled (1: eq. (48) as printed, 3 sigma per component).
-        "rv_r": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="rv_r"),
-        "rv_v": Field(_NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=1e6, si="rv_v"),
     },
     "forces": {
         "j2": Field(bool, True),

@@ -138,8 +138,8 @@ def test_the_planner_flies_its_whole_burns_around_long_passes(kind):
     and the FOMPC (its flown cycle moved, at the annealing's north-south fraction)."""
     from geojax.runner import rollout
 
-    base = {"duration.days": 4, "navigation.burns_during_passes": False, "navigation.burn_magnitude_sigma_pct": 0.0,
-            "navigation.burn_pointing_sigma_deg": 0.0, "navigation.stations[0].pass_s": 14400.0,
+    base = {"duration.days": 4, "navigation.burns_during_passes": False, "errors.sigma3_dv_pct": 0.0,
+            "errors.sigma3_att_deg": 0.0, "navigation.stations[0].pass_s": 14400.0,
             "navigation.stations[1].pass_s": 14400.0, "navigation.stations[0].phase_s": 17000.0,
             "navigation.stations[1].phase_s": 17000.0}
     ratios = {}

@@ -1,4 +1,4 @@
-"""How the attitude error enters a planned pair of burns (Li 2022 eqs. (47)-(48); ``control.burns``).
+"""How the attitude error enters a planned pair of burns (Li 2022 eqs. (47)-(48); ``physics.execution``).
 
 Independent checks: eq. (48)'s 3 sigma = 0.05 deg x H_att against sample statistics of many cycles' draws, a
 burn pair whose directions are exactly the planned ones (the re-fit must give back the planned magnitudes),
@@ -13,26 +13,27 @@ import numpy as np
 import pytest
 
 from geojax.control import burns
+from geojax.physics.execution import attitude_error_rad
 from geojax.control.effects import cycle_coast_s, effect_matrix
 from geojax.control.qffc import BurnPair
 
-ERRORS = {"h_att": 300.0, "att_yaw": 1.0, "att_pitch": 1.0, "att_shared": 0.0, "att_known": 0.0}
+ERRORS = {"sigma3_att_deg": 15.0, "att_axes": [1.0, 1.0], "att_shared": 0.0, "att_known": 0.0}  # H_att = 300
 
 
 def _draws(errors, n=4000):
     errors = {k: jnp.asarray(v) for k, v in errors.items()}
     keys = jax.random.split(jax.random.PRNGKey(0), n)
-    return np.degrees(np.asarray(jax.vmap(lambda k: burns.attitude_error_rad(errors, k))(keys)))  # [n, 2, 2]
+    return np.degrees(np.asarray(jax.vmap(lambda k: attitude_error_rad(errors, k))(keys)))  # [n, 2, 2]
 
 
 def test_attitude_error_has_eq_48s_sigma_and_its_switches():
     """Eq. (48): 3 sigma = 0.05 deg x H_att, so 5 deg at H_att = 300, in yaw and pitch and for each burn
-    (sample std of 4000 cycles within 4 %, the burns uncorrelated); att_pitch = 0 leaves the yaw only;
+    (sample std of 4000 cycles within 4 %, the burns uncorrelated); ``att_axes = "yaw"`` leaves the yaw only;
     att_shared gives both burns one draw."""
     draws = _draws(ERRORS)
     np.testing.assert_allclose(draws.std(axis=0), 5.0, rtol=0.04)
     assert abs(np.corrcoef(draws[:, 0, 0], draws[:, 0, 1])[0, 1]) < 0.06
-    yaw_only = _draws({**ERRORS, "att_pitch": 0.0})
+    yaw_only = _draws({**ERRORS, "att_axes": [1.0, 0.0]})
     assert np.all(yaw_only[:, 1] == 0.0) and yaw_only[:, 0].std() == pytest.approx(5.0, rel=0.04)
     shared = _draws({**ERRORS, "att_shared": 1.0})
     np.testing.assert_array_equal(shared[:, :, 0], shared[:, :, 1])

@@ -150,7 +150,7 @@ def test_lagrange_interpolation_of_the_written_states(run, tmp_path):
 def test_opm_has_one_maneuver_block_per_burn_flown(run, tmp_path):
     """``ccsds-ndm`` reads the OPM: one maneuver block per burn, as many as ``burns_total``, RTN, propellant
     negative, in time order; their Delta-V is the commanded one, within the filter's execution errors (1-sigma
-    ``burn_magnitude_sigma_pct``, pointing ``burn_pointing_sigma_deg``) of the Delta-V the loop delivered."""
+    ``errors.sigma3_dv_pct`` / 3, pointing ``errors.sigma3_att_deg`` / 3) of the Delta-V the loop delivered."""
     opm = read(run.save_maneuvers(tmp_path / "m.opm"))
     blocks = opm.body.segment.data.maneuver_parameters
     assert len(blocks) == run.metrics["burns_total"] > 0
@@ -160,8 +160,8 @@ def test_opm_has_one_maneuver_block_per_burn_flown(run, tmp_path):
     assert np.all(np.diff(ignition) > 0)
     dv = np.array([[float(getattr(b, f"man_dv_{i}").value) for i in (1, 2, 3)] for b in blocks]) * 1e3
     delivered = float(run.final.dv_mps - run.params.initial.dv_mps)
-    nav = run.scenario.config["navigation"]
-    sigma = np.hypot(nav["burn_magnitude_sigma_pct"] / 100, np.radians(nav["burn_pointing_sigma_deg"]))
+    errors = run.scenario.config["errors"]
+    sigma = np.hypot(errors["sigma3_dv_pct"] / 300, np.radians(errors["sigma3_att_deg"] / 3))
     assert abs(np.linalg.norm(dv, axis=1).sum() - delivered) < 4 * sigma * delivered
 
 

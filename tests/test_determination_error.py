@@ -1,15 +1,15 @@
-"""How the orbit-determination error enters the controller's fix (Li 2022 eqs. (47)-(48); ``loop.simulate``).
+"""How the orbit-determination error enters the controller's fix (Li 2022 eqs. (47)-(48); ``navigation.fix``).
 
 Independent check: the fix converted back to Cartesian (``physics.elements.mee_to_cartesian``, the inverse of
 the conversion the fix goes through) differs from the true r and v by exactly the closed form
-H_rv x (0.3 m, 5e-5 m/s) / 3 x noise per component, each part scaled by ``rv_r`` / ``rv_v``.
+(sigma3_r_m, sigma3_v_mps) / 3 x noise per component.
 """
 
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from geojax.loop.simulate import measured_mee
+from geojax.navigation.fix import fix_mee
 from geojax.physics.constants import MU_EARTH_M3_S2
 from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian
 from geojax.physics.propagate import CARTESIAN, MEE
@@ -20,27 +20,27 @@ V0 = np.array([0.0, 3074.66, 5.0])
 NOISE = jnp.array([0.7, -1.3, 2.1, -0.4, 1.9, -2.6])
 
 
-@pytest.mark.parametrize("dynamics", [MEE, CARTESIAN], ids=["mee", "cartesian"])
-@pytest.mark.parametrize("rv_r, rv_v", [(1.0, 1.0), (0.0, 1.0), (1.0, 0.0), (0.5, 2.0)])
-def test_fix_error_is_eq_48s_sigma_times_the_noise_in_each_part(dynamics, rv_r, rv_v):
-    """At H_rv = 800 (Li's largest stable level): 3 sigma = 240 m and 0.04 m/s per component, so the fix is off
-    the truth by 80 m x noise in position and 0.01333 m/s x noise in velocity, times rv_r and rv_v (0 removes
-    that part exactly)."""
+def _fix(dynamics, sigma3_r_m, sigma3_v_mps):
     mee = cartesian_to_mee(jnp.asarray(R0), jnp.asarray(V0), MU_EARTH_M3_S2)
     orbit = dynamics.from_mee(mee, MU_EARTH_M3_S2)
-    errors = {"h_rv": jnp.asarray(800.0), "rv_r": jnp.asarray(rv_r), "rv_v": jnp.asarray(rv_v)}
-    fix = measured_mee(dynamics, orbit, NOISE, errors, MU_EARTH_M3_S2)
+    r, v = mee_to_cartesian(dynamics.to_mee(orbit, MU_EARTH_M3_S2), MU_EARTH_M3_S2)
+    errors = {"sigma3_r_m": jnp.asarray(sigma3_r_m), "sigma3_v_mps": jnp.asarray(sigma3_v_mps)}
+    return mee, fix_mee(dynamics.to_mee(orbit, MU_EARTH_M3_S2), r, v, NOISE, errors, MU_EARTH_M3_S2)
+
+
+@pytest.mark.parametrize("dynamics", [MEE, CARTESIAN], ids=["mee", "cartesian"])
+@pytest.mark.parametrize("sigma3_r_m, sigma3_v_mps", [(240.0, 0.04), (0.0, 0.04), (240.0, 0.0), (120.0, 0.08)])
+def test_fix_error_is_the_stated_sigma_times_the_noise_in_each_part(dynamics, sigma3_r_m, sigma3_v_mps):
+    """At Li's H_rv = 800 (3 sigma 240 m and 0.04 m/s per component) the fix is off the truth by 80 m x noise in
+    position and 0.01333 m/s x noise in velocity; a part at 0 is removed exactly."""
+    _, fix = _fix(dynamics, sigma3_r_m, sigma3_v_mps)
     r, v = (np.asarray(x) for x in mee_to_cartesian(fix, MU_EARTH_M3_S2))
-    expected_r = rv_r * 80.0 * np.asarray(NOISE[:3])
-    expected_v = rv_v * (800.0 * 5e-5 / 3) * np.asarray(NOISE[3:])
-    np.testing.assert_allclose(r - R0, expected_r, atol=2e-6)  # the MEE round trip at 4e7 m: ~1e-8 m
-    np.testing.assert_allclose(v - V0, expected_v, atol=1e-9)
+    np.testing.assert_allclose(r - R0, sigma3_r_m / 3 * np.asarray(NOISE[:3]), atol=2e-6)  # MEE round trip: ~1e-8 m
+    np.testing.assert_allclose(v - V0, sigma3_v_mps / 3 * np.asarray(NOISE[3:]), atol=1e-9)
 
 
 def test_no_error_gives_the_true_state():
-    mee = cartesian_to_mee(jnp.asarray(R0), jnp.asarray(V0), MU_EARTH_M3_S2)
-    errors = {"h_rv": jnp.asarray(0.0), "rv_r": jnp.asarray(1.0), "rv_v": jnp.asarray(1.0)}
-    fix = measured_mee(MEE, mee, NOISE, errors, MU_EARTH_M3_S2)
+    mee, fix = _fix(MEE, 0.0, 0.0)
     np.testing.assert_allclose(np.asarray(fix), np.asarray(mee), rtol=1e-13, atol=1e-13)
 
 
@@ -66,18 +66,21 @@ def test_absolute_errors_give_the_numbers_of_the_equivalent_multiples_bit_for_bi
     assert result.metrics["dv_per_year_mps"][0] != result.metrics["dv_per_year_mps"][2]
 
 
-@pytest.mark.parametrize("given, multipliers", [
-    ({"errors.sigma3_r_m": 0.6}, {"h_rv": 2.0, "rv_r": 1.0, "rv_v": 0.0}),  # velocity not given: none
-    ({"errors.sigma3_r_m": 0.3, "errors.sigma3_v_mps": 1e-4}, {"h_rv": 2.0, "rv_r": 0.5, "rv_v": 1.0}),
-    ({"errors.sigma3_att_deg": 0.1}, {"h_att": 2.0, "att_yaw": 1.0, "att_pitch": 1.0}),
-    ({"errors.h_rv": 2.0, "errors.sigma3_r_m": 0.6}, {"h_rv": 2.0, "rv_r": 1.0, "rv_v": 1.0}),  # agreeing: kept
+@pytest.mark.parametrize("given, sizes", [
+    ({"errors.sigma3_r_m": 0.6}, {"sigma3_r_m": 0.6, "sigma3_v_mps": 0.0, "sigma3_att_deg": 0.0}),  # v not given: 0
+    ({"errors.h_rv": 2.0}, {"sigma3_r_m": 0.6, "sigma3_v_mps": 1e-4, "sigma3_att_deg": 0.0}),
+    ({"errors.h_att": 2.0}, {"sigma3_r_m": 0.0, "sigma3_v_mps": 0.0, "sigma3_att_deg": 0.1}),
+    ({"errors.h_rv": 2.0, "errors.sigma3_r_m": 0.6}, {"sigma3_r_m": 0.6, "sigma3_v_mps": 1e-4, "sigma3_att_deg": 0.0}),
 ])
-def test_absolute_errors_set_the_multipliers(given, multipliers):
-    """Closed form: a part's 3 sigma is h x scale x nominal (0.3 m, 5e-5 m/s, 0.05 deg)."""
-    from geojax import scenario
+def test_a_preset_gives_the_sizes_it_stands_for(given, sizes):
+    """Closed form: a preset H stands for H x Li's nominal 3 sigma (0.3 m, 5e-5 m/s, 0.05 deg); a size given
+    beside its agreeing preset is kept; the leaves the loop reads are these sizes."""
+    from geojax import nominal_errors, scenario
 
     errors = scenario.load("li2022-qffc", given).config["errors"]
-    assert {k: errors[k] for k in multipliers} == pytest.approx(multipliers, rel=1e-15)
+    assert nominal_errors.sigma3(errors) == pytest.approx(sizes, rel=1e-15)
+    leaves = nominal_errors.leaves(errors)
+    assert {k: float(leaves[k]) for k in sizes} == pytest.approx(sizes, rel=1e-15)
 
 
 @pytest.mark.parametrize("args, key", [(["--h-rv", "3", "--sigma3-r-m", "0.6"], "errors.sigma3_r_m"),

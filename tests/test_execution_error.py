@@ -13,7 +13,7 @@ import pytest
 
 import geojax
 from geojax import scenario
-from geojax.control.burns import MAGNITUDE_KEY
+from geojax.physics.execution import MAGNITUDE_KEY
 
 SIGMA3_PCT = 30.0  # large, so the check sees the error well above the mass's 1e-5 effect
 
@@ -39,3 +39,35 @@ def test_each_burn_flies_its_planned_magnitude_times_the_drawn_level():
 def test_a_law_without_planned_burns_refuses_the_key():
     with pytest.raises(ValueError, match="errors.sigma3_dv_pct"):
         scenario.load("katz2025-continuous", {"errors.sigma3_dv_pct": 5.0})
+
+
+def test_the_truth_read_back_from_planned_and_flown_is_exact():
+    """Closed form: ``truth_of`` inverts ``executed`` (a filter's model of a burn) for a burn flown with Li's
+    errors (yaw and pitch added to the planned angles, the level scaled): executed(planned, truth_of(...)) is the
+    flown direction and thrust to rounding, and nothing planned reads as no error."""
+    import jax.numpy as jnp
+
+    from geojax.physics.execution import executed, truth_of
+    from geojax.physics.propulsion import delta_v_direction_rsw
+
+    planned = delta_v_direction_rsw(jnp.asarray(0.7), jnp.asarray(-1.1))
+    flown = delta_v_direction_rsw(jnp.asarray(0.7 + 0.004), jnp.asarray(-1.1 - 0.003))
+    eps, phi = truth_of(planned, 0.5, flown, 0.5 * 1.03)
+    direction, thrust_n = executed(planned, 0.5, eps, phi)
+    np.testing.assert_allclose(np.asarray(direction), np.asarray(flown), atol=1e-15)
+    assert float(thrust_n) == pytest.approx(0.515, rel=1e-15) and float(eps) == pytest.approx(0.03, rel=1e-12)
+    assert abs(float(jnp.dot(phi, planned))) < 1e-18  # perpendicular to the line: no roll
+    eps0, phi0 = truth_of(jnp.zeros(3), 0.0, jnp.zeros(3), 0.0)
+    assert float(eps0) == 0.0 and np.all(np.asarray(phi0) == 0.0)
+
+
+def test_one_key_set_states_the_execution_errors_under_either_navigation_model():
+    """The truth's execution errors are the ``[errors]`` keys whether the Gaussian fix or the filter navigates;
+    the filter's priors default to them and are keys of their own."""
+    ekf = scenario.load("li2022-qffc-ranging", {"errors.h_att": 2.0, "errors.sigma3_dv_pct": 3.0})
+    assert ekf.config["navigation"]["assumed_sigma3_att_deg"] == pytest.approx(0.1)
+    assert ekf.config["navigation"]["assumed_sigma3_dv_pct"] == 3.0
+    own = scenario.load("li2022-qffc-ranging", {"navigation.assumed_sigma3_dv_pct": 9.0})
+    assert own.config["navigation"]["assumed_sigma3_dv_pct"] == 9.0 and own.config["errors"]["sigma3_dv_pct"] == 6.0
+    with pytest.raises(ValueError, match="errors.h_rv"):
+        scenario.load("li2022-qffc-ranging", {"errors.h_rv": 1.0})

@@ -24,13 +24,14 @@ from geojax.navigation.measurements import MODELS
 from geojax.physics.constants import OMEGA_EARTH_RAD_S
 from geojax.physics.frames import rsw_basis
 from geojax.navigation import leaves, prediction, updates
-from geojax.navigation.execution import executed, reset_execution
+from geojax.navigation.execution import reset_execution
+from geojax.physics.execution import executed
 from geojax.states import navigation as nav
 
 from test_navigation import _kepler
 
 UNPERTURBED = {"forces.j2": False, "forces.sun": False, "forces.moon": False, "forces.srp": False}
-NO_EXECUTION = {"navigation.burn_magnitude_sigma_pct": 0.0, "navigation.burn_pointing_sigma_deg": 0.0}
+NO_EXECUTION = {"errors.sigma3_dv_pct": 0.0, "errors.sigma3_att_deg": 0.0}
 
 
 class Burning(NamedTuple):
@@ -227,8 +228,8 @@ def test_keys_without_the_filter_are_refused(overrides, message):
     assert str(caught.value).startswith(message)
 
 
-@pytest.mark.parametrize("key, value", [("errors.h_rv", 1.0), ("errors.h_att", 1.0), ("errors.sigma3_dv_pct", 3.0)])
-def test_the_gaussian_fix_and_its_execution_errors_are_refused_with_the_filter(key, value):
+@pytest.mark.parametrize("key, value", [("errors.h_rv", 1.0), ("errors.sigma3_r_m", 0.3), ("errors.sigma3_v_mps", 1e-4)])
+def test_the_gaussian_fixs_error_is_refused_with_the_filter(key, value):
     with pytest.raises(ValueError, match=rf'^{key}: must be 0 with navigation.model = "ekf"'):
         scenario.load("li2022-qffc-ranging", {key: value})
 

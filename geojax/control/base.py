@@ -33,7 +33,7 @@ from geojax.physics.dynamics import Thrust, no_thrust
 # that a refusal names the key the file gave).
 ARM_LIMIT_KEYS = ("thrusters.beta_max_deg", "thrusters.beta_min_deg", "thrusters.alpha_max_deg",
                   "thrusters.alpha_min_deg")
-BURN_KEYS = ("thrusters.min_burn_s", "errors.sigma3_dv_pct", "errors.sigma3_att_deg", "errors.h_att", "errors.att_yaw", "errors.att_pitch",
+BURN_KEYS = ("thrusters.min_burn_s", "errors.sigma3_dv_pct", "errors.sigma3_att_deg", "errors.h_att", "errors.att_axes",
              "errors.att_shared", "errors.att_known")
 
 # The ``params.controller`` leaf holding a surrogate's temperature (``geojax.tune`` anneals it).

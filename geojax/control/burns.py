@@ -9,20 +9,17 @@ shadow is suspended and resumed until it has fired its full time (constraint
 (``propulsion.sunlit_clock``), with the shadow taken at the station's nominal
 position (within +-0.05 deg of the satellite, a few seconds of eclipse
 timing); a suspended burn that would run past the end of the cycle is cut
-there.  Each burn is flown with Gaussian yaw and pitch errors (1-sigma
-``errors.h_att`` x 0.05 deg / 3, Li 2022 eqs. (47)-(48)), drawn as row 1 of
-``normal(key_k, (2, 6))`` (the loop's orbit-determination fix takes row 0),
-added to the planned angles of the direction flown (``attitude_error_rad``), and with a magnitude error: each
-burn's thrust level scaled by 1 + e, e Gaussian with 1-sigma ``errors.sigma3_dv_pct`` / 3 %, drawn as
-``normal(fold_in(key_k, MAGNITUDE_KEY), (2,))`` (``magnitude_scale``), the burn's planned duration kept (the
-plan does not know the error; the mass flow follows the thrust at the stated Isp).  At 0 % the scale is exactly
-1 and every number is as without the key.
+there.  Each burn is flown with the truth's execution errors (``physics.execution``: yaw and pitch errors added
+to its planned angles, its thrust level scaled by 1 + e, drawn from the cycle's key), the burn's planned duration
+kept (the plan does not know the error; the mass flow follows the thrust at the stated Isp); the thrust says what
+was planned beside what is flown (``Thrust.planned_direction_rsw``) for a navigation filter.  At zero errors every
+number is as without them.
 Told by the faults part (``states.faults``) of the thrusters' levels, ``allocated`` picks each arm's working
 thruster and ``one_arm`` flies a cycle from one arm where the other is lost (Ye 2022's one-node north-south
 keeping; ``docs/contingencies.md``).
 The readings the paper leaves open are switches of ``errors`` (the ablation
 ``studies/ablation/li_attitude_error.py`` measures each): the yaw and pitch
-parts scaled apart (``att_yaw``, ``att_pitch``), one draw for both burns of a
+parts apart (``att_axes``), one draw for both burns of a
 cycle (``att_shared``), and the plan knowing the error: the two magnitudes
 re-fitted so that the burns flown along the perturbed directions best
 reproduce the planned effect (``att_known``, ``refit_magnitudes_mps``).
@@ -41,12 +38,8 @@ from geojax.physics.forces import sunlit_fraction_xyz
 from geojax.physics.propulsion import (alpha_beta_bounds, arm_limits, delta_v_direction_rsw, firing_fraction,
                                       sunlit_clock)
 from geojax.physics.trig import sincos
-from geojax.nominal_errors import NOMINAL_3SIGMA_ATT_DEG  # noqa: F401 (Li 2022 eq. (48))
+from geojax.physics.execution import attitude_error_rad, magnitude_scale
 from geojax.states.faults import NAME as FAULTS
-
-# ``fold_in`` constant of the magnitude errors' draw from the cycle's key (the FOMPC's search takes 1; the parts
-# their own named streams, ``states.base.stream_id``).
-MAGNITUDE_KEY = 2
 
 
 class BurnPlan(NamedTuple):
@@ -57,6 +50,7 @@ class BurnPlan(NamedTuple):
     clock: jnp.ndarray  # [n_steps + 1] sunlit time at every step boundary of the cycle
     clock_start: jnp.ndarray  # [2] sunlit-clock time at which each burn starts
     directions_rsw: jnp.ndarray  # [2, 3] unit velocity increments, attitude errors included
+    planned_rsw: jnp.ndarray  # [2, 3] unit velocity increments as planned (no attitude error)
     prediction: jnp.ndarray  # [6] predicted mean elements at the end of the cycle, without burns
     ns_fraction: jnp.ndarray  # [] north-south correction flown, as a fraction of the QFFC's (1 for the QFFC)
     start_s: jnp.ndarray  # [2] when each burn starts firing, s from the cycle start (after the shadow it met)
@@ -81,7 +75,7 @@ def fly(params, burns, prediction, ns_fraction, estimate, context, key, arms: in
             flying = jnp.where(lost, flying[::-1], flying)
             level = jnp.where(lost, level[::-1], level)
     t_mid = jnp.mod(burns.l_rad - l_start, 2 * jnp.pi) / (2 * jnp.pi) * cycle_s
-    attitude_error = attitude_error_rad(params.errors, key)
+    attitude_error = attitude_error_rad(params.errors, key)  # the truth's (``physics.execution``)
     directions = delta_v_direction_rsw(burns.alpha_rad + attitude_error[0], burns.beta_rad + attitude_error[1])
     v_mps = jnp.where(params.errors["att_known"] > 0, refit_magnitudes_mps(burns, directions, l_start), burns.v_mps)
     burn_s = v_mps * estimate.mass_kg / thrusters["thrust_n"]  # eq. (13)
@@ -92,7 +86,8 @@ def fly(params, burns, prediction, ns_fraction, estimate, context, key, arms: in
     clock = sunlit_clock(sunlit_fraction(context.env, params.station["lon_rad"], context.force_model), step_s)
     grid = jnp.arange(n_steps + 1) * step_s
     clock_start = jnp.interp(start, grid, clock)
-    return BurnPlan(burns, burn_s, clock, clock_start, directions, prediction, ns_fraction,
+    return BurnPlan(burns, burn_s, clock, clock_start, directions,
+                    delta_v_direction_rsw(burns.alpha_rad, burns.beta_rad), prediction, ns_fraction,
                     firing_start_s(clock, clock_start, step_s), magnitude_scale(params.errors, key), flying)
 
 
@@ -161,13 +156,6 @@ def one_arm(burns, keeper, limits):
     return burns._replace(dv_rsw_mps=dv_new, v_mps=v, alpha_rad=alpha, beta_rad=beta)
 
 
-def magnitude_scale(errors, key):
-    """The thrust level [2] each of a cycle's two burns flies, over the planned: 1 + e with e ~ N(0, (sigma3 /
-    3)^2), ``errors["sigma3_dv_frac"]`` the 3-sigma fraction (exactly 1 at 0)."""
-    draws = jax.random.normal(jax.random.fold_in(key, MAGNITUDE_KEY), (2,))
-    return 1.0 + errors["sigma3_dv_frac"] / 3 * draws
-
-
 def firing_start_s(clock, clock_start, step_s):
     """When burns [k] that start at sunlit-clock times ``clock_start`` begin firing, s from the cycle start: the
     first time ``clock`` [n_steps + 1] (sunlit time at the step boundaries) passes ``clock_start``, linear within
@@ -178,16 +166,6 @@ def firing_start_s(clock, clock_start, step_s):
     rise = clock[j + 1] - clock[j]
     within = jnp.where(rise > 0, (clock_start - clock[j]) / jnp.where(rise > 0, rise, 1.0), 0.0)
     return (j + jnp.clip(within, 0.0, 1.0)) * step_s
-
-
-def attitude_error_rad(errors, key):
-    """The yaw (row 0) and pitch (row 1) errors [2, 2] of a cycle's two burns (columns), rad: Li 2022 eq. (47)
-    with 1-sigma h_att x 0.05 deg / 3 (eq. (48)), each part scaled by ``att_yaw`` / ``att_pitch``, burn 1's draw
-    used for both when ``att_shared``."""
-    sigma_att_rad = jnp.deg2rad(errors["h_att"] * NOMINAL_3SIGMA_ATT_DEG / 3)
-    draws = jax.random.normal(key, (2, 6))[1, :4].reshape(2, 2)
-    draws = jnp.where(errors["att_shared"] > 0, draws[:, :1], draws)
-    return sigma_att_rad * jnp.stack([errors["att_yaw"], errors["att_pitch"]])[:, None] * draws
 
 
 # The rows of eq. (29) in velocity terms (m/s per unit): V_RS = -V_s/2 d lambda, V_DT = -R_s/3 d lambda_dot,
@@ -217,8 +195,10 @@ def thrust(params, plan: BurnPlan, t, state, environment, tilts_rsw=None) -> Thr
     tilt = None if tilts_rsw is None else jnp.where(fraction[0] > 0, tilts_rsw[0], tilts_rsw[1])
     flying = jnp.arange(2) if plan.thrusters is None else plan.thrusters  # burn k from arm k (``states.faults``)
     thruster = jnp.where(fraction[0] > 0, flying[0], flying[1])
-    return Thrust(direction, params.thrusters["thrust_n"] * level, params.thrusters["isp_s"], jnp.sum(fraction),
-                  tilt, thruster)
+    planned = jnp.where(fraction[0] > 0, plan.planned_rsw[0], plan.planned_rsw[1])
+    thrust_n = params.thrusters["thrust_n"]
+    return Thrust(direction, thrust_n * level, params.thrusters["isp_s"], jnp.sum(fraction), tilt, thruster,
+                  planned, thrust_n)
 
 
 def record(plan: BurnPlan) -> dict:

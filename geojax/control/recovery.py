@@ -215,6 +215,8 @@ def with_recovery(controller: Controller) -> Controller:
             back = back._replace(on_fraction=jnp.where(level > 0, back.on_fraction, 0.0), thruster=k)
         elif own.thruster is not None:  # a manipulator's one thruster (zone NSSK)
             back = back._replace(thruster=jnp.zeros_like(own.thruster))
+        if own.planned_direction_rsw is not None:  # the law flies as planned (no execution-error model)
+            back = back._replace(planned_direction_rsw=back.direction_rsw, planned_thrust_n=back.thrust_n)
         if own.thruster is None and back.thruster is not None:  # one structure for the choice below: None is 0
             own = own._replace(thruster=jnp.zeros_like(back.thruster))
         return jax.tree_util.tree_map(lambda r, o: jnp.where(plan.command.recovering, r, o), back, own)

@@ -223,15 +223,12 @@ def _filter_on(result) -> bool:
 
 def gaussian_fixes(result, truth_rv) -> tuple[np.ndarray, np.ndarray]:
     """(fixes [n, 6], their 1-sigma [6]): the orbit-determination fix the loop drew at each of the n cycle starts
-    from the true ``truth_rv`` [n, 6] there (``loop.simulate.measured_mee``'s errors, the same draws from the
-    run's seed), ECI m and m/s."""
-    from geojax.loop.simulate import NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS
-
+    from the true ``truth_rv`` [n, 6] there (``navigation.fix``'s errors, the same draws from the run's seed), ECI
+    m and m/s."""
     if result.seed is None:
         raise ValueError("oem_of: estimate: this Result was made with a key, not a seed; its fixes cannot be drawn")
-    errors = {k: float(v) for k, v in result.params.errors.items() if k in ("h_rv", "rv_r", "rv_v")}
-    sigma = errors["h_rv"] * np.repeat([errors["rv_r"] * NOMINAL_3SIGMA_R_M / 3,
-                                        errors["rv_v"] * NOMINAL_3SIGMA_V_MPS / 3], 3)
+    errors = result.params.errors
+    sigma = np.repeat([float(errors["sigma3_r_m"]) / 3, float(errors["sigma3_v_mps"]) / 3], 3)
     noise = np.asarray(_fix_noise(jax.random.key(result.seed), len(truth_rv)))
     return truth_rv + sigma * noise, sigma
 

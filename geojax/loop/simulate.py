@@ -8,10 +8,8 @@ predictor's reference run (the null controller, ``control.none``).
 
 Per cycle, at its start:
 
-1. the orbit-determination fix: the true position and velocity with Gaussian
-   errors (Li 2022 eqs. (47)-(48): 1-sigma ``errors.h_rv`` x 0.3 m / 3 and
-   x 5e-5 m/s / 3 per axis), drawn as row 0 of ``normal(key_k, (2, 6))`` with
-   ``key_k = fold_in(key, k)``;
+1. the orbit-determination fix: Li 2022's Gaussian fix (``navigation.fix``, drawn from ``key_k = fold_in(key,
+   k)``) unless a part navigates (``StateModel.navigates``: the navigation filter);
 2. the estimate: the fix, and for a controller that asks for the shared
    reference (``reference_cycles > 0``) the mean elements of Li 2022 eqs.
    (24)-(27) (``control.predictor``);
@@ -45,9 +43,9 @@ import jax.numpy as jnp
 
 from geojax.control.base import Controller, Estimate
 from geojax.control.predictor import Reference, boundary_elements, estimate_mean
-from geojax.nominal_errors import NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS
+from geojax.navigation.fix import fix_mee
 from geojax.physics.dynamics import SpacecraftState
-from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, semi_major_axis_m, wrap_angle
+from geojax.physics.elements import mee_to_cartesian, semi_major_axis_m, wrap_angle
 from geojax.physics.forces import Environment, ForceModel
 from geojax.physics.frames import latitude_rad, rsw_to_eci_xyz, subsatellite_lon_tan_lat_xyz
 from geojax.physics.fusion import materialized
@@ -235,7 +233,10 @@ def cycle_phases(controller: Controller, params: Params, key, *, step_s: float, 
         cycle_key = jax.random.fold_in(key, k)
         ctx = CycleContext(k, k * cycle_s, cycle_s, step_s, env_steps, window, fm)
         extra = _cycle_start(states, params, extra, dynamics, state, k, ctx.t_s, cycle_key, mu)
-        fix = measured_mee(dynamics, state.orbit, jax.random.normal(cycle_key, (2, 6))[0], params.errors, mu)
+        fix = dynamics.to_mee(state.orbit, mu)
+        if not any(m.navigates for m in states):  # the navigation part's Gaussian fix, the loop's to draw
+            fix = fix_mee(fix, *position_velocity(dynamics, state.orbit, mu), jax.random.normal(cycle_key, (2, 6))[0],
+                          params.errors, mu)
         estimate = _estimate_hooks(states, params, extra, Estimate(fix, jnp.zeros(6), state.mass_kg, ctx.t_s))
         if width:
             estimate = estimate._replace(mean=estimate_mean(
@@ -393,20 +394,6 @@ def position_velocity(dynamics: Dynamics, orbit, mu):
     return rv[:3], rv[3:]
 
 
-def measured_mee(dynamics: Dynamics, orbit, noise, errors: dict, mu):
-    """The orbit-determination fix as MEE: the true r and v with Gaussian errors (``noise`` [6] ~ N(0, 1)), 1 sigma
-    H_rv x 0.3 m / 3 per position component and H_rv x 5e-5 m/s / 3 per velocity component (Li 2022, eqs.
-    (47)-(48)), each part scaled by ``errors["rv_r"]`` / ``errors["rv_v"]`` (1 as printed)."""
-    r, v = position_velocity(dynamics, orbit, mu)
-    h_rv = errors["h_rv"]
-    r = r + h_rv * errors["rv_r"] * NOMINAL_3SIGMA_R_M / 3 * noise[:3]
-    v = v + h_rv * errors["rv_v"] * NOMINAL_3SIGMA_V_MPS / 3 * noise[3:]
-    fix = cartesian_to_mee(r, v, mu)
-    # Keep the true longitude continuous with the state's (cartesian_to_mee wraps it).
-    true_lon = dynamics.to_mee(orbit, mu)[5]
-    return fix.at[5].set(true_lon + wrap_angle(fix[5] - true_lon))
-
-
 def propagate(dynamics: Dynamics, state: SpacecraftState, env: Environment, force_model: ForceModel, step_s: float,
               thrust_fn=None):
     """Open-loop propagation through the same loop: ``thrust_fn(step_start_s, step_s) -> Thrust`` per step
@@ -417,7 +404,7 @@ def propagate(dynamics: Dynamics, state: SpacecraftState, env: Environment, forc
     controller = none.CONTROLLER if thrust_fn is None else Controller(
         stateless_init, no_plan, lambda params, plan, t, state, environment: thrust_fn(t, environment.step_s))
     zero = jnp.asarray(0.0)
-    params = Params(state, force_model, {"dry_mass_kg": zero}, {}, {"lon_rad": zero}, {"h_rv": zero, "rv_r": zero, "rv_v": zero}, {})
+    params = Params(state, force_model, {"dry_mass_kg": zero}, {}, {"lon_rad": zero}, {"sigma3_r_m": zero, "sigma3_v_mps": zero}, {})
     final, records = simulate(controller, params, Shared(env, None), jax.random.key(0), step_s=step_s,
                               dynamics=dynamics)
     return final, records.cycles.means

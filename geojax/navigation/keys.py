@@ -25,14 +25,12 @@ FIELDS = {
                            doc="the filter's prediction model: the loop's force model, or point-mass gravity"),
     "snc_mps2_per_rthz": Field(NUMBER, 0.0, **SIGMA, si="snc_mps2_per_rthz",
                                doc="state-noise compensation: white acceleration noise density per axis"),
-    "burn_magnitude_sigma_pct": Field(NUMBER, 0.0, lower=0.0, upper=100.0, lower_inclusive=True,
-                                      si="burn_magnitude_sigma", to_si=0.01,
-                                      doc="every burn's thrust-level error, 1 sigma (the truth's, and the filter's "
-                                          "prior of it)"),
-    "burn_pointing_sigma_deg": Field(NUMBER, 0.0, lower=0.0, upper=90.0, lower_inclusive=True,
-                                     si="burn_pointing_sigma_rad", to_si=degrees,
-                                     doc="every burn's pointing error per perpendicular axis, 1 sigma (the "
-                                         "truth's, and the filter's prior of it)"),
+    "assumed_sigma3_dv_pct": Field(NUMBER, None, lower=0.0, upper=100.0, lower_inclusive=True,
+                                   doc="the filter's prior of every burn's thrust-level error, 3 sigma in % (unset: "
+                                       "the truth's, errors.sigma3_dv_pct)"),
+    "assumed_sigma3_att_deg": Field(NUMBER, None, lower=0.0, upper=270.0, lower_inclusive=True,
+                                    doc="the filter's prior of every burn's pointing error per perpendicular axis, "
+                                        "3 sigma in deg (unset: the truth's, errors.sigma3_att_deg)"),
     "initial_sigma_r_m": Field(NUMBER, 100.0, lower=0.0, upper=MAX_SIGMA, si="initial_sigma_r_m",
                                doc="the filter's initial position sigma per axis (and the initial error's)"),
     "initial_sigma_v_mps": Field(NUMBER, 0.01, lower=0.0, upper=MAX_SIGMA, si="initial_sigma_v_mps",
@@ -120,9 +118,9 @@ def _tracker(prefix: str, table, fields: dict) -> dict:
 def check_with(config: dict) -> dict:
     """The ``[navigation]`` table of a validated scenario (``config``, its other tables checked) checked across
     tables; returns it completed.  With the Gaussian fix no other key of the table is read; with the filter the
-    Gaussian fix's and the controllers' own execution errors (``errors.h_rv``, ``h_att``, ``sigma3_dv_pct``) must
-    be 0: the filter replaces the fix, and it must know the plan the burns' errors are drawn about (those are
-    ``burn_magnitude_sigma_pct`` and ``burn_pointing_sigma_deg`` here)."""
+    Gaussian fix's error (``errors.h_rv``, ``sigma3_r_m``, ``sigma3_v_mps``) must be 0, the filter's estimate
+    replacing the fix, and the filter's priors of the burns' execution errors default to the truth's
+    (``errors.sigma3_dv_pct``, ``errors.sigma3_att_deg``)."""
     table = validate({k: v for k, v in config.get("navigation", {}).items() if v is not None})
     if table["model"] == "gaussian_fix":
         for key, field in FIELDS.items():
@@ -131,9 +129,11 @@ def check_with(config: dict) -> dict:
                                  f"set navigation.model = \"ekf\" or leave it out")
         return table
     errors = config["errors"]
-    for key, why in (("h_rv", "the filter's estimate replaces the Gaussian fix"),
-                     ("h_att", "the burns' pointing error is navigation.burn_pointing_sigma_deg"),
-                     ("sigma3_dv_pct", "the burns' magnitude error is navigation.burn_magnitude_sigma_pct")):
-        if errors[key] != 0:
-            raise ValueError(f"errors.{key}: must be 0 with navigation.model = \"ekf\" ({why}), got {errors[key]!r}")
+    for key in ("h_rv", "sigma3_r_m", "sigma3_v_mps"):
+        if errors[key]:
+            raise ValueError(f"errors.{key}: must be 0 with navigation.model = \"ekf\" (the filter's estimate "
+                             f"replaces the Gaussian fix), got {errors[key]!r}")
+    for key, truth in (("assumed_sigma3_dv_pct", "sigma3_dv_pct"), ("assumed_sigma3_att_deg", "sigma3_att_deg")):
+        if table[key] is None:
+            table[key] = errors[truth]
     return table

@@ -25,8 +25,8 @@ def leaves_of(table: dict) -> dict:
     deg = np.pi / 180.0
     out = {
         "snc_mps2_per_rthz": table["snc_mps2_per_rthz"],
-        "burn_magnitude_sigma": table["burn_magnitude_sigma_pct"] / 100.0,
-        "burn_pointing_sigma_rad": table["burn_pointing_sigma_deg"] * deg,
+        "burn_magnitude_sigma": one_sigma(table["assumed_sigma3_dv_pct"]) / 100.0,
+        "burn_pointing_sigma_rad": one_sigma(table["assumed_sigma3_att_deg"]) * deg,
         "initial_sigma_r_m": table["initial_sigma_r_m"],
         "initial_sigma_v_mps": table["initial_sigma_v_mps"],
         "burns_during_passes": float(table["burns_during_passes"]),
@@ -50,6 +50,11 @@ def leaves_of(table: dict) -> dict:
                    gnss_cadence_s=gnss["cadence_s"], gnss_pass_s=gnss["pass_s"], gnss_phase_s=gnss["phase_s"],
                    gnss_outages_s=_padded([gnss["outages_s"]])[0])
     return {k: jnp.asarray(v, jnp.float64) for k, v in out.items()}
+
+
+def one_sigma(sigma3: float) -> float:
+    """A 3-sigma size's 1 sigma, to 15 significant digits (0.3 deg is 0.1 deg, not the double below it)."""
+    return float(f"{sigma3 / 3:.15g}")
 
 
 def _padded(windows: list) -> np.ndarray:

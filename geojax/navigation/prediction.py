@@ -7,7 +7,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.navigation.execution import executed
+from geojax.physics.execution import executed
 from geojax.navigation.state import N_STATE, Layout, Navigation, n_estimated
 from geojax.physics.dynamics import SpacecraftState, Thrust, cartesian_rhs, mee_rhs
 from geojax.physics.elements import cartesian_to_mee, mee_to_cartesian, wrap_angle

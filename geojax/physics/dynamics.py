@@ -48,6 +48,11 @@ class Thrust(NamedTuple):
     # [] int or None: which thruster flies it, from 0 (``control.burns``: the burn's arm); None: thruster 0.  Read by
     # the parts that act on one thruster (``states.faults``); no leaf where a controller does not say.
     thruster: jnp.ndarray | None = None
+    # [3] and [] or None: the direction and thrust the controller planned, where it flies the burns' execution
+    # errors itself (``control.burns``: ``direction_rsw`` and ``thrust_n`` are then the flown ones); read by a
+    # navigation filter, which knows the errors' statistics, not the draws.  None: flown as planned.
+    planned_direction_rsw: jnp.ndarray | None = None
+    planned_thrust_n: jnp.ndarray | None = None
 
 
 def no_thrust() -> Thrust:

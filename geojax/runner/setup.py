@@ -23,7 +23,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax import compilation, traced
+from geojax import compilation, nominal_errors, traced
 from geojax.physics.constants import SIDEREAL_DAY_S
 from geojax.control import lookup, recovery, none
 from geojax.control.base import Controller
@@ -93,6 +93,7 @@ def params_of(sc: Scenario, controller: Controller, extra: tuple = ()) -> Params
     fields = {t: SCHEMA[t] for t in LEAF_TABLES if t != "controller"}
     fields["controller"] = controller.fields
     leaves = {t: table_leaves(cfg[t], fields[t]) for t in LEAF_TABLES}
+    leaves["errors"].update(nominal_errors.leaves(cfg["errors"]))  # each error's size, its preset converted
     return Params(initial, fm, **leaves, states=parts.leaves_of(cfg, extra))
 
 

@@ -57,7 +57,7 @@ class CycleStart(NamedTuple):
 
 
 # The streams the loop and the controllers draw from the cycle's key: rows of normal(key_k), fold_in(key_k, 1)
-# (the FOMPC's search) and fold_in(key_k, control.burns.MAGNITUDE_KEY).  A part's stream is never one of them.
+# (the FOMPC's search) and fold_in(key_k, physics.execution.MAGNITUDE_KEY).  A part's stream is never one of them.
 RESERVED_STREAMS = frozenset({0, 1, 2})
 # The navigation filter's stream: the value it drew from when it was the only part (the first of the tuple,
 # 1 << 16 + its place), kept so that every scenario with the filter keeps its numbers bit for bit.
@@ -131,6 +131,9 @@ class StateModel(NamedTuple):
     # records (``tests/test_lanes.py`` checks it against the columns); its records' bytes come from jax.eval_shape
     columns_per_cycle: int = 0
     stream: int | None = None  # its random stream's id (``stream_id``); None: a stable hash of its name
+    # The navigation slot: True where its ``estimate`` tells the controller the orbit (a filter), so the loop draws
+    # no Gaussian fix (``navigation.fix``) and hands the hook the true elements to keep its longitude continuous.
+    navigates: bool = False
 
 
 class Constraint(NamedTuple):

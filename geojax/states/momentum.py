@@ -187,7 +187,9 @@ def thrust(params, state: Wheels, flown: Thrust, ctx: ThrustContext):
     direction = jnp.stack([-u_new_b[2], u_new_b[0], -u_new_b[1]])
     state = state._replace(thrust_torque_body_nm=torque, thrust_start_eci_nm=c.T @ torque, cross_force_n=cross_n,
                            line_eci=jnp.where(firing, u_eci, state.line_eci), other_line_eci=other_eci)
-    return state, flown._replace(direction_rsw=direction, tilt_rsw=None)
+    planned = flown.planned_direction_rsw  # the tilt is planned: a filter is told it (``Thrust``)
+    planned = None if planned is None else planned + (direction - d)
+    return state, flown._replace(direction_rsw=direction, tilt_rsw=None, planned_direction_rsw=planned)
 
 
 def nozzle_distance_m(attitude: dict, u_hat, w_component):

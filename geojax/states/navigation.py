@@ -15,7 +15,8 @@ import jax
 import jax.numpy as jnp
 
 from geojax.navigation import ekf
-from geojax.navigation.execution import executed, reset_execution
+from geojax.navigation.execution import reset_execution
+from geojax.physics.execution import truth_of
 from geojax.navigation.keys import FIELDS as KEYS, check_with
 from geojax.navigation.leaves import bias_sigmas, initial_cartesian, layout_of, leaves_of, n_biases
 from geojax.navigation.prediction import elements_of, error_state_prediction, transition
@@ -31,7 +32,7 @@ from geojax.states.base import NAVIGATION_STREAM, Part, StateModel
 NAME = "navigation"
 # ``fold_in`` constants of the model's draws from its cycle key (the step's draws fold the step index into
 # MEASUREMENT_KEY first).
-INITIAL_KEY, BIAS_KEY, MEASUREMENT_KEY, BURN_KEY = 0, 1, 2, 3
+INITIAL_KEY, BIAS_KEY, MEASUREMENT_KEY = 0, 1, 2
 
 
 def init(layout: Layout, params, r_eci_m, v_eci_mps, env, fm) -> Navigation:
@@ -76,27 +77,28 @@ def cycle(layout: Layout, params, state: Navigation, start) -> Navigation:
     return state
 
 
-def thrust(layout: Layout, params, state: Navigation, planned: Thrust, ctx):
-    """The thrust flown: the planned one with the current burn's true execution errors, a new draw at each burn's
-    start (where the filter resets its own (eps, phi) to the errors' prior); the plan noted for ``step``."""
+def thrust(layout: Layout, params, state: Navigation, flown: Thrust, ctx):
+    """The thrust flown (no burn while a station tracks where ``burns_during_passes`` is 0) and the state noting
+    the plan for ``step``: the planned thrust the controller says it flew with the truth's execution errors
+    (``Thrust.planned_direction_rsw``; none said: flown as planned), those errors read back from the two
+    (``physics.execution.truth_of``), and at each burn's start the filter's estimate of them reset to its prior."""
     nav = params.states[NAME]
     if layout.stations:  # burns forbidden while a station's schedule is on (where ``burns_during_passes`` is 0)
         in_pass = jnp.any(jax.vmap(tracking_weight, in_axes=(None, 0))(ctx.t_s, station_schedules(nav)) > 0)
         allowed = jnp.where(in_pass, nav["burns_during_passes"], 1.0)
-        planned = planned._replace(on_fraction=planned.on_fraction * allowed)
-    firing = (planned.on_fraction > 0) & (planned.thrust_n > 0)
+        flown = flown._replace(on_fraction=flown.on_fraction * allowed)
+    planned_rsw = flown.direction_rsw if flown.planned_direction_rsw is None else flown.planned_direction_rsw
+    planned_n = flown.thrust_n if flown.planned_thrust_n is None else flown.planned_thrust_n
+    firing = (flown.on_fraction > 0) & (planned_n > 0)
     new_burn = firing & ~state.firing
     sigma = jnp.concatenate([nav["burn_magnitude_sigma"][None], jnp.full(3, nav["burn_pointing_sigma_rad"])])
-    key = jax.random.fold_in(jax.random.fold_in(state.key, BURN_KEY), state.step_index)
-    truth = jnp.where(new_burn, sigma * jax.random.normal(key, (4,)), state.truth_execution)
+    eps, phi = truth_of(planned_rsw, planned_n, flown.direction_rsw, flown.thrust_n)
+    truth = jnp.where(firing, jnp.concatenate([eps[None], phi]), state.truth_execution)
     prior = reset_execution(state.p, sigma)
-    direction, thrust_n = executed(planned.direction_rsw, planned.thrust_n, truth[0], truth[1:])
     state = state._replace(p=jnp.where(new_burn, prior, state.p),
                            execution=jnp.where(new_burn, 0.0, state.execution), truth_execution=truth, firing=firing,
-                           planned_direction_rsw=planned.direction_rsw, planned_thrust_n=planned.thrust_n,
-                           planned_on_fraction=planned.on_fraction, isp_s=planned.isp_s)
-    flown = planned._replace(direction_rsw=jnp.where(firing, direction, planned.direction_rsw),
-                             thrust_n=jnp.where(firing, thrust_n, planned.thrust_n))
+                           planned_direction_rsw=planned_rsw, planned_thrust_n=planned_n,
+                           planned_on_fraction=flown.on_fraction, isp_s=flown.isp_s)
     return state, flown
 
 
@@ -203,7 +205,7 @@ def model(layout: Layout) -> StateModel:
     return StateModel(NAME, functools.partial(init, layout), functools.partial(step, layout), summary, metrics,
                       cycle=functools.partial(cycle, layout), columns=columns,
                       thrust=functools.partial(thrust, layout), estimate=estimate,
-                      columns_per_cycle=15 + 2 * n_b, stream=NAVIGATION_STREAM)
+                      columns_per_cycle=15 + 2 * n_b, stream=NAVIGATION_STREAM, navigates=True)
 
 
 # The registry's entry (metrics and columns, which do not depend on the layout).

@@ -48,8 +48,8 @@ WEAK = {"thrusters.beta_max_deg": 90.0, "thrusters.beta_min_deg": 0.0, "thruster
         "thrusters.alpha_min_deg": 90.0}
 VARIANTS = {
     "flown": ({}, "eq. (47) on the direction flown, one draw per burn, magnitudes as planned (ours)"),
-    "yaw-only": ({"errors.att_pitch": 0.0}, "the error in the yaw alpha only"),
-    "pitch-only": ({"errors.att_yaw": 0.0}, "the error in the pitch beta only"),
+    "yaw-only": ({"errors.att_axes": "yaw"}, "the error in the yaw alpha only"),
+    "pitch-only": ({"errors.att_axes": "pitch"}, "the error in the pitch beta only"),
     "shared": ({"errors.att_shared": True}, "one draw for both burns of a cycle"),
     "plan-known": ({"errors.att_known": True}, "magnitudes re-fitted to the directions flown"),
     "weak-limits": (WEAK, "Table 1 weak arm limits"),

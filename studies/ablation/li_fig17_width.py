@@ -11,7 +11,7 @@ errors (Fig. 4).  Ours (``studies/li2022/results/fig17_at_h_rv_800.md``, the Fig
 
 * the error's scale: H_rv = 0, 200, 400, 800 as printed (3 sigma per component), and 800 read as 3 sigma of the
   vector's norm (each component sigma / sqrt(3), the same draws as H_rv = 462);
-* which part of the fix: the position error only (``errors.rv_v = 0``), the velocity error only (``rv_r = 0``);
+* which part of the fix: the position error only (``errors.sigma3_v_mps = 0``), the velocity error only (``sigma3_r_m = 0``);
 * the measure of the excursion, on every run: the osculating sub-satellite longitude's half-range over the
   year (ours, acquisition included), the same from day 30 on, the half-range of the one-cycle mean longitude
   (Li's mean elements) from the second cycle on, and the 95th percentile over cycles of the cycle's largest
@@ -37,6 +37,7 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 import geojax  # noqa: E402
+from geojax.nominal_errors import NOMINAL_3SIGMA_R_M, NOMINAL_3SIGMA_V_MPS  # noqa: E402
 from geojax import sweep  # noqa: E402
 from geojax.physics.constants import SIDEREAL_DAY_S  # noqa: E402
 from geojax.physics.elements import wrap_angle  # noqa: E402
@@ -54,8 +55,8 @@ VARIANTS = {
     "norm reading": ({"errors.h_rv": LI_LEVEL / np.sqrt(3.0)},
                      "800, with 3 sigma the norm of the 3-vector error (per component / sqrt 3)"),
     "as printed": ({"errors.h_rv": LI_LEVEL}, "800, 3 sigma per component (ours)"),
-    "position only": ({"errors.h_rv": LI_LEVEL, "errors.rv_v": 0.0}, "800, the velocity error removed"),
-    "velocity only": ({"errors.h_rv": LI_LEVEL, "errors.rv_r": 0.0}, "800, the position error removed"),
+    "position only": ({"errors.sigma3_r_m": LI_LEVEL * NOMINAL_3SIGMA_R_M, "errors.sigma3_v_mps": 0.0}, "800, the velocity error removed"),
+    "velocity only": ({"errors.sigma3_r_m": 0.0, "errors.sigma3_v_mps": LI_LEVEL * NOMINAL_3SIGMA_V_MPS}, "800, the position error removed"),
 }
 MEASURES = (("osc_deg", "osculating, whole year (ours)"), ("osc_after_deg", f"osculating, day {ACQUISITION_DAYS} on"),
             ("mean_deg", "one-cycle mean longitude"), ("p95_deg", "95th percentile of the cycles' largest |δλ|"))

@@ -36,8 +36,6 @@ RANGING = """
 model = "ekf"
 filter_forces = "loop"
 snc_mps2_per_rthz = 1e-9
-burn_magnitude_sigma_pct = 2.0
-burn_pointing_sigma_deg = 0.1
 initial_sigma_r_m = 100.0
 initial_sigma_v_mps = 0.01
 
@@ -78,7 +76,8 @@ def sweep_file(folder: Path, name: str, base: str, controller: str, clusters: in
     path = folder / f"{name}.toml"
     path.write_text(f'name = "{name}"\nscenario = "{base}"\ncontrollers = ["{controller}"]\nrepetitions = {clusters}\n'
                     f'seed = 2026\n[set]\n"duration.days" = {days}\n' +
-                    ('"errors.h_rv" = 1.0\n"errors.h_att" = 1.0\n' if errors else ""))
+                    ('"errors.h_rv" = 1.0\n"errors.h_att" = 1.0\n' if errors else
+                     '"errors.sigma3_dv_pct" = 6.0\n"errors.sigma3_att_deg" = 0.3\n'))  # the filter's: 2 %, 0.1 deg
     return path
 
 

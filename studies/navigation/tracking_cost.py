@@ -48,9 +48,9 @@ SETUPS = [
     ("σ_range 50 m", both("range_sigma_m", 50.0), True),
     ("1 pass/day", both("cadence_s", 86400.0), True),
     ("4 passes/day", both("cadence_s", 21600.0), True),
-    ("no execution errors", {"navigation.burn_magnitude_sigma_pct": 0.0, "navigation.burn_pointing_sigma_deg": 0.0},
+    ("no execution errors", {"errors.sigma3_dv_pct": 0.0, "errors.sigma3_att_deg": 0.0},
      False),
-    ("magnitude error 5 %", {"navigation.burn_magnitude_sigma_pct": 5.0}, False),
+    ("magnitude error 5 %", {"errors.sigma3_dv_pct": 15.0}, False),
 ]
 ONE_STATION = ("one station (Xichang), 5 m, 2 passes/day, 2 %", {"navigation.stations": [XICHANG]}, True)
 H_RV = [0.0, 10.0, 20.0, 50.0, 100.0, 200.0, 400.0, 800.0]
