@@ -103,6 +103,9 @@ def _unread_cases():
             table, name = key.split(".")
             field = scenario.SCHEMA[table][name]
             default = field.default
+            if field.choices:  # a switch of words: another of its choices
+                yield shipped[kind], kind, key, next(c for c in field.choices if c != default)
+                continue
             value = 1.0 if default is None else (not default) if isinstance(default, bool) else default + 0.5
             if field.upper is not None and not isinstance(default, bool) and value >= field.upper:
                 value = default / 2  # within the key's own bounds, so the refusal is the controller's
