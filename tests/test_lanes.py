@@ -190,7 +190,8 @@ def test_every_metric_is_the_same_at_every_lane_width(name, overrides, n, days):
     for width in (n, 64, 1024):
         p, f, r = (rollout.pad_lanes(t, width) for t in (batch.params, final, records))
         m = rollout.metrics_batch(p, f, r, n_cycles=batch.n_cycles, step_s=batch.step_s,
-                                  steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1], states=batch.states)
+                                  steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1], states=batch.states,
+                                  controller_metrics=batch.controller.metrics)
         widths[width] = {k: np.asarray(v)[:n] for k, v in m.items()}
     for width in (64, 1024):
         differ = [k for k in widths[n] if not np.array_equal(widths[n][k], widths[width][k])]

@@ -181,7 +181,8 @@ def cluster_rollout(params, keys, shared, reference_env, alert_m, min_separation
     if ephemeris:
         records, kept = recorder.split(records)
         states = states[:-1]  # the recording's own model (``recorder.TRUTH``) last
-    metrics = jax.vmap(lambda p, f, c: summarize(p, f, Records(c, None), step_s, steps_per_cycle, states))(
+    metrics = jax.vmap(lambda p, f, c: summarize(p, f, Records(c, None), step_s, steps_per_cycle, states,
+                                                      controller.metrics))(
         params, final, records.cycles)
     out = final, records, separation, metrics, separation_metrics(separation, steps_per_cycle * step_s)
     return (*out, kept) if ephemeris else out

@@ -4,8 +4,8 @@ A ``Controller`` is three things kept apart.  Its **protocol**, the pure functio
 (``geojax.loop.simulate``) calls: ``init(params, context) -> state`` once; ``plan(params, state, estimate,
 context, key) -> (plan, state)`` once per cycle, from the on-board ``Estimate`` (never the truth); ``thrust(params,
 plan, t, spacecraft, environment) -> Thrust`` once per integration step; optionally ``record(plan) -> {name:
-array}`` (per-cycle records: ``"solved"`` counts cycles without a solution, ``control.burns.record`` feeds the
-burn metrics), ``reference_cycles`` (> 0: the loop provides the uncontrolled reference that many boundaries ahead,
+array}`` (per-cycle records: ``"solved"`` counts cycles without a solution) and ``metrics`` (what it says of a
+run from its records, ``control.burn_metrics`` for the planners), ``reference_cycles`` (> 0: the loop provides the uncontrolled reference that many boundaries ahead,
 Li 2022 eqs. (24)-(27)) and ``surrogate`` (a smooth stand-in for derivatives, ``geojax.tune``; its sharpness the
 leaf ``params.controller[SURROGATE_TEMPERATURE]``).  Its **spec** (``Spec``), what it asks of a scenario, read at
 load: its ``[controller]`` keys (a field with a ``transform`` is tunable), its checks, the thrusters it flies and
@@ -109,6 +109,11 @@ class Controller:
     # a leading satellite axis but the separation to keep (m, []): a cluster's loop (``loop.cluster``) calls it in
     # place of each satellite's ``plan`` where ``[collocation] coordinated`` asks (``control.mpc_cluster``).
     plan_cluster: Callable | None = None
+    # Its own metrics of a run, or None: the thrusters' duty per axis.  ``metrics(params, cycles, run_s, own) ->
+    # {name: scalar}`` over the loop's ``CycleRecord`` stacked over cycles (its ``record`` s in ``cycles.controller``),
+    # ``own`` [n_cycles] bool the cycles it flew itself (``control.recovery`` flies the others); the planners that
+    # fly ``control.burns`` say their burns' (``control.burn_metrics.metrics``).
+    metrics: Callable | None = None
 
     @property
     def fields(self) -> Mapping[str, Any]:

@@ -41,6 +41,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from geojax.control import burn_metrics
 from geojax.control import burns as burns_mod
 from geojax.control import qffc
 from geojax.control.base import Controller, Sizing, Spec
@@ -231,4 +232,4 @@ def controller(annealing: Annealing = Annealing(), around_passes: bool = False) 
     # 4.1 at 64) and a small sweep pads less; XLA's memory_analysis at 32 lanes, 10 and 40 cycles (li2022's
     # annealing): 16.7 and 22.7 kB per lane.
     return Controller(init, plan_cycle, burns_mod.thrust, SPEC, reference_cycles=annealing.n_max + 2,
-                      record=burns_mod.record, sizing=Sizing(lanes_cpu=32, working_bytes=16_000))
+                      record=burns_mod.record, metrics=burn_metrics.metrics, sizing=Sizing(lanes_cpu=32, working_bytes=16_000))

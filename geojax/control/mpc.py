@@ -45,6 +45,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
+from geojax.control import burn_metrics
 from geojax.control import burns as burns_mod
 from geojax.control import lp
 from geojax.control.base import Controller, Sizing, Spec
@@ -438,5 +439,5 @@ def controller(shape: Shape = Shape()) -> Controller:
     # Widths and memory (``geojax.lanes``): the interior point's matrices dominate (10 days, 2 loaded cores: 7.5-8.9e-3 s
     # per orbit per sample at 8 lanes, 1.0e-2 at 32 and 64), so 8 lanes per CPU core; XLA's memory_analysis at 8
     # lanes, 4 and 12 cycles (li2022-mpc's horizon): 1.73 MB per lane and 0.33 kB more per cycle.
-    return Controller(init, plan_cycle, thrust, SPEC, reference_cycles=shape.n_max + 1, record=record,
+    return Controller(init, plan_cycle, thrust, SPEC, reference_cycles=shape.n_max + 1, record=record, metrics=burn_metrics.metrics,
                       sizing=Sizing(lanes_cpu=8, working_bytes=1_750_000, one_sample_opt_level=1))

@@ -68,6 +68,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
+from geojax.control import burn_metrics
 from geojax.control import burns as burns_mod
 from geojax.control import lp, mpc
 from geojax.control.base import Controller, Sizing, Spec
@@ -442,5 +443,5 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
     # Widths and memory as the MPC's (``mpc.controller``: 8 lanes per CPU core, its interior point's matrices
     # dominating); the lane's bytes scaled from the MPC's measured 1.73 MB by the decisions per cycle (20 against
     # 12), an estimate, not measured: the GPU's batch sizing is its only reader.
-    return Controller(init, plan_cycle, thrust, SPEC, reference_cycles=shape.n_max + 1, record=record,
+    return Controller(init, plan_cycle, thrust, SPEC, reference_cycles=shape.n_max + 1, record=record, metrics=burn_metrics.metrics,
                       sizing=Sizing(lanes_cpu=8, working_bytes=2_500_000, one_sample_opt_level=1))

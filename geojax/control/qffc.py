@@ -13,6 +13,7 @@ import dataclasses
 import jax.numpy as jnp
 
 from geojax.control import around_passes
+from geojax.control import burn_metrics
 from geojax.control import burns as burns_mod
 from geojax.control.base import Controller, Sizing, Spec, stateless_init
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_columns, remaining_fraction
@@ -177,7 +178,7 @@ SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS)
 # Reads the reference at the cycle's start boundary and the two after it (``model_cycle``).
 # Widths and memory (``geojax.lanes``): 128 lanes per CPU core (simulated years/s over 30 days on one pinned core: 77 at
 # 64 lanes, 89 at 128, 100 at 256); XLA's memory_analysis at 64 lanes, 10 and 40 cycles: 15.6 and 21.3 kB per lane.
-CONTROLLER = Controller(stateless_init, _plan, burns_mod.thrust, SPEC, reference_cycles=3, record=burns_mod.record,
+CONTROLLER = Controller(stateless_init, _plan, burns_mod.thrust, SPEC, reference_cycles=3, record=burns_mod.record, metrics=burn_metrics.metrics,
                         sizing=Sizing(lanes_cpu=128, working_bytes=16_000))
 
 

@@ -225,8 +225,14 @@ def with_recovery(controller: Controller) -> Controller:
         own = {} if controller.record is None else controller.record(plan.inner)
         return {**_masked(own, plan.command.recovering), "recovering": plan.command.recovering}
 
+    def metrics(params, cycles, run_s, own) -> dict:  # the controller's own over its cycles, then the law's
+        recovering = cycles.controller["recovering"]
+        inner = {} if controller.metrics is None else controller.metrics(params, cycles, run_s, own & ~recovering)
+        return {**inner, **recovery_metrics(cycles.controller, cycles.dv_mps)}
+
     surrogate = None if controller.surrogate is None else with_recovery(controller.surrogate)
     return dataclasses.replace(controller, init=init, plan=plan, thrust=thrust, record=record, surrogate=surrogate,
+                               metrics=metrics,
                                spec=dataclasses.replace(controller.spec,
                                                         fields={**controller.spec.fields, "recovery": FIELD}))
 

@@ -69,6 +69,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
+from geojax.control import burn_metrics
 from geojax.control import burns as burns_mod
 from geojax.control.base import ARM_LIMIT_KEYS, Controller, Spec, stateless_init
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS
@@ -366,7 +367,8 @@ def _record(plan: ZonePlan) -> dict:
 
 # Reads the reference at the cycle's start and end boundaries (the drift of eq. (56)).
 SPEC = Spec(FIELDS, validate, THRUSTERS, unread=UNREAD, bound_geometry="gimbal")  # the manipulator points anywhere
-CONTROLLER = Controller(stateless_init, _plan, _thrust, SPEC, reference_cycles=2, record=_record)
+CONTROLLER = Controller(stateless_init, _plan, _thrust, SPEC, reference_cycles=2, record=_record,
+                        metrics=burn_metrics.metrics)
 
 
 def make(tables: list[dict]) -> Controller:

@@ -32,19 +32,16 @@ node's 18.6-year cycle moves the yearly Delta-V by several per cent.
 
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
-from geojax.physics.constants import SECONDS_PER_DAY, SIDEREAL_DAY_S
+from geojax.control.burn_metrics import ns_delta_v_mps
+from geojax.physics.constants import SECONDS_PER_DAY, SECONDS_PER_YEAR, SIDEREAL_DAY_S
 from geojax.physics.elements import wrap_angle
-from geojax.control.recovery import recovery_metrics
 from geojax.params import station_target
-from geojax.reductions import mean_over_cycles, sum_in_order, sum_over_cycles
+from geojax.reductions import mean_over_cycles, sum_over_cycles
 from geojax import states as parts
-from geojax.states.faults import NAME as FAULTS
 
-SECONDS_PER_YEAR = 365.25 * SECONDS_PER_DAY
 YEAR_CYCLES = round(SECONDS_PER_YEAR / SIDEREAL_DAY_S)  # 366 sidereal-day cycles: the cycles of a one-year run
 (STATUS_OK, STATUS_NO_SOLUTION, STATUS_LEFT_LON_BOX, STATUS_LEFT_LAT_BOX, STATUS_NONFINITE,
  STATUS_NO_PROPELLANT) = range(len(parts.CORE_STATUSES))
@@ -55,9 +52,11 @@ STATUS_TEXT = ", ".join(f"{code} {text}" for code, text in enumerate(STATUS_MEAN
 CYCLE_NAMES = ("lon_deg", "ex", "ey", "ix", "iy", "dv_mps", "ns_fraction")
 
 
-def summarize(params, final, records, step_s: float, steps_per_cycle: int, states: tuple = ()) -> dict:
+def summarize(params, final, records, step_s: float, steps_per_cycle: int, states: tuple = (),
+              controller_metrics=None) -> dict:
     """{name: scalar} of one rollout (``loop.simulate``'s final state and records), ``"status"`` included;
-    ``states``: the models the loop carried (static; their metrics and status codes)."""
+    ``states``: the models the loop carried (static; their metrics and status codes); ``controller_metrics``: the
+    controller's own (``Controller.metrics``), else the thrusters' duty per axis."""
     cycles = records.cycles
     m = cycles.means
     n_cycles = m.lon_rad.shape[0]
@@ -84,14 +83,9 @@ def summarize(params, final, records, step_s: float, steps_per_cycle: int, state
         "cycles_without_solution": jnp.sum(~solved).astype(float),
     }
     out.update(yearly_dv(cycles.dv_mps, cycle_s))
-    out.update(duty_metrics(cycles, n_steps_total, n_cycles * cycle_s))
-    if "fired_s" in cycles.controller:
-        out.update(burn_metrics(cycles.controller, n_cycles))
-        faults = cycles.states.get(FAULTS)
-        out.update(dv_components_per_year(cycles.controller, cycles.dv_mps, n_cycles * cycle_s) if faults is None
-                   else flown_dv_components_per_year(faults, own_cycles(cycles.controller), n_cycles * cycle_s))
-    if "recovering" in cycles.controller:  # control.recovery: its cycles and Delta-V apart
-        out.update(recovery_metrics(cycles.controller, cycles.dv_mps))
+    own = {} if controller_metrics is None else controller_metrics(params, cycles, n_cycles * cycle_s,
+                                                                   jnp.ones(n_cycles, bool))
+    out.update(own if "duty_fraction" in own else {**duty_metrics(cycles, n_steps_total), **own})
     lon_out, lat_out = box_exits(params, cycles)
     failures = []  # (failed, code) of the parts, in their order
     meanings = parts.status_meanings(states)
@@ -141,83 +135,14 @@ def yearly_dv(dv_mps, cycle_s: float) -> dict:
     return out
 
 
-def burn_metrics(rec: dict, n_cycles: int) -> dict:
-    """Li 2022: burns fired, per thruster per orbit, and the mean pitch of eq. (46) over the cycles that burn."""
-    fired = rec["fired_s"] > 0
-    burns = rec["burns"]
-    v_sum = jnp.sum(jnp.where(fired, burns.v_mps, 0.0), axis=1)
-    dv_ns = ns_delta_v_mps(rec)
-    with_burns = v_sum > 0
-    beta = jnp.degrees(jnp.arcsin(jnp.clip(dv_ns / jnp.where(with_burns, v_sum, 1.0), 0.0, 1.0)))
-    return {
-        "burns_total": jnp.sum(fired).astype(float),
-        "burns_per_thruster_per_orbit": jnp.sum(fired) / (2 * n_cycles),
-        "mean_beta_deg": sum_over_cycles(jnp.where(with_burns, beta, 0.0)) / jnp.maximum(jnp.sum(with_burns), 1),
-    }
-
-
-def duty_metrics(cycles, n_steps_total: int, run_s: float) -> dict:
-    """How much the thrusters fire.  A planner's burns (``fired_s`` records): ``duty_fraction``, the fraction of
-    the run's time a thruster fires (its burns one at a time, eclipse suspensions left out).  Another
-    controller's: ``duty_x``, ``duty_y``, ``duty_z``, the fraction of the steps whose delivered acceleration has
-    an ECEF x, y, z component, Katz 2025's duty cycle of per-axis thrusters (its discrete law; thrust in any other
-    direction has all three components, so the three are equal, its firing fraction).  A planner's burns are
-    along RSW directions, so their per-axis counts would only repeat its firing fraction: they are not given.
-    Where the faults part rode the loop (``states.faults``): ``duty_fraction`` as flown, the firing time delivered
-    per thruster (``Faults.flown_s``), not the planned, over the controller's own cycles (``own_cycles``)."""
-    if "fired_s" in cycles.controller:
-        faults = cycles.states.get(FAULTS)
-        if faults is not None:  # ``states.faults``: the firing time delivered, not the planned
-            flown_s = jnp.where(own_cycles(cycles.controller), sum_in_order(faults.flown_s), 0.0)
-            return {"duty_fraction": sum_over_cycles(flown_s) / run_s}
-        return {"duty_fraction": sum_over_cycles(jnp.sum(cycles.controller["fired_s"], axis=1)) / run_s}
+def duty_metrics(cycles, n_steps_total: int) -> dict:
+    """How much the thrusters fire, for a controller that says nothing of its own (``Controller.metrics``; the
+    planners' burns say ``duty_fraction``, ``control.burns.metrics``): ``duty_x``, ``duty_y``, ``duty_z``, the
+    fraction of the steps whose delivered acceleration has an ECEF x, y, z component, Katz 2025's duty cycle of
+    per-axis thrusters (its discrete law; thrust in any other direction has all three components, so the three
+    are equal, its firing fraction)."""
     duty = jnp.sum(cycles.firing_steps, axis=0) / n_steps_total
     return {"duty_x": duty[0], "duty_y": duty[1], "duty_z": duty[2]}
-
-
-# The per-axis components of a planner's Delta-V (``dv_components_per_year``), in RSW (= RTN) order.
-DV_COMPONENTS = ("dv_radial_per_year_mps", "dv_ew_per_year_mps", "dv_ns_per_year_mps")
-
-
-def dv_components_per_year(rec: dict, dv_mps, run_s: float) -> dict:
-    """The radial, along-track and cross-track components of a planner's Delta-V, per 365.25 days, a planner's
-    budget by axis: ``dv_radial_per_year_mps`` (RSW R; with the robotic arms, the geometry's cosine loss: thrust
-    lines aimed through the centre of mass from anti-nadir arms),
-    ``dv_ew_per_year_mps`` (S, along-track: east-west control, drift and eccentricity) and
-    ``dv_ns_per_year_mps`` (W, cross-track: north-south control, inclination).  Each cycle's delivered Delta-V
-    (``dv_mps`` [n_cycles]) is split by the directions its burns flew (``directions_rsw`` [n_cycles, 2, 3],
-    attitude errors included), weighted by each burn's firing time (one thrust F/m for both burns of a cycle:
-    the mass changes by parts in 1e5 within a cycle): a burn of v along the unit direction d counts v |d_R|,
-    v |d_S| and v |d_W|.  Components, not a partition: the three add up to more than ``dv_per_year_mps``
-    wherever a burn is not along one axis (their root sum of squares per burn is its Delta-V)."""
-    d = rec["directions_rsw"]
-    weight = rec["fired_s"] / jnp.maximum(jnp.sum(rec["fired_s"], axis=1, keepdims=True), 1e-300)
-    # the weighted parts stored before they are added (``geojax.reductions``: fused, the last bit depended on
-    # the lane width, 1-2 of 40 QFFC samples an ulp apart at 64 and 1024 lanes)
-    return {name: sum_over_cycles(dv_mps * sum_in_order(weight * jnp.abs(d[..., axis]))) * SECONDS_PER_YEAR / run_s
-            for axis, name in enumerate(DV_COMPONENTS)}
-
-
-def own_cycles(rec: dict):
-    """[n_cycles] bool: the cycles the controller flew its own burns in (not those flown by ``control.recovery``,
-    whose Delta-V ``dv_recovery_mps`` reports apart)."""
-    return ~rec["recovering"] if "recovering" in rec else jnp.ones(rec["fired_s"].shape[0], bool)
-
-
-def flown_dv_components_per_year(faults, own, run_s: float) -> dict:
-    """``dv_components_per_year`` as flown, where the faults part rode the loop (``states.faults``): each cycle's
-    Delta-V delivered per thruster and RSW axis, summed step by step as |component| (``Faults.flown_dv_abs_rsw``
-    [n_cycles, 4, 3]: a burn missed counts 0, a degraded one its delivered thrust, a stuck arm's its frozen
-    direction), over the cycles of the controller's own burns (``own`` [n_cycles]), per 365.25 days."""
-    per_cycle = jnp.where(own[:, None], jnp.sum(faults.flown_dv_abs_rsw, axis=1), 0.0)  # [n_cycles, 3]
-    return {name: sum_over_cycles(per_cycle[:, axis]) * SECONDS_PER_YEAR / run_s
-            for axis, name in enumerate(DV_COMPONENTS)}
-
-
-def ns_delta_v_mps(rec: dict):
-    """North-south Delta-V of each cycle's fired burns (Li 2022, eq. (45)), [n_cycles]."""
-    fired = rec["fired_s"] > 0
-    return jnp.sum(jnp.where(fired, jnp.abs(rec["burns"].dv_rsw_mps[..., 2]), 0.0), axis=1)
 
 
 def cycle_series(records, states: tuple = ()) -> dict:

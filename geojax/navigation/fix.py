@@ -7,7 +7,6 @@ is row 0 of ``normal(key_k, (2, 6))``, the cycle's key (row 1: the burns' pointi
 
 from __future__ import annotations
 
-import jax.numpy as jnp
 
 from geojax.physics.elements import cartesian_to_mee, wrap_angle
 

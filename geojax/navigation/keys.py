@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from geojax.navigation.measurements import MODELS
-from geojax.params import NUMBER, REQUIRED, Field, check_table, degrees
+from geojax.params import NUMBER, REQUIRED, Field, check_table
 
 MAX_SIGMA = 1.0e6  # no measurement noise or bias reaches this in its unit (1000 km, 1000 km/s): a unit slip
 

@@ -28,5 +28,6 @@ R_MOON_M = 1.7374e6  # mean radius (IAU WG on Cartographic Coordinates, Archinal
 G0_MPS2 = 9.80665
 SIDEREAL_DAY_S = 86164.0905
 SECONDS_PER_DAY = 86400.0
+SECONDS_PER_YEAR = 365.25 * SECONDS_PER_DAY  # the yearly rates' year (Julian)
 DAYS_PER_JULIAN_CENTURY = 36525.0
 JD_J2000 = 2451545.0

@@ -29,7 +29,7 @@ from geojax.physics.propagate import DYNAMICS, environment_grid, for_one_sample,
 from geojax.scenario import Scenario
 
 
-# What each per-axis component of a planner's Delta-V is (loop.metrics.dv_components_per_year), printed beside it.
+# What each per-axis component of a planner's Delta-V is (control.burn_metrics.dv_components_per_year), printed beside it.
 DV_COMPONENT_NOTES = {
     "dv_radial_per_year_mps": "radial (RTN R): the arms' cosine loss (thrust lines through the centre of mass)",
     "dv_ew_per_year_mps": "along-track (RTN T): east-west control",

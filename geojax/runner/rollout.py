@@ -87,7 +87,8 @@ def rollout(params: Params, key, shared: Shared, reference_env=None, *, controll
     """
     final, records = loop(params, key, shared, reference_env, controller=controller, step_s=step_s,
                           dynamics=dynamics, keep_steps=keep_steps, states=states)
-    return final, records, summarize(params, final, records, step_s, shared.env.earth_angle_rad.shape[1], states)
+    return final, records, summarize(params, final, records, step_s, shared.env.earth_angle_rad.shape[1], states,
+                                     controller.metrics)
 
 
 def loop(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,
@@ -159,12 +160,14 @@ def _over_lanes(fn, per_lane: tuple, common: tuple):
     return jax.vmap(fn, in_axes=(0,) * len(per_lane) + (None,) * len(common))(*per_lane, *common)
 
 
-@functools.partial(jax.jit, static_argnames=("n_cycles", "step_s", "steps_per_cycle", "states"))
-def metrics_batch(params, final, records, n_cycles: int, step_s: float, steps_per_cycle: int, states: tuple = ()):
+@functools.partial(jax.jit, static_argnames=("n_cycles", "step_s", "steps_per_cycle", "states", "controller_metrics"))
+def metrics_batch(params, final, records, n_cycles: int, step_s: float, steps_per_cycle: int, states: tuple = (),
+                  controller_metrics=None):
     """``loop.metrics.summarize`` of every sample over the first ``n_cycles`` cycles of its records: a small
     program of its own, compiled per duration (the closed loop is compiled per slot count)."""
     records = records._replace(cycles=jax.tree_util.tree_map(lambda x: x[:, :n_cycles], records.cycles))
-    return _over_lanes(lambda p, f, r: summarize(p, f, r, step_s, steps_per_cycle, states), (params, final, records),
+    return _over_lanes(lambda p, f, r: summarize(p, f, r, step_s, steps_per_cycle, states, controller_metrics),
+                       (params, final, records),
                        ())
 
 
@@ -268,7 +271,8 @@ def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, own_state
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=dynamics,
                   keep_steps=keep_steps, states=recorder.with_recording(batch.states) if ephemeris else batch.states)
     summarized = dict(n_cycles=batch.n_cycles, step_s=batch.step_s,
-                      steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1], states=batch.states)
+                      steps_per_cycle=batch.shared.env.earth_angle_rad.shape[1], states=batch.states,
+                      controller_metrics=batch.controller.metrics)
     # A registered controller's programs are kept traced between runs (``geojax.traced``); a user's, or a loop
     # carrying a user's own part, are not.
     shipped = controller is None and scenarios[0].controller in REGISTRY and not own_states  # in traced's digest

@@ -38,7 +38,7 @@ import numpy as np  # noqa: E402
 import jax  # noqa: E402
 
 import geojax  # noqa: E402
-from geojax.loop.metrics import ns_delta_v_mps  # noqa: E402
+from geojax.control.burn_metrics import ns_delta_v_mps  # noqa: E402
 from geojax.papers import LI2022  # noqa: E402
 from geojax.physics.constants import SIDEREAL_DAY_S  # noqa: E402
 
