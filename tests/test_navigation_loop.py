@@ -260,7 +260,7 @@ def test_an_estimated_bias_is_updated_as_the_scalar_kalman_filter_says():
     np.testing.assert_array_equal(np.asarray(f[10:]), np.eye(12)[10:])
     np.testing.assert_array_equal(np.asarray(f[:10, 10:]), np.zeros((10, 2)))
     correlated = state.p.at[0, 10].set(30.0).at[10, 0].set(30.0).at[6, 0].set(1.0).at[0, 6].set(1.0)
-    reset = np.asarray(reset_execution(correlated, jnp.full(4, 0.1)))
+    reset = np.asarray(reset_execution(correlated, jnp.diag(jnp.full(4, 0.1**2))))
     assert reset[0, 10] == reset[10, 0] == 30.0 and reset[6, 0] == reset[0, 6] == 0.0 and reset[6, 6] == 0.1**2
 
     p = jnp.zeros((12, 12)).at[10:, 10:].set(jnp.diag(jnp.full(2, sigma_b**2)))  # only the biases unknown

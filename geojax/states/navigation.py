@@ -15,7 +15,7 @@ import jax
 import jax.numpy as jnp
 
 from geojax.navigation import ekf
-from geojax.navigation.execution import reset_execution
+from geojax.navigation.execution import execution_prior, reset_execution
 from geojax.physics.execution import truth_of
 from geojax.navigation.keys import FIELDS as KEYS, check_with
 from geojax.navigation.leaves import bias_sigmas, initial_cartesian, layout_of, leaves_of, n_biases
@@ -91,10 +91,10 @@ def thrust(layout: Layout, params, state: Navigation, flown: Thrust, ctx):
     planned_n = flown.thrust_n if flown.planned_thrust_n is None else flown.planned_thrust_n
     firing = (flown.on_fraction > 0) & (planned_n > 0)
     new_burn = firing & ~state.firing
-    sigma = jnp.concatenate([nav["burn_magnitude_sigma"][None], jnp.full(3, nav["burn_pointing_sigma_rad"])])
     eps, phi = truth_of(planned_rsw, planned_n, flown.direction_rsw, flown.thrust_n)
     truth = jnp.where(firing, jnp.concatenate([eps[None], phi]), state.truth_execution)
-    prior = reset_execution(state.p, sigma)
+    prior = reset_execution(state.p, execution_prior(nav["burn_magnitude_sigma"], nav["burn_pointing_sigma_rad"],
+                                                     planned_rsw))
     state = state._replace(p=jnp.where(new_burn, prior, state.p),
                            execution=jnp.where(new_burn, 0.0, state.execution), truth_execution=truth, firing=firing,
                            planned_direction_rsw=planned_rsw, planned_thrust_n=planned_n,
