@@ -39,7 +39,7 @@ from geojax.physics.propulsion import (alpha_beta_bounds, arm_limits, delta_v_di
                                       sunlit_clock)
 from geojax.physics.trig import sincos
 from geojax.physics.execution import attitude_error_rad, magnitude_scale
-from geojax.states.faults import NAME as FAULTS
+from geojax.states.base import THRUSTER_LEVELS
 
 
 class BurnPlan(NamedTuple):
@@ -66,8 +66,8 @@ def fly(params, burns, prediction, ns_fraction, estimate, context, key, arms: in
     n_steps = context.env.earth_angle_rad.shape[0]
     l_start = estimate.fix_mee[5]
     flying = None
-    if FAULTS in estimate.states:  # told of the thrusters' levels (``states.faults``)
-        flying, level = allocated(estimate.states[FAULTS], thrusters.get("count"))
+    if THRUSTER_LEVELS in estimate.states:  # told of the thrusters' levels (``states.faults``)
+        flying, level = allocated(estimate.states[THRUSTER_LEVELS], thrusters.get("count"))
         if arms == 2:  # an arm known lost: the other flies both nodes (``one_arm``)
             lost = (level <= 0) & (level[::-1] > 0)
             burns = jax.tree_util.tree_map(lambda one, two: jnp.where(jnp.any(lost), one, two),

@@ -57,7 +57,7 @@ import numpy as np
 
 from geojax.control.burns import one_thruster
 from geojax.physics import thrust_laws
-from geojax.states.faults import NAME as FAULTS
+from geojax.states.base import THRUSTER_LEVELS
 from geojax.physics.constants import OMEGA_EARTH_RAD_S
 from geojax.control.base import (ARM_LIMIT_KEYS, BURN_KEYS, SURROGATE_TEMPERATURE, Controller, Spec, no_plan,
                                  stateless_init)
@@ -179,9 +179,9 @@ class Told(NamedTuple):
 
 def told_plan(params, controller_state, estimate, context, key):
     """``plan`` of the law: nothing planned (``no_plan``), or, told of the thrusters' levels, the one to fly."""
-    if FAULTS not in estimate.states:
+    if THRUSTER_LEVELS not in estimate.states:
         return no_plan(params, controller_state, estimate, context, key)
-    return Told(*one_thruster(estimate.states[FAULTS], params.thrusters.get("count"))), controller_state
+    return Told(*one_thruster(estimate.states[THRUSTER_LEVELS], params.thrusters.get("count"))), controller_state
 
 
 def gains(controller: dict) -> "LyapunovGains":

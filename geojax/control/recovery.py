@@ -54,7 +54,7 @@ from geojax.physics.elements import wrap_angle
 from geojax.physics.trig import sincos
 from geojax.reductions import sum_over_cycles
 from geojax.params import Field
-from geojax.states.faults import NAME as FAULTS
+from geojax.states.base import THRUSTER_LEVELS
 
 # The re-acquisition law's stated constants (see the module docstring).
 TAU_CYCLES = 4.0  # the longitude offset's time constant, cycles
@@ -195,7 +195,7 @@ def with_recovery(controller: Controller) -> Controller:
         inner, inner_state = controller.plan(params, inner_state, estimate, context, key)
         inside, outside = settled(params, estimate, context, use_mean)
         recovering = jnp.where(was_recovering, ~inside, outside | ~solved_of(inner))
-        levels = estimate.states.get(FAULTS)
+        levels = estimate.states.get(THRUSTER_LEVELS)
         # told of the thrusters' levels: sized for the best working one (1 where none works: nothing is flown)
         level = 1.0 if levels is None else jnp.where(jnp.max(levels) > 0, jnp.max(levels), 1.0)
         return (Plan(inner, command(params, estimate, context, recovering, use_mean, level), levels),

@@ -58,6 +58,11 @@ class CycleStart(NamedTuple):
 
 # The streams the loop and the controllers draw from the cycle's key: rows of normal(key_k), fold_in(key_k, 1)
 # (the FOMPC's search) and fold_in(key_k, physics.execution.MAGNITUDE_KEY).  A part's stream is never one of them.
+# ``Estimate.states`` key of the thrusters' levels as told at a cycle start ([4]: each thruster's delivered fraction
+# of its thrust, 0 out), published by the part that knows them (``states.faults``) and read by every law that
+# allocates among thrusters; a quantity, not a part, so a controller names no part to read it.
+THRUSTER_LEVELS = "thruster_levels"
+
 RESERVED_STREAMS = frozenset({0, 1, 2})
 # The navigation filter's stream: the value it drew from when it was the only part (the first of the tuple,
 # 1 << 16 + its place), kept so that every scenario with the filter keeps its numbers bit for bit.

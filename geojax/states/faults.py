@@ -8,7 +8,7 @@ uniform draw per thruster per cycle from the part's own random stream) or where 
 one or a list, from ``out_from_day`` -- or a start drawn per sample over ``out_from_spread_days`` -- for
 ``out_days`` days, 0: to the end), and delivers its ``thrust_scale`` (one for all, or one per thruster) of its
 thrust otherwise.  With ``planner_told`` (the default) the planner learns at each cycle
-start what telemetry shows then (``estimate.states["faults"]``: each thruster's level; ``control.burns`` plans a
+start what telemetry shows then (``estimate.states[THRUSTER_LEVELS]``: each thruster's level; ``control.burns`` plans a
 degraded thruster's burns with its delivered level and fires no burn from a thruster it knows is out); without,
 it plans as if nothing were wrong, and the closed loop shows what that costs.  A "burn" is a thruster's
 firing within one control cycle (a planner's burn; a feedback law's cycle of firing).  A stuck arm
@@ -30,7 +30,7 @@ import numpy as np
 from geojax.params import NUMBER, Field
 from geojax.physics.constants import SECONDS_PER_DAY
 from geojax.physics.propulsion import alpha_beta_bounds, arm_limits, delta_v_direction_rsw
-from geojax.states.base import Part, StateModel
+from geojax.states.base import THRUSTER_LEVELS, Part, StateModel
 
 NAME = "faults"
 # The thrusters the part tracks (indices 0 .. TRACKED - 1): Li's two arms with two thrusters each.
@@ -138,13 +138,13 @@ def delivered_level(params, state: Faults, thruster, t_s):
 
 
 def estimate(params, state: Faults, told):
-    """What the planner is told at a cycle start (``estimate.states["faults"]``): each thruster's level [TRACKED]
+    """What the planner is told at a cycle start (``estimate.states[states.base.THRUSTER_LEVELS]``): each thruster's level [TRACKED]
     as telemetry shows it then (``health``; 0 on a stuck arm: the planner treats it as lost), or 1 for every
     thruster where ``planner_told`` is false."""
     levels = jnp.stack([jnp.where(stuck(params, state, k, told.t_s), 0.0, health(params, state, k, told.t_s))
                         for k in range(TRACKED)])
     known = jnp.where(params.states[NAME]["planner_told"] > 0, levels, 1.0)
-    return told._replace(states={**told.states, NAME: known})
+    return told._replace(states={**told.states, THRUSTER_LEVELS: known})
 
 
 def thrust(params, state: Faults, commanded, ctx):
