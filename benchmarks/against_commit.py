@@ -60,7 +60,7 @@ def main() -> None:
                 for label, tree in trees.items():
                     got = harness.run_json(["-c", CHILD, name, json.dumps(overrides), str(args.batch),
                                             str(args.days)], harness.Devices(platform=args.platform),
-                                           pythonpath=tree)
+                                           pythonpath=tree, cwd=tree)  # ``-c`` puts the cwd first on the path
                     print(label, name, got, flush=True)
                     if label not in best or got["run_s"] < best[label]["run_s"]:
                         best[label] = got
