@@ -20,6 +20,7 @@ import numpy as np
 
 from geojax.control import REGISTRY
 from geojax.control.base import Controller, keeps_steps
+from geojax.control.predictor import Reference
 from geojax.physics.dynamics import SpacecraftState
 from geojax.loop.metrics import cycle_table, summarize
 from geojax.export import maneuvers, recorder, trajectory
@@ -94,8 +95,11 @@ def rollout(params: Params, key, shared: Shared, reference_env=None, *, controll
 def loop(params: Params, key, shared: Shared, reference_env=None, *, controller: Controller, step_s: float,
          dynamics: Dynamics, keep_steps: bool = False, states: tuple = ()):
     """``rollout`` without its metrics: ``(final state, records)``, the records over every cycle of
-    ``shared.env`` (the run's first ``shared.n_active``, zeros beyond)."""
-    if reference_env is not None:
+    ``shared.env`` (the run's first ``shared.n_active``, zeros beyond).  ``reference_env``: where this sample's
+    own reference runs (``Segments``), or the reference itself, computed before (``Batch.references``)."""
+    if isinstance(reference_env, Reference):
+        shared = shared._replace(reference=reference_env)
+    elif reference_env is not None:
         own = reference(params, reference_env, step_s, dynamics, controller.reference_cycles)
         slots = shared.env.earth_angle_rad.shape[0]  # the loop's cycle slots (``runner.setup.prepare(pad=True)``)
         if own.osc.shape[0] < slots:
@@ -111,7 +115,8 @@ def rollout_fn(batch: Batch, keep_steps: bool = False, controller: Controller | 
     ``controller`` replaces the batch's (a tuning differentiates through the surrogate); ``lanes`` is how many
     samples the caller vmaps per device (the step is compiled for it, ``physics.propagate.for_lanes``).
     """
-    return functools.partial(rollout, shared=batch.shared, reference_env=_reference_env(batch),
+    return functools.partial(rollout, shared=batch.shared,
+                             reference_env=batch.reference_env if batch.reference_per_sample else None,
                              controller=batch.controller if controller is None else controller,
                              step_s=batch.step_s, dynamics=for_lanes(batch.dynamics, lanes), keep_steps=keep_steps,
                              states=batch.states)
@@ -125,7 +130,10 @@ def record_bytes_per_cycle(batch: Batch) -> RecordBytes:
     key = jax.eval_shape(lambda: jax.random.key(0))
     one = functools.partial(loop, controller=batch.controller, step_s=batch.step_s, dynamics=batch.dynamics,
                             states=batch.states)
-    _, records = jax.eval_shape(one, params, key, batch.shared, _reference_env(batch))
+    own = _reference_env(batch)
+    if isinstance(own, Reference):  # one lane's
+        own = jax.tree_util.tree_map(lambda x: jax.ShapeDtypeStruct(x.shape[1:], x.dtype), own)
+    _, records = jax.eval_shape(one, params, key, batch.shared, own)
     n_cycles = batch.shared.env.earth_angle_rad.shape[0]
     width = batch.controller.reference_cycles
     reference = reference_shape(n_cycles, width, jnp.float64) if width else ()
@@ -137,6 +145,10 @@ def _nbytes(tree) -> int:
 
 
 def _reference_env(batch: Batch):
+    """What the loop gets of the samples' references: each sample's, computed before (``Batch.references``,
+    [n, ...]), where each runs its own (``Segments``), or None (one shared in ``batch.shared``)."""
+    if batch.references is not None:
+        return batch.references
     return batch.reference_env if batch.reference_per_sample else None
 
 
@@ -146,6 +158,8 @@ def closed_loop_batch(params, keys, shared, reference_env, controller, step_s, d
     step, dynamics), whatever the duration within the slots and the epoch."""
     one = functools.partial(loop, controller=controller, step_s=step_s, dynamics=dynamics, keep_steps=keep_steps,
                             states=states)
+    if isinstance(reference_env, Reference):  # each sample's own, computed before the loop: per lane
+        return _over_lanes(lambda p, k, r, s: one(p, k, s, r), (params, keys, reference_env), (shared,))
     return _over_lanes(one, (params, keys), (shared, reference_env))
 
 
@@ -231,6 +245,7 @@ def simulate_batch(scenarios: list[Scenario] | Scenario, params: Params | None =
 
     n = len(scenarios) if params is None else jax.tree_util.tree_leaves(params)[0].shape[0]
     batch = prepare(scenarios, controller, pad=True, on_shapes=compile_meanwhile, one_sample=n == 1, states=states,
+                    own_references=True,
                     slots=functools.partial(slots_compiled, call))
     args, _, _, _, summarized, n = call(batch)
     if meanwhile is not None:
@@ -266,7 +281,9 @@ def _loop_call(scenarios, params, seeds, keys, controller, keep_steps, own_state
     if keys is None:
         keys = keys_of(np.arange(n) if seeds is None else seeds)
     lanes = lane_slots(n)
-    args = (pad_lanes(params, lanes), pad_lanes(keys, lanes), batch.shared, _reference_env(batch))
+    own = _reference_env(batch)
+    args = (pad_lanes(params, lanes), pad_lanes(keys, lanes), batch.shared,
+            pad_lanes(own, lanes) if isinstance(own, Reference) else own)
     dynamics = for_one_sample(batch.dynamics) if lanes == 1 else for_lanes(batch.dynamics, lanes)
     static = dict(controller=batch.controller, step_s=batch.step_s, dynamics=dynamics,
                   keep_steps=keep_steps, states=recorder.with_recording(batch.states) if ephemeris else batch.states)
@@ -383,6 +400,8 @@ def pad_lanes(tree, lanes: int):
     """``tree``'s leaves (leading axis n) with the last sample repeated up to ``lanes``."""
     def pad(x):
         extra = lanes - x.shape[0]
+        if isinstance(x, jax.ShapeDtypeStruct):  # a shape (what compiles ahead): the padded one's
+            return jax.ShapeDtypeStruct((lanes, *x.shape[1:]), x.dtype)
         return x if extra == 0 else jnp.concatenate([x, jnp.repeat(x[-1:], extra, axis=0)])
     return jax.tree_util.tree_map(pad, tree)
 

@@ -80,6 +80,9 @@ class Batch(NamedTuple):
     reference_env: Segments | None  # where the reference runs; None for a controller that reads none
     reference_per_sample: bool  # each sample runs its own reference (its initial state or forces differ)
     states: tuple = ()  # the further states the loop carries (``geojax.states.of_config``), static
+    # With ``prepare(own_references=True)`` and references that differ: each sample's reference [n, ...], computed
+    # before the loop by the program a batch of one reference shares (``distinct_references``); else None
+    references: Reference | None = None
 
 
 def params_of(sc: Scenario, controller: Controller, extra: tuple = ()) -> Params:
@@ -111,7 +114,8 @@ def controller_of(scenarios: list[Scenario]) -> Controller:
 
 def prepare(scenarios: list[Scenario], controller: Controller | None = None,
             segment_cycles: int = REFERENCE_SEGMENT_CYCLES, pad: bool = False, on_shapes=None,
-            one_sample: bool = False, states: tuple = (), slots=None, shapes_only: bool = False) -> Batch:
+            one_sample: bool = False, states: tuple = (), slots=None, shapes_only: bool = False,
+            own_references: bool = False) -> Batch:
     """The ``Batch`` of ``scenarios`` (``controller``: a user's, else the registered one of their kind).
 
     ``segment_cycles``: cycles between re-starts of the predictor's reference (``REFERENCE_SEGMENT_CYCLES``).
@@ -131,6 +135,9 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     run speed (``reference(sequential=True)`` with ``compilation.ONE_SAMPLE_OPTIONS``).
     ``shapes_only``: return that ``Batch`` of shapes at once (what ``runner.rollout.record_bytes_per_cycle``
     traces), computing nothing.
+    ``own_references``: where the samples' references differ, compute each distinct one (at most
+    ``DISTINCT_REFERENCES``) before the loop with the program that computes a batch's shared reference, so that a
+    sample's numbers do not depend on the batch it flies in (``Batch.references``); else the loop computes them.
     ``slots(layout, n_slots)``, with ``pad``: the slot count to compile for instead of ``n_slots``
     (``cycle_slots(n_cycles)``), given ``layout(count)``, the ``Batch`` of shapes (as ``on_shapes`` gets it) for a
     loop of ``count`` slots: a larger one already compiled serves the run as well (``rollout.simulate_batch``).
@@ -151,6 +158,7 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     n_env = environment_cycles(n_cycles, width, segment_cycles)
     grid = (first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s, step_s, n_env, n_steps)
     per_sample = width > 0 and _references_differ(params)
+    distinct = _distinct_references(params) if per_sample and own_references else None
     on_segments = functools.partial(reference_segments, n_cycles=n_cycles, width=width, segment_cycles=segment_cycles)
     batch = functools.partial(Batch, controller, stacked, step_s=step_s, dynamics=dynamics, n_cycles=n_cycles,
                               reference_per_sample=per_sample, states=parts.of_config(first.config, states))
@@ -160,7 +168,12 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
         env = environment_shape(*grid)
         ref = reference_shape(n_cycles, width, env.earth_angle_rad.dtype) if width and not per_sample else None
         shared = jax.eval_shape(functools.partial(_shared, n_cycles=n_cycles, n_slots=count), env, ref)
-        return batch(shared, reference_env=jax.eval_shape(on_segments, env) if width else None)
+        own = None
+        if distinct is not None:  # each sample's, as the shared one's program pads it
+            one = jax.eval_shape(functools.partial(_shared, n_cycles=n_cycles, n_slots=count), env,
+                                 reference_shape(n_cycles, width, env.earth_angle_rad.dtype)).reference
+            own = jax.tree_util.tree_map(lambda x: jax.ShapeDtypeStruct((len(scenarios), *x.shape), x.dtype), one)
+        return batch(shared, reference_env=jax.eval_shape(on_segments, env) if width else None, references=own)
 
     if pad and slots is not None:
         n_slots = slots(layout, n_slots)
@@ -172,15 +185,22 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
         before_reference = on_shapes(layout(n_slots if pad else None))
     env = environment_grid(*grid, first.config["forces"]["ephemeris"])
     segments = on_segments(env) if width else None
-    ref = None
-    if width and not per_sample:
-        if before_reference is not None:
-            before_reference()
+    def shared_reference(p: Params) -> Reference:  # the reference a batch of samples like ``p`` shares
         identity = program_identity(first, "reference", step_s, width, one_sample)
-        ref = traced.call(_REFERENCE_JIT[one_sample], "reference", identity, params[0], segments,
-                          compiler_options=compilation.ONE_SAMPLE_OPTIONS if one_sample else None, step_s=step_s,
-                          dynamics=for_one_sample(dynamics) if one_sample else dynamics, width=width)
-    return batch(sharing(env, ref), reference_env=segments)
+        return traced.call(_REFERENCE_JIT[one_sample], "reference", identity, p, segments,
+                           compiler_options=compilation.ONE_SAMPLE_OPTIONS if one_sample else None, step_s=step_s,
+                           dynamics=for_one_sample(dynamics) if one_sample else dynamics, width=width)
+
+    ref = own = None
+    if width and (not per_sample or distinct is not None) and before_reference is not None:
+        before_reference()
+    if width and not per_sample:
+        ref = shared_reference(params[0])
+    if distinct is not None:
+        computed = [sharing(env, shared_reference(params[k])).reference for k in sorted(set(distinct))]
+        by_first = dict(zip(sorted(set(distinct)), computed))
+        own = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *(by_first[k] for k in distinct))
+    return batch(sharing(env, ref), reference_env=segments, references=own)
 
 
 def environment_cycles(n_cycles: int, width: int, segment_cycles: int = REFERENCE_SEGMENT_CYCLES) -> int:
@@ -232,6 +252,27 @@ def reference_per_sample(scenarios: list[Scenario], controller: Controller) -> b
     """Whether a batch of ``scenarios`` runs one predictor reference per sample (``Batch.reference_per_sample``),
     without preparing it."""
     return controller.reference_cycles > 0 and _references_differ([params_of(sc, controller) for sc in scenarios])
+
+
+# The most distinct references a batch computes before its loop (``prepare(own_references=True)``); a batch with
+# more (a Monte Carlo of dispersed initial states: every sample its own) computes them inside the loop.
+DISTINCT_REFERENCES = 64
+
+
+def _distinct_references(params: list[Params]) -> list[int] | None:
+    """For each sample the index of the first sample whose reference inputs it shares; None where there are more
+    than ``DISTINCT_REFERENCES`` distinct ones."""
+    firsts: list[int] = []
+    out = []
+    for p in params:
+        match = next((k for k in firsts if _same(_reference_inputs(p), _reference_inputs(params[k]))), None)
+        if match is None:
+            if len(firsts) == DISTINCT_REFERENCES:
+                return None
+            firsts.append(len(out))
+            match = len(out)
+        out.append(match)
+    return out
 
 
 def _references_differ(params: list[Params]) -> bool:
