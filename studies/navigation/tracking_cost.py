@@ -86,9 +86,13 @@ def equivalent_h_rv(dv: float, grid: list[float], dv_grid: list[float]) -> float
 
 
 def navigation_overrides() -> dict:
-    """The ``[navigation]`` table of li2022-qffc-ranging as overrides (for another controller's scenario)."""
-    table = scenario.load("li2022-qffc-ranging").config["navigation"]
-    return {f"navigation.{key}": value for key, value in table.items() if value is not None}
+    """The ``[navigation]`` table of li2022-qffc-ranging and its burns' execution errors (``[errors]``) as overrides
+    (for another controller's scenario); the filter's priors left to follow the errors, as there."""
+    config = scenario.load("li2022-qffc-ranging").config
+    table = {key: value for key, value in config["navigation"].items()
+             if value is not None and not key.startswith("assumed_")}
+    return {**{f"navigation.{key}": value for key, value in table.items()},
+            **{f"errors.{key}": config["errors"][key] for key in ("sigma3_dv_pct", "sigma3_att_deg")}}
 
 
 def main() -> None:
