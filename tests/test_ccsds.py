@@ -69,13 +69,16 @@ def to_epoch_frame(run, states_km):
 
 def test_recording_the_ephemeris_leaves_the_run_as_it_was(runs):
     """The same seed with and without the ephemeris: the same records and metrics (the recording is a different
-    compiled program: XLA's fusion moves last bits, measured 1e-15 relative) and a run without it carries none."""
+    compiled program: XLA's fusion moves last bits, and the closed loop with its filter carries them on: measured
+    over three days, the metrics up to 8e-10 relative (the filter's RMS errors; 1e-14 before the filter read the
+    burns' truth back from the planned and flown directions), the final elements 1e-14 absolute) and a run without it
+    carries none."""
     plain, recorded = runs
     assert plain.ephemeris is None and recorded.ephemeris.truth.shape == (DAYS, 96, 6)
     assert set(plain.metrics) == set(recorded.metrics) and plain.metrics["burns_total"] > 0
     for name, value in plain.metrics.items():
-        np.testing.assert_allclose(recorded.metrics[name], value, rtol=1e-12, atol=1e-18, err_msg=name)
-    np.testing.assert_allclose(recorded.final.orbit, plain.final.orbit, rtol=1e-13, atol=1e-15)  # MEE f, g, h, k ~1e-4
+        np.testing.assert_allclose(recorded.metrics[name], value, rtol=1e-8, atol=1e-18, err_msg=name)
+    np.testing.assert_allclose(recorded.final.orbit, plain.final.orbit, rtol=1e-13, atol=1e-13)  # MEE f, g, h, k ~1e-4
     assert recorded.status == plain.status == 0
 
 
