@@ -75,18 +75,19 @@ def test_a_run_in_a_longer_compiled_loop_is_bit_for_bit_the_exact_loops(qffc, pa
 
 @pytest.mark.slow
 def test_samples_with_their_own_reference_run_padded_as_in_the_exact_loop():
-    """A batch whose samples differ in their forces runs one predictor reference per sample, inside the loop: in
-    the padded loop (32 slots for 2 cycles) it is padded to the slots and the run is the exact loop's (``rollout``
-    over exactly its cycles), bit for bit."""
+    """A batch whose samples differ in their forces runs one predictor reference per sample, computed before the
+    loop (``prepare(own_references=True)``): in the padded loop (32 slots for 2 cycles) it is padded to the slots
+    and the run is the exact loop's (``rollout`` over exactly its cycles, given the same references), bit for
+    bit."""
     scenarios = [scenario.load("ye2022-ex1", {"duration.days": 2, "spacecraft.srp_area_m2": area})
                  for area in (40.0, 160.0)]
     padded = rollout.simulate_batch(scenarios)
-    batch = prepare(scenarios)
-    assert batch.reference_per_sample
+    batch = prepare(scenarios, own_references=True)
+    assert batch.reference_per_sample and batch.references is not None
     exact = jax.jit(jax.vmap(functools.partial(rollout.rollout, controller=batch.controller, step_s=batch.step_s,
                                                dynamics=rollout.for_lanes(batch.dynamics, 2)),
-                             in_axes=(0, 0, None, None)))
-    _, records, metrics = exact(batch.params, rollout.keys_of(np.arange(2)), batch.shared, batch.reference_env)
+                             in_axes=(0, 0, None, 0)))
+    _, records, metrics = exact(batch.params, rollout.keys_of(np.arange(2)), batch.shared, batch.references)
     metrics.pop("status")
     assert not np.array_equal(*padded.metrics["dv_per_year_mps"])
     _equal(metrics, padded.metrics, "metrics")
