@@ -1,20 +1,22 @@
 """This tree's sweep speed against an earlier commit's, in one run: sample-years per second after compilation.
 
-    python benchmarks/against_commit.py [--commit 3c28a1c] [--batch 32] [--days 365.25] [--rounds 2]
+    python benchmarks/against_commit.py [--commit 3c28a1c] [--batch 32] [--days 365.25] [--rounds 2] [--name NAME]
 
 For each scenario (li2022-qffc with Li's nominal errors, H_rv = H_att = 1: the Gaussian fix; li2022-qffc-ranging:
 the navigation filter), a fresh process per tree runs ``geojax.simulate_batch`` of ``--batch`` samples (their
 own seeds) three times on the compiled programs and reports the best ``run_s`` (the compiled closed loop and its
 metrics alone: no set-up, no compilation); the trees alternate, ``--rounds`` times, and the best of each is kept,
-so both see the same machine.  The earlier tree is ``git archive`` of ``--commit``'s ``geojax/`` (the public API,
+so both see the same machine.  The earlier tree runs with the ``XLA_FLAGS`` it would have had (without the flag
+this tree's ``import geojax`` adds: ``geojax.arithmetic``).  The earlier tree is ``git archive`` of ``--commit``'s ``geojax/`` (the public API,
 ``simulate_batch``, is the same in both).  Both trees' mean ΔV is printed beside, so a change of numbers shows.
-Results: ``benchmarks/results/against_commit.json`` and ``.md``.
+Results: ``benchmarks/results/NAME.json`` and ``.md`` (default ``against_commit``).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import tempfile
 from pathlib import Path
@@ -22,6 +24,7 @@ from pathlib import Path
 import harness
 
 NAME = "against_commit"
+USER_FLAGS = os.environ.get("XLA_FLAGS", "").split()  # before anything here imports geojax
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = (("li2022-qffc", {"errors.h_rv": 1.0, "errors.h_att": 1.0}), ("li2022-qffc-ranging", {}))
 CHILD = """
@@ -42,12 +45,23 @@ def baseline_tree(commit: str, folder: Path) -> Path:
     return folder
 
 
+def as_before_arithmetic(env) -> dict:
+    """``env`` without the flag this process's ``import geojax`` added (``geojax.arithmetic``): an earlier tree's
+    child runs with XLA's defaults, as it did then, unless the user's own ``XLA_FLAGS`` gave the flag."""
+    from geojax.arithmetic import SEPARATE_ROUNDINGS
+
+    added = {SEPARATE_ROUNDINGS} - set(USER_FLAGS)
+    flags = [f for f in env.get("XLA_FLAGS", "").split() if f not in added]
+    return {**env, "XLA_FLAGS": " ".join(flags)}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--commit", default="3c28a1c")
     parser.add_argument("--batch", type=int, default=32)
     parser.add_argument("--days", type=float, default=365.25)  # 60 days run in 0.6 s: noise
     parser.add_argument("--rounds", type=int, default=2)
+    parser.add_argument("--name", default=NAME, help="results file's name (benchmarks/results/NAME.json, .md)")
     harness.add_arguments(parser)
     args = parser.parse_args()
     run = harness.start(harness.Devices(platform=args.platform))
@@ -60,7 +74,8 @@ def main() -> None:
                 for label, tree in trees.items():
                     got = harness.run_json(["-c", CHILD, name, json.dumps(overrides), str(args.batch),
                                             str(args.days)], harness.Devices(platform=args.platform),
-                                           pythonpath=tree, cwd=tree)  # ``-c`` puts the cwd first on the path
+                                           pythonpath=tree, cwd=tree,  # ``-c`` puts the cwd first on the path
+                                           env=None if tree == ROOT else as_before_arithmetic(os.environ))
                     print(label, name, got, flush=True)
                     if label not in best or got["run_s"] < best[label]["run_s"]:
                         best[label] = got
@@ -74,7 +89,7 @@ def main() -> None:
                              f"{r['this tree']['sample_years_per_s']:.2f}", f"**{r['ratio']:.3f}×**",
                              f"{r[args.commit]['dv_per_year_mps_mean']:.6f}",
                              f"{r['this tree']['dv_per_year_mps_mean']:.6f}"] for r in rows], align="lrrrrr")]
-    print(harness.write(args.out / NAME, run, f"Sweep speed against {args.commit}", {"rows": rows}, body))
+    print(harness.write(args.out / args.name, run, f"Sweep speed against {args.commit}", {"rows": rows}, body))
 
 
 if __name__ == "__main__":

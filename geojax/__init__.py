@@ -23,6 +23,9 @@ The public API (shapes and units in each docstring):
 
 import jax
 
+from geojax.arithmetic import use_separate_roundings as _use_separate_roundings  # noqa: E402
+
+_use_separate_roundings()  # no fused multiply-adds: the same last bit at every width (geojax.arithmetic)
 jax.config.update("jax_enable_x64", True)
 
 from geojax.compilation import use_default as _use_compilation_cache  # noqa: E402

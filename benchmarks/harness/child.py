@@ -11,10 +11,11 @@ from harness import devices as _devices
 
 
 def run_json(args: list[str], devices: _devices.Devices = _devices.Devices(), cwd: Path | None = None,
-             pythonpath: Path | None = None):
+             pythonpath: Path | None = None, env: dict | None = None):
     """Run ``python ARGS`` on ``devices`` (its ``XLA_FLAGS``, platform and cores) and return the JSON of the
-    last line it prints.  ``pythonpath``: the tree whose ``geojax`` it imports (default: as inherited)."""
-    env = _devices.environment(devices)
+    last line it prints.  ``pythonpath``: the tree whose ``geojax`` it imports (default: as inherited).
+    ``env``: the child's environment before ``devices`` is applied (default: this process's)."""
+    env = _devices.environment(devices, env)
     if pythonpath is not None:
         env["PYTHONPATH"] = str(pythonpath)
     cores = devices.cores

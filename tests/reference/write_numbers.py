@@ -49,8 +49,9 @@ def flat(tree, prefix: str, out: dict) -> None:
 
 def platform() -> str:
     """What the last bits of a compiled run depend on: jax and jaxlib, and the CPU (its model and the vector
-    instructions XLA may use)."""
+    instructions XLA may use, capped by ``--xla_cpu_max_isa``: ``geojax.arithmetic``)."""
     import hashlib
+    import os
     import platform as host
 
     import jaxlib
@@ -64,9 +65,11 @@ def platform() -> str:
                 model = line.split(":", 1)[1].strip()
     except OSError:
         pass
+    cap = next((f.split("=", 1)[1] for f in os.environ.get("XLA_FLAGS", "").split()
+                if f.startswith("--xla_cpu_max_isa=")), "")
     isa = " ".join(sorted(f for f in flags.split() if f.startswith(("avx", "sse", "fma", "amx"))))
     return (f"jax {jax.__version__}, jaxlib {jaxlib.__version__}, {host.machine()} {model}, "
-            f"isa {hashlib.sha256(isa.encode()).hexdigest()[:12]}")
+            f"isa {hashlib.sha256(isa.encode()).hexdigest()[:12]}{cap and ', max ' + cap}")
 
 
 def numbers() -> dict[str, np.ndarray]:
