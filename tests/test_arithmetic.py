@@ -42,10 +42,14 @@ def test_import_geojax_asks_for_separate_roundings_unless_told_not_to():
     assert late.stdout.strip() == "" and "JAX started before geojax" in late.stderr
 
 
-def test_a_sample_flies_the_same_at_2_and_70_lanes():
+@pytest.mark.parametrize("name, overrides", [
+    ("li2022-qffc", {"errors.h_rv": 1.0, "errors.h_att": 1.0}),  # the Gaussian fix
+    pytest.param("li2022-qffc-ranging", {}, marks=pytest.mark.slow),  # the navigation filter: 58 records apart with FMA
+])
+def test_a_sample_flies_the_same_at_2_and_70_lanes(name, overrides):
     from geojax import scenario, simulate_batch
 
-    sc = scenario.load("li2022-qffc", {"duration.days": 3, "errors.h_rv": 1.0, "errors.h_att": 1.0})
+    sc = scenario.load(name, {"duration.days": 3, **overrides})
     narrow, wide = (simulate_batch([sc] * n, seeds=np.arange(n) % 2) for n in (2, 70))
     assert np.all(np.asarray(narrow.metrics["dv_per_year_mps"]) > 0)
     for (path, a), b in zip(jax.tree_util.tree_leaves_with_path(narrow.records),
