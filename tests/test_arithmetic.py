@@ -45,6 +45,8 @@ def test_import_geojax_asks_for_separate_roundings_unless_told_not_to():
 @pytest.mark.parametrize("name, overrides", [
     ("li2022-qffc", {"errors.h_rv": 1.0, "errors.h_att": 1.0}),  # the Gaussian fix
     pytest.param("li2022-qffc-ranging", {}, marks=pytest.mark.slow),  # the navigation filter: 58 records apart with FMA
+    pytest.param("li2022-momentum-mpc", {}, marks=[pytest.mark.slow, pytest.mark.xfail(
+        strict=True, reason="open: the momentum MPC's interior-point solve moves the last bit with the width")]),
 ])
 def test_a_sample_flies_the_same_at_2_and_70_lanes(name, overrides):
     from geojax import scenario, simulate_batch
