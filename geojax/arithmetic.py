@@ -1,21 +1,21 @@
 """One rounding for every width: XLA:CPU kept from contracting ``a*b + c`` into fused multiply-adds.
 
-On an x86-64 CPU with FMA instructions, XLA's CPU backend lets LLVM fuse a multiply and an add into one FMA
-(one rounding instead of two).  Whether a given product is fused depends on how XLA fused the program around
-it, and that changes with the batch's width: ``physics.propagate.for_lanes`` materializes the RK4 stages at
-widths of 8 and 64 lanes, and one sample compiles its stages inside the loop.  Measured before this module
-(``geojax sweep --lanes 1024`` against the default 128, li2022-qffc, 160 samples): ``dv_ew_per_year_mps`` and
-``dv_ns_per_year_mps`` moved by 1 ulp in 13-21 samples; one RK4 step of 64 states differed in 122-273 of them
-between the width tiers and between one sample and a batch.  Neither value is the more accurate one (both are
-correctly rounded arithmetic of different expressions), but docs/design.md promises that no number depends on
-the width, so geojax asks XLA for AVX code, which has no FMA: every product rounded, at every width.
+On an x86-64 CPU with FMA instructions, XLA's CPU backend lets LLVM fuse a multiply and an add into one FMA (one
+rounding instead of two). Whether a given product is fused depends on how XLA fused the program around it, and that
+changes with the batch's width: ``physics.propagate.for_lanes`` materializes the RK4 stages at widths of 8 and 64
+lanes, and one sample compiles its stages inside the loop. Measured with XLA's default: one RK4 step of 64 states
+differed in 122-273 of them between the width tiers and between one sample and a batch, and a 4-day QFFC batch at 2
+and 12 lanes in the predicted mean e vector from the second cycle. Neither value is the more accurate one (both are
+correctly rounded arithmetic of different expressions), but docs/design.md promises that no number depends on the
+width, so geojax asks XLA for AVX code, which has no FMA: every product rounded, at every width.
 
-XLA reads its flags when JAX starts its first backend, so this must run before any JAX computation;
-``import geojax`` calls ``use_separate_roundings()`` first thing.  A user's own ``--xla_cpu_max_isa`` in
-``XLA_FLAGS`` wins, and ``GEOJAX_FMA=1`` leaves XLA's default (fused, width-dependent in the last bit).  Only
-x86-64 has the flag.  Measured with it (4 days, 2 against 12 and 70 lanes): the QFFC and the navigation filter bit for bit; the momentum MPC's interior-point solve still moves the last bit between widths.  On an aarch64 CPU (where FMA is part of the base instruction set) and on a GPU the
-numbers may still move in the last bit with the width.  The cost, this tree against the one before it with
-XLA's defaults in one run: ``benchmarks/results/arithmetic_{1,16,128}.md``.
+XLA reads its flags when JAX starts its first backend, so this must run before any JAX computation; ``import
+geojax`` calls ``use_separate_roundings()`` first thing. A user's own ``--xla_cpu_max_isa`` in ``XLA_FLAGS`` wins,
+and ``GEOJAX_FMA=1`` leaves XLA's default (fused, width-dependent in the last bit). Only x86-64 has the flag.
+Measured with it (4 days, 2 against 12 and 70 lanes): the QFFC and the navigation filter bit for bit; the momentum
+MPC's interior-point solve still moves the last bit between widths. On an aarch64 CPU (where FMA is part of the
+base instruction set) and on a GPU the numbers may still move in the last bit with the width. The cost, this tree
+against the one before it with XLA's defaults in one run: ``benchmarks/results/arithmetic_{1,16,128}.md``.
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ import jax
 import numpy as np
 
 import geojax
-from geojax import scenario
+from geojax import arithmetic, scenario
 from geojax.runner import setup
 from geojax.runner.rollout import rollout_fn, simulate
 
@@ -66,7 +66,7 @@ def platform() -> str:
     except OSError:
         pass
     cap = next((f.split("=", 1)[1] for f in os.environ.get("XLA_FLAGS", "").split()
-                if f.startswith("--xla_cpu_max_isa=")), "")
+                if f.split("=", 1)[0] == arithmetic.ISA_FLAG), "")
     isa = " ".join(sorted(f for f in flags.split() if f.startswith(("avx", "sse", "fma", "amx"))))
     return (f"jax {jax.__version__}, jaxlib {jaxlib.__version__}, {host.machine()} {model}, "
             f"isa {hashlib.sha256(isa.encode()).hexdigest()[:12]}{cap and ', max ' + cap}")
