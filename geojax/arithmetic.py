@@ -12,8 +12,11 @@ width, so geojax asks XLA for AVX code, which has no FMA: every product rounded,
 XLA reads its flags when JAX starts its first backend, so this must run before any JAX computation; ``import
 geojax`` calls ``use_separate_roundings()`` first thing. A user's own ``--xla_cpu_max_isa`` in ``XLA_FLAGS`` wins,
 and ``GEOJAX_FMA=1`` leaves XLA's default (fused, width-dependent in the last bit). Only x86-64 has the flag.
-Measured with it (4 days, 2 against 12 and 70 lanes): the QFFC and the navigation filter bit for bit; the momentum
-MPC's interior-point solve still moves the last bit between widths. On an aarch64 CPU (where FMA is part of the
+Measured with it (4 days, 2 against 12 and 70 lanes): the QFFC and the navigation filter bit for bit.  The rounding
+is not the only width dependence: XLA's float64 ``tan`` and ``atan`` differ between a vector loop and its remainder
+(``physics.trig`` has its own), and a long reduction's partial sums and a small batched dot's loop order follow the
+batch's shape (``reductions.sum_pairwise``, ``per_lane.lane_by_lane``); with those the MPC and the momentum MPC are
+bit for bit at 2, 12 and 70 lanes too. On an aarch64 CPU (where FMA is part of the
 base instruction set) and on a GPU the numbers may still move in the last bit with the width. The cost, this tree
 against the one before it with XLA's defaults in one run: ``benchmarks/results/arithmetic_{1,16,128}.md``.
 """

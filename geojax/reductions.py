@@ -1,4 +1,4 @@
-"""Reductions over a run's cycles whose last bit does not depend on the lane width.
+"""Reductions whose last bit does not depend on the lane width: over a run's cycles, and along a long axis.
 
 Under ``vmap`` a reduction over cycles is one over an array [lanes, cycles], which XLA's CPU compiler vectorises
 by the batch's shape, and a product fused into a sum may become one rounding (an FMA) in one loop and two in
@@ -32,6 +32,19 @@ def sum_in_order(parts):
     for column in range(1, parts.shape[1]):
         total = total + parts[:, column]
     return total
+
+
+def sum_pairwise(values):
+    """The sum over the last axis, added in halves (the first half's terms to the second's, then again) until one
+    is left: elementwise additions in one fixed order, whatever the batch.  XLA's own reduction of a long axis
+    keeps partial sums whose number follows its vectorisation of the whole batch (measured: the interior point's
+    complementarity mean over 2160 terms, ``control.lp``, an ulp apart at 2 and 70 lanes)."""
+    while values.shape[-1] > 1:
+        if values.shape[-1] % 2:
+            values = jnp.concatenate([values, jnp.zeros_like(values[..., :1])], -1)
+        half = values.shape[-1] // 2
+        values = values[..., :half] + values[..., half:]
+    return values[..., 0]
 
 
 def percentile_over_cycles(values, q: float):

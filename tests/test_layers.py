@@ -13,7 +13,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "geojax"
 # The engine and what it stands on (layers 1-5 of docs/design.md).
-BELOW_THE_RUNNER = ("geojax/physics", "geojax/params.py", "geojax/nominal_errors.py", "geojax/reductions.py",
+BELOW_THE_RUNNER = ("geojax/physics", "geojax/params.py", "geojax/nominal_errors.py", "geojax/reductions.py", "geojax/per_lane.py",
                     "geojax/control", "geojax/states", "geojax/navigation", "geojax/loop")
 # What the runner and orchestration own: files, figures, exports, results, the command line, sweeps, tuning.
 ABOVE = ("geojax.runner", "geojax.export", "geojax.plots", "geojax.figures", "geojax.store", "geojax.results",

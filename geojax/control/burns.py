@@ -37,7 +37,7 @@ from geojax.physics.dynamics import Thrust
 from geojax.physics.forces import sunlit_fraction_xyz
 from geojax.physics.propulsion import (alpha_beta_bounds, arm_limits, delta_v_direction_rsw, firing_fraction,
                                       sunlit_clock)
-from geojax.physics.trig import sincos
+from geojax.physics.trig import sincos, tan
 from geojax.physics.execution import attitude_error_rad, magnitude_scale
 from geojax.states.base import THRUSTER_LEVELS
 
@@ -137,7 +137,7 @@ def one_arm(burns, keeper, limits):
     alpha_other = jnp.clip(jnp.arctan2(-other[1], -other[0]), lo, hi)
     p_other = jnp.hypot(other[0], other[1])
     x, y = p_other * jnp.cos(alpha_other), p_other * jnp.sin(alpha_other)  # eq. (1)'s x = -v_r >= 0, y = -v_t
-    tan_max, tan_min = jnp.tan(limits.beta_max_rad), jnp.tan(limits.beta_min_rad)
+    tan_max, tan_min = tan(limits.beta_max_rad), tan(limits.beta_min_rad)
     radial = jnp.zeros(())
     n_other = jnp.zeros(())
     # the floor's normal part and the raise d depend on each other: fixed-point steps, each shrinking the error by

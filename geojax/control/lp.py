@@ -15,7 +15,9 @@ diag(sigma) + A' diag(rho) A and the row and column norms of a scaling of A, so 
 dense A.  The problem is first equilibrated (OSQP's modified Ruiz scaling).  The iterations run in a
 ``lax.while_loop`` that stops when ``certify`` accepts the iterate (duality gap, hard-row violation and
 dual residual within ``tolerance``); under ``vmap`` a batch runs until its slowest member has converged,
-or for ``Settings.iterations`` at most.
+or for ``Settings.iterations`` at most.  Its sums (the complementarity mean, the objectives) are added in a
+fixed order (``reductions.sum_pairwise``), so that a lane's iterates, and when it stops, do not depend on the
+batch's width.
 
 Why not ADMM in the OSQP form (tried first): on the MPC's programs (``control.mpc``), whose longitude rows
 are ~1e4 times more sensitive to tangential Delta-V than the inclination rows, it left half of 16 random
@@ -29,6 +31,8 @@ from typing import Callable, NamedTuple
 
 import jax
 import jax.numpy as jnp
+
+from geojax.reductions import sum_pairwise
 
 
 class Settings(NamedTuple):
@@ -120,7 +124,8 @@ def solve(c, operator: Operator, lower, upper, penalty, *, tolerance, settings: 
         return ax, r_primal, r_dual, r_penalty
 
     def mu_of(s, z, v, zeta):
-        return (jnp.sum(jnp.where(present, s * z, 0.0)) + jnp.sum(jnp.where(soft, v * zeta, 0.0))) / count
+        return (sum_pairwise(jnp.where(present, s * z, 0.0).reshape(-1))
+                + sum_pairwise(jnp.where(soft, v * zeta, 0.0).reshape(-1))) / count
 
     def iteration(carry):
         state, k = carry[:2]
@@ -197,7 +202,7 @@ def objective(c, ax, x, lower, upper, penalty):
     """c'x plus the soft rows' penalties at the row values ``ax``."""
     soft = jnp.isfinite(penalty)
     violation = jnp.maximum(lower - ax, 0.0) + jnp.maximum(ax - upper, 0.0)
-    return c @ x + jnp.sum(jnp.where(soft, jnp.where(soft, penalty, 0.0) * violation, 0.0))
+    return sum_pairwise(c * x) + sum_pairwise(jnp.where(soft, jnp.where(soft, penalty, 0.0) * violation, 0.0))
 
 
 def dual_objective(lower, upper, penalty, y):
@@ -207,7 +212,7 @@ def dual_objective(lower, upper, penalty, y):
     pos, neg = jnp.maximum(y, 0.0), jnp.minimum(y, 0.0)
     support = jnp.where(pos > 0, upper, 0.0) * pos + jnp.where(neg < 0, lower, 0.0) * neg
     allowed = jnp.abs(y) <= penalty * (1 + 1e-9)
-    return jnp.where(jnp.all(allowed), -jnp.sum(support), -jnp.inf)
+    return jnp.where(jnp.all(allowed), -sum_pairwise(support), -jnp.inf)
 
 
 def certify(c, operator: Operator, lower, upper, penalty, x, y, tolerance):

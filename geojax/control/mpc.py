@@ -55,6 +55,7 @@ from geojax.control.qffc import BurnPair
 from geojax.params import LOG, NUMBER, Field, degrees, station_target
 from geojax.physics.elements import wrap_angle
 from geojax.physics.propulsion import alpha_beta_bounds, arm_limits, delta_v_direction_rsw
+from geojax.per_lane import lane_by_lane
 
 HORIZON_LIMIT = 30  # cycles: the largest N_max accepted
 SOLVED_VIOLATION = 0.01  # a plan violating a row by more than this fraction of its half-width is "not solved"
@@ -416,6 +417,8 @@ SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS)
 def controller(shape: Shape = Shape()) -> Controller:
     """The MPC with static sizes ``shape`` (stateless: the interior-point method starts afresh every cycle)."""
 
+    solve = lane_by_lane(lambda *args: plan(*args, shape))  # its numbers one lane's at every width
+
     def init(params, context):
         return jnp.zeros(())
 
@@ -423,8 +426,8 @@ def controller(shape: Shape = Shape()) -> Controller:
         limits = arm_limits(params.thrusters)
         target = station_target(params.station)
         accel = params.thrusters["thrust_n"] / estimate.mass_kg
-        burns, solution, model = plan(estimate.mean, target, context.reference, estimate.fix_mee[5], limits, accel,
-                                      context.cycle_s, params.controller, params.station, shape)
+        burns, solution, model = solve(estimate.mean, target, context.reference, estimate.fix_mee[5], limits, accel,
+                                       context.cycle_s, params.controller, params.station)
         violation = row_violation(model, solution.ax[-model.lower.size:])
         return flown_plan(params, target, burns, solution, violation, estimate, context, key), controller_state
 

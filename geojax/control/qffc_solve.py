@@ -57,7 +57,7 @@ import numpy as np
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s
 from geojax.physics.fusion import materialized
 from geojax.physics.propulsion import ArmLimits
-from geojax.physics.trig import atan2, sincos
+from geojax.physics.trig import atan2, sincos, tan
 
 
 class BurnPair(NamedTuple):
@@ -349,7 +349,7 @@ def arm_trig(limits: ArmLimits | ArmTrig) -> ArmTrig:
         return limits
     hi = jnp.stack([limits.alpha_max_rad, limits.alpha_min_rad])
     lo = jnp.stack([-limits.alpha_min_rad, -limits.alpha_max_rad])
-    finite = lambda b: jnp.tan(jnp.minimum(b, jnp.pi / 2 - 1e-12))  # noqa: E731
+    finite = lambda b: tan(jnp.minimum(b, jnp.pi / 2 - 1e-12))  # noqa: E731
     return ArmTrig(jnp.cos(hi), jnp.sin(hi), jnp.cos(lo), jnp.sin(lo), finite(limits.beta_min_rad),
                    finite(limits.beta_max_rad), jnp.cos(limits.beta_max_rad) < 1e-12)
 

@@ -51,7 +51,7 @@ from geojax.control.burns import allocated, one_thruster
 from geojax.physics.constants import J2, OMEGA_EARTH_RAD_S, R_EARTH_M, SECONDS_PER_DAY
 from geojax.physics.dynamics import Thrust
 from geojax.physics.elements import wrap_angle
-from geojax.physics.trig import sincos
+from geojax.physics.trig import atan, sincos
 from geojax.reductions import sum_over_cycles
 from geojax.params import Field
 from geojax.states.base import THRUSTER_LEVELS
@@ -98,10 +98,10 @@ def view(estimate: Estimate, earth_angle_rad, station: dict, mu, use_mean: bool)
     a = p / (1.0 - f * f - g * g)
     if use_mean:
         mean = estimate.mean
-        return wrap_angle(mean[0] - station["lon_rad"]), mean[1], a, 2.0 * jnp.arctan(jnp.hypot(mean[4], mean[5]))
+        return wrap_angle(mean[0] - station["lon_rad"]), mean[1], a, 2.0 * atan(jnp.hypot(mean[4], mean[5]))
     n = jnp.sqrt(mu / a ** 3) * (1.0 + 1.5 * J2 * (R_EARTH_M / a) ** 2)
     dlon = wrap_angle(l_rad - earth_angle_rad - station["lon_rad"])
-    return dlon, n - OMEGA_EARTH_RAD_S, a, 2.0 * jnp.arctan(jnp.hypot(h, k))
+    return dlon, n - OMEGA_EARTH_RAD_S, a, 2.0 * atan(jnp.hypot(h, k))
 
 
 def along_track_dv_mps(a_m, drift_rad_s, drift_goal_rad_s):
@@ -123,7 +123,7 @@ def command(params, estimate: Estimate, context, recovering, use_mean: bool, lev
     accel = params.thrusters["thrust_n"] * level / estimate.mass_kg
     on_t = jnp.clip(along_track_dv_mps(a, drift, goal) / (accel * cycle_s), -1.0, 1.0)
     h, k = estimate.fix_mee[3] - station["ix"], estimate.fix_mee[4] - station["iy"]
-    di = 2.0 * jnp.arctan(jnp.hypot(h, k))
+    di = 2.0 * atan(jnp.hypot(h, k))
     v = jnp.sqrt(mu / a)
     wanted = di > station["box_half_width_rad"] / 4
     on_n = jnp.where(wanted, jnp.clip(di * v / ARC_EFFICIENCY / (accel * cycle_s / 2), 0.0, 1.0), 0.0)

@@ -153,7 +153,7 @@ def save_oem(result, path: str | Path, *, oem_step_s: float | None = None, of: s
                 f"{'seed ' + str(result.seed) if result.seed is not None else 'a given key'}",)
     frame_note = (f"REF_FRAME EME2000: geojax's ECI (mean equator and equinox of {epoch_text} {time_system}) "
                   f"turned by the IAU 1976 precession" if frame == "EME2000" else
-                  f"REF_FRAME MOD: mean equator and equinox of REF_FRAME_EPOCH, fixed (not of date)")
+                  "REF_FRAME MOD: mean equator and equinox of REF_FRAME_EPOCH, fixed (not of date)")
     data_comments = (states.what,
                      *([f"Covariance: the filter's of its estimate of (r, v) at {len(covariances)} of the epochs"]
                        if covariances else []),

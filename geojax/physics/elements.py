@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from geojax.physics.trig import sincos
+from geojax.physics.trig import atan, sincos, tan
 
 P, F, G, H, K, L = range(6)
 
@@ -65,7 +65,7 @@ def cartesian_to_kepler(r_eci, v_eci, mu):
 
 def kepler_to_mee(a_m, e, i_rad, raan_rad, argp_rad, true_anomaly_rad):
     """Li 2022, eq. (5)."""
-    tan_half_i = jnp.tan(i_rad / 2)
+    tan_half_i = tan(i_rad / 2)
     return jnp.stack(
         [
             a_m * (1 - e**2),
@@ -83,7 +83,7 @@ def mee_to_kepler(mee):
     """Inverse of eq. (5); angles in [0, 2 pi)."""
     p, f, g, h, k, true_lon = (mee[..., j] for j in range(6))
     e = jnp.hypot(f, g)
-    i = 2 * jnp.arctan(jnp.hypot(h, k))
+    i = 2 * atan(jnp.hypot(h, k))
     raan = jnp.mod(jnp.arctan2(k, h), 2 * jnp.pi)
     lon_peri = jnp.arctan2(g, f)
     argp = jnp.mod(lon_peri - raan, 2 * jnp.pi)

@@ -1,4 +1,4 @@
-"""Cosine, sine and arc tangent of per-sample values in plain XLA arithmetic.
+"""Cosine, sine, tangent and arc tangents of per-sample values in plain XLA arithmetic.
 
 XLA's CPU compiler evaluates float64 ``cos`` and ``sin`` one element at a time
 (about 13 ns for the pair per element, measured on 1024 lanes); the same
@@ -20,6 +20,12 @@ longitude and latitude of every sample at every step and the QFFC's burn nodes (
 thousands of times per cycle by the FOMPC's annealing, go through ``atan2`` below, fdlibm's ``e_atan2.c``
 and ``s_atan.c``: |y / x| reduced to one of five intervals and an odd polynomial of degree 21, within 1 ulp
 of libm (``tests/test_trig.py``).
+
+``tan`` and ``atan`` are here for the batch's width: XLA:CPU's own float64 ``tan`` and ``atan`` take a
+vectorised path for the elements of a loop that fill a vector and libm's for the rest, and the two differ in the
+last bit (measured: ``jnp.arctan`` over a [288, 70] array against [10080, 2], 271 of 20160 values apart; ``jnp.tan``
+in a scalar loop against a vector, 656 of 2000), so a sample's value depended on how many lanes it was batched
+with. Built from ``sincos`` and ``atan2``'s kernel, each is the same plain arithmetic in every lane.
 """
 
 from __future__ import annotations
@@ -84,6 +90,25 @@ def _atan2_jvp(primals, tangents):
     (y, x), (dy, dx) = primals, tangents
     r2 = x * x + y * y
     return atan2(y, x), (x * dy - y * dx) / jnp.where(r2 > 0, r2, 1.0)
+
+
+def tan(angle_rad):
+    """tan ``angle_rad`` as sin / cos of ``sincos`` (within 3 ulp of libm below 1.5 rad; the same at every width)."""
+    cos_a, sin_a = sincos(angle_rad)
+    return sin_a / cos_a
+
+
+@jax.custom_jvp
+def atan(t):
+    """atan ``t`` in [-pi/2, pi/2], elementwise (fdlibm's ``s_atan.c``, as ``atan2``); derivative 1 / (1 + t^2)."""
+    z = _atan_nonnegative(jnp.abs(t))
+    return jnp.where(jnp.signbit(t), -z, z)
+
+
+@atan.defjvp
+def _atan_jvp(primals, tangents):
+    (t,), (dt,) = primals, tangents
+    return atan(t), dt / (1.0 + t * t)
 
 
 # s_atan.c: atan(t) = ATAN_HI[i] + atan((t - c_i) / (1 + c_i t)) on five intervals of t >= 0 (c = 1/2, 1, 3/2,

@@ -154,7 +154,6 @@ def prepare(scenarios: list[Scenario], controller: Controller | None = None,
     stacked = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *params)
     width = controller.reference_cycles
     segment_cycles = min(segment_cycles, n_cycles)
-    n_segments = -(-n_cycles // segment_cycles)
     n_env = environment_cycles(n_cycles, width, segment_cycles)
     grid = (first.epoch_tt_s, first.epoch_tt_s, first.tt_minus_ut1_s, step_s, n_env, n_steps)
     per_sample = width > 0 and _references_differ(params)

@@ -34,6 +34,8 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
+from geojax.physics.trig import atan
+
 
 class OrbitGeometry(NamedTuple):
     """Osculating quantities of a MEE state that the guidance reads (rad, m)."""
@@ -52,7 +54,7 @@ def orbit_geometry(mee) -> OrbitGeometry:
     p, f, g, h, k, true_lon = (mee[j] for j in range(6))
     e = jnp.hypot(f, g)
     a = p / (1 - e**2)
-    return OrbitGeometry(e, 2 * jnp.arctan(jnp.hypot(h, k)), true_lon - jnp.arctan2(g, f),
+    return OrbitGeometry(e, 2 * atan(jnp.hypot(h, k)), true_lon - jnp.arctan2(g, f),
                          true_lon - jnp.arctan2(k, h), a, a * (1 - e), a * (1 + e))
 
 

@@ -72,12 +72,15 @@ def with_ranging(folder: Path, name: str, text: str) -> Path:
 
 
 def sweep_file(folder: Path, name: str, base: str, controller: str, clusters: int, days: float,
-               errors: bool = True) -> Path:
+               errors: bool = True, settings: tuple[str, ...] = ()) -> Path:
+    """A sweep of ``clusters`` repetitions of ``base``; ``settings`` are ``KEY=VALUE`` lines added to its ``[set]``
+    (VALUE as TOML writes it), for both the cluster and the lone satellite."""
     path = folder / f"{name}.toml"
     path.write_text(f'name = "{name}"\nscenario = "{base}"\ncontrollers = ["{controller}"]\nrepetitions = {clusters}\n'
                     f'seed = 2026\n[set]\n"duration.days" = {days}\n' +
                     ('"errors.h_rv" = 1.0\n"errors.h_att" = 1.0\n' if errors else
-                     '"errors.sigma3_dv_pct" = 6.0\n"errors.sigma3_att_deg" = 0.3\n'))  # the filter's: 2 %, 0.1 deg
+                     '"errors.sigma3_dv_pct" = 6.0\n"errors.sigma3_att_deg" = 0.3\n') +  # the filter's: 2 %, 0.1 deg
+                    "".join(f'"{k.strip()}" = {v.strip()}\n' for k, v in (line.split("=", 1) for line in settings)))
     return path
 
 
@@ -109,8 +112,13 @@ def main() -> None:
     parser.add_argument("--days", type=float, default=365.25)
     parser.add_argument("--navigation", choices=("nominal", "ranging"), default="nominal",
                         help="Li's nominal Gaussian fixes, or two stations' ranging into the filter")
+    parser.add_argument("--set", dest="settings", action="append", default=[], metavar="KEY=VALUE",
+                        help="a scenario key for every satellite and the lone one, e.g. controller.e_max=1e-4 "
+                             "(the MPC's windows within the separation); repeatable")
     parser.add_argument("--out", type=Path, default=HERE / "results")
     args = parser.parse_args()
+    if any("=" not in line for line in args.settings):
+        parser.error("--set takes KEY=VALUE")
     label = args.controller + ("" if args.navigation == "nominal" else "_ranging")
     work = args.out / f"cluster_year_{label}"
     work.mkdir(parents=True, exist_ok=True)
@@ -122,9 +130,9 @@ def main() -> None:
         lone_path.write_text(lone_text())
     cluster, lone = work / "cluster.h5", work / "lone.h5"
     for path, spec in ((cluster, sweep_file(work, "cluster", base, args.controller, args.clusters, args.days,
-                                            not ranging)),
+                                            not ranging, tuple(args.settings))),
                        (lone, sweep_file(work, "lone", str(lone_path), args.controller, args.clusters, args.days,
-                                         not ranging))):
+                                         not ranging, tuple(args.settings)))):
         if not _finished(path, spec):  # a finished sweep of the same file is read again, not flown again
             run_sweep(load_sweep(spec), path, resume=Path(f"{path}.parts").exists(), force=path.exists())
     wall_s = 0.0
@@ -143,7 +151,9 @@ def main() -> None:
         "geojax_version": geojax.__version__,
         "command": f"python studies/collocation/cluster_year.py --controller {args.controller} "
                    f"--clusters {args.clusters} --days {args.days:g}" +
-                   ("" if not ranging else " --navigation ranging"),
+                   ("" if not ranging else " --navigation ranging") +
+                   "".join(f" --set {line}" for line in args.settings),
+        "settings": args.settings,
         "navigation": args.navigation,
         "min_estimated_separation_km": float(c["min_estimated_separation_km"].min()),
         "max_separation_error_km": float(c["max_separation_error_km"].max()),
@@ -159,7 +169,8 @@ def main() -> None:
         "dv_lone_mean_mps": float(s["dv_per_year_mps"].mean()), "dv_lone_std_mps": float(s["dv_per_year_mps"].std()),
         "lone_held": int(np.sum(s["status"] == 0)), "satellites_held": held,
     }
-    data["dv_price_percent"] = 100 * (data["dv_cluster_mean_mps"] / data["dv_lone_mean_mps"] - 1)
+    data["dv_price_percent"] = (100 * (data["dv_cluster_mean_mps"] / data["dv_lone_mean_mps"] - 1)
+                                if data["dv_lone_mean_mps"] > 0 else float("nan"))  # a run too short to burn
     (args.out / f"cluster_year_{label}.json").write_text(json.dumps(data, indent=1))
     m = data["min_separation_km"]
     lines = [f"# collocation-4 for {args.days:g} days under {args.controller.upper()}, {args.clusters} clusters"
@@ -191,8 +202,7 @@ def main() -> None:
              "forces' pull on the vectors between burns take the rest."]
     if args.clusters < 64:
         lines += ["", f"{args.clusters} clusters, not the study's 64: the run's time on 2 shared CPU cores. The "
-                  f"full study: `python studies/collocation/cluster_year.py --controller {args.controller} "
-                  f"--clusters 64`."]
+                  f"full study: `{data['command'].replace(f'--clusters {args.clusters}', '--clusters 64')}`."]
     (args.out / f"cluster_year_{label}.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
