@@ -56,7 +56,6 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
-from geojax.states.faults import NAME as FAULTS, TRACKED
 from geojax.export.oem import Covariance, Metadata, write_oem
 from geojax.physics.constants import G0_MPS2
 from geojax.physics.elements import mee_to_cartesian
@@ -75,7 +74,6 @@ J2000_TT = dt.datetime(2000, 1, 1, 12)  # J2000.0 as a TT calendar date
 BURN_COLUMNS = ("cycle", "thruster", "start_utc", "start_tt_s", "duration_s", "dv_mps", "dv_r_mps", "dv_t_mps",
                 "dv_n_mps")
 FAULT_BURN_COLUMNS = ("status", "planned_duration_s")  # after BURN_COLUMNS where the faults part rode the loop
-BURN_STATUSES = ("flown", "missed", "cut", "degraded")
 
 
 class Burns(NamedTuple):
@@ -89,7 +87,7 @@ class Burns(NamedTuple):
     # law's: the span of its steps, fired at their level)
     dv_rtn_mps: np.ndarray  # [m, 3] Delta-V along R, T, N (held fixed in RTN through the burn)
     mass_kg: np.ndarray  # [m] the propellant it used
-    status: np.ndarray | None = None  # [m] str, one of BURN_STATUSES, where the faults part rode the loop
+    status: np.ndarray | None = None  # [m] str, one of states.base.BURN_STATUSES, where a part says (the faults)
     planned_s: np.ndarray | None = None  # [m] the firing time commanded, there
 
 
@@ -300,18 +298,9 @@ def run_burns(result) -> Burns | None:
     planned = fired_s > 0
     level = np.ones(fired_s.shape)
     status = commanded_s = None
-    faults = result.records.cycles.states.get(FAULTS)
-    if faults is not None:  # ``states.faults``: the burns as flown (each by its thruster), at the level delivered
-        commanded_s = np.take_along_axis(np.asarray(faults.planned_s, float), flying, axis=1)
-        flown_s = np.take_along_axis(np.asarray(faults.flown_s, float), flying, axis=1)
-        scale = np.broadcast_to(np.asarray(result.params.states[FAULTS]["thrust_scale"], float), (TRACKED,))
-        level = np.where(flown_s > 0, scale[flying], 0.0)
-        status = np.select([flown_s <= 0, flown_s < commanded_s, level != 1.0], BURN_STATUSES[1:], BURN_STATUSES[0])
-        fired_s = np.where(planned, flown_s, 0.0)
-        # the direction flown (a stuck arm's frozen one: ``faults.stuck_arm``), where the burn fired
-        flown_dv = np.take_along_axis(np.asarray(faults.flown_dv_rsw, float), flying[..., None], axis=1)
-        size = np.linalg.norm(flown_dv, axis=-1, keepdims=True)
-        directions = np.where(size > 0, flown_dv / np.where(size > 0, size, 1.0), directions)
+    for part in getattr(result, "parts", ()):  # a part that changes what flies (``states.faults``) says how
+        if part.flown_burns is not None:
+            fired_s, directions, level, status, commanded_s = part.flown_burns(result, fired_s, directions, flying)
     cycle_s = steps_per_cycle(sc.step_s) * result.step_s
     cycle = np.broadcast_to(np.arange(len(fired_s))[:, None], fired_s.shape)
     order = np.lexsort((start_s.ravel(), cycle.ravel()))

@@ -150,6 +150,19 @@ class Constraint(NamedTuple):
     status: str
 
 
+BURN_STATUSES = ("flown", "missed", "cut", "degraded")  # a burn as flown, where a part says (``FlownBurns``)
+
+
+class FlownBurns(NamedTuple):
+    """A run's planned burns [cycles, burns] as a part let them fly (``Part.flown_burns``)."""
+
+    fired_s: object  # the firing time delivered, s
+    directions_rsw: object  # [..., 3] unit, the direction flown
+    level: object  # the fraction of the full thrust delivered
+    status: object  # one of ``BURN_STATUSES``
+    commanded_s: object  # the firing time the controller commanded, s
+
+
 class Part(NamedTuple):
     """What a state of the loop declares besides its protocol, every entry optional but its name: its scenario
     table and keys, the model a table selects, its ``Params`` leaves (``params.states[name]``), its validation,
@@ -172,6 +185,9 @@ class Part(NamedTuple):
     # (result, folder) -> [paths of the figures it drew], or its import path ("geojax.plots.parts:wheel_figures"),
     # resolved by the runner when a run's figures are drawn: a part's module need not import the figures' code
     figures: Callable | str | None = None
+    # (run, fired_s, directions_rsw, thrusters) -> ``FlownBurns``: the planner's burns [cycles, burns] as this part
+    # let them fly (host side, numpy), for the burns file and the CCSDS maneuvers (``export.trajectory.run_burns``)
+    flown_burns: Callable | None = None
     # the model where it does not depend on the table (a user's own), or the one whose metrics and columns serve
     # every table (a registered part's)
     model: StateModel | None = None

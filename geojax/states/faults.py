@@ -30,7 +30,7 @@ import numpy as np
 from geojax.params import NUMBER, Field
 from geojax.physics.constants import SECONDS_PER_DAY
 from geojax.physics.propulsion import alpha_beta_bounds, arm_limits, delta_v_direction_rsw
-from geojax.states.base import THRUSTER_LEVELS, Part, StateModel
+from geojax.states.base import BURN_STATUSES, THRUSTER_LEVELS, FlownBurns, Part, StateModel
 
 NAME = "faults"
 # The thrusters the part tracks (indices 0 .. TRACKED - 1): Li's two arms with two thrusters each.
@@ -311,5 +311,22 @@ DESCRIPTIONS = {
     **{f"fired_s_t{k}": f"thruster {k}'s firing time delivered in the cycle, s (/cycles)" for k in range(TRACKED)},
     **{f"planned_s_t{k}": f"thruster {k}'s firing time commanded in the cycle, s (/cycles)" for k in range(TRACKED)},
 }
+def flown_burns(run, fired_s, directions_rsw, thrusters) -> FlownBurns:
+    """The planner's burns [cycles, burns] (firing times, directions, the thruster of each) as this part let them
+    fly: each by its thruster's delivered firing time, along the direction flown (a stuck arm's frozen one), at the
+    level delivered; its status missed (nothing flown), cut (less than commanded), degraded (a level below 1) or
+    flown."""
+    records = run.records.cycles.states[NAME]
+    commanded_s = np.take_along_axis(np.asarray(records.planned_s, float), thrusters, axis=1)
+    flown_s = np.take_along_axis(np.asarray(records.flown_s, float), thrusters, axis=1)
+    scale = np.broadcast_to(np.asarray(run.params.states[NAME]["thrust_scale"], float), (TRACKED,))
+    level = np.where(flown_s > 0, scale[thrusters], 0.0)
+    status = np.select([flown_s <= 0, flown_s < commanded_s, level != 1.0], BURN_STATUSES[1:], BURN_STATUSES[0])
+    flown_dv = np.take_along_axis(np.asarray(records.flown_dv_rsw, float), thrusters[..., None], axis=1)
+    size = np.linalg.norm(flown_dv, axis=-1, keepdims=True)
+    directions_rsw = np.where(size > 0, flown_dv / np.where(size > 0, size, 1.0), directions_rsw)
+    return FlownBurns(np.where(fired_s > 0, flown_s, 0.0), directions_rsw, level, status, commanded_s)
+
+
 PART = Part(NAME, table=NAME, fields=FIELDS, select=lambda table: MODEL if table["enabled"] else None,
-            leaves=leaves, validate=validate, descriptions=DESCRIPTIONS, model=MODEL)
+            leaves=leaves, validate=validate, descriptions=DESCRIPTIONS, model=MODEL, flown_burns=flown_burns)
