@@ -2,6 +2,7 @@
 price of holding non-zero e and i vectors against the lone satellite.
 
     python studies/collocation/cluster_year.py [--controller qffc] [--clusters 64] [--days 365.25]
+        [--navigation nominal|ranging] [--set KEY=VALUE ...] [--coordinated D_MIN_KM] [--name NAME]
         [--out studies/collocation/results]
 
 ``collocation-4`` (four of the ``geo`` satellites at 19.2 deg E, e and i vectors on circles of 1.5e-4 at the same
@@ -9,7 +10,9 @@ phase), every satellite kept by ``--controller`` with Li 2022's nominal errors (
 clusters each with its own draws (a sweep: every sample a whole cluster); against it the same satellite flown
 alone on e = i = 0 targets (``--clusters`` samples).  Per run: the least separation's percentiles over the
 clusters, the fraction below the 2 km alert, the satellites' boxes, the ΔV of the cluster's satellites against
-the lone one's.  Writes ``cluster_year_<controller>.md`` and ``.json`` into ``--out``.
+the lone one's.  ``--coordinated`` keeps each cluster in one MPC program that holds its pairs ``D_MIN_KM`` apart
+(``control.mpc_cluster``; the lone satellite flies the MPC alone).  Writes ``cluster_year_<controller>.md`` and
+``.json`` (or ``NAME``'s) into ``--out``.
 """
 
 from __future__ import annotations
@@ -115,12 +118,20 @@ def main() -> None:
     parser.add_argument("--set", dest="settings", action="append", default=[], metavar="KEY=VALUE",
                         help="a scenario key for every satellite and the lone one, e.g. controller.e_max=1e-4 "
                              "(the MPC's windows within the separation); repeatable")
+    parser.add_argument("--coordinated", type=float, metavar="D_MIN_KM",
+                        help="the cluster in one MPC program holding every pair this far apart (controller mpc)")
+    parser.add_argument("--name", help="the results files' name (by default cluster_year_CONTROLLER[_ranging])")
     parser.add_argument("--out", type=Path, default=HERE / "results")
     args = parser.parse_args()
     if any("=" not in line for line in args.settings):
         parser.error("--set takes KEY=VALUE")
+    if args.coordinated is not None and args.controller != "mpc":
+        parser.error("--coordinated: the coordinated program is the MPC's (--controller mpc)")
+    together = () if args.coordinated is None else (
+        "collocation.coordinated=true", f"collocation.min_separation_km={args.coordinated}")
     label = args.controller + ("" if args.navigation == "nominal" else "_ranging")
-    work = args.out / f"cluster_year_{label}"
+    name = args.name or f"cluster_year_{label}"
+    work = args.out / name
     work.mkdir(parents=True, exist_ok=True)
     ranging = args.navigation == "ranging"
     base = str(with_ranging(work, "cluster_scenario", scenario.read_text("collocation-4"))) if ranging else \
@@ -130,7 +141,7 @@ def main() -> None:
         lone_path.write_text(lone_text())
     cluster, lone = work / "cluster.h5", work / "lone.h5"
     for path, spec in ((cluster, sweep_file(work, "cluster", base, args.controller, args.clusters, args.days,
-                                            not ranging, tuple(args.settings))),
+                                            not ranging, (*args.settings, *together))),
                        (lone, sweep_file(work, "lone", str(lone_path), args.controller, args.clusters, args.days,
                                          not ranging, tuple(args.settings)))):
         if not _finished(path, spec):  # a finished sweep of the same file is read again, not flown again
@@ -152,7 +163,8 @@ def main() -> None:
         "command": f"python studies/collocation/cluster_year.py --controller {args.controller} "
                    f"--clusters {args.clusters} --days {args.days:g}" +
                    ("" if not ranging else " --navigation ranging") +
-                   "".join(f" --set {line}" for line in args.settings),
+                   "".join(f" --set {line}" for line in args.settings) + (f" --name {args.name}" if args.name else "") +
+                   ("" if args.coordinated is None else f" --coordinated {args.coordinated:g}"),
         "settings": args.settings,
         "navigation": args.navigation,
         "min_estimated_separation_km": float(c["min_estimated_separation_km"].min()),
@@ -171,7 +183,7 @@ def main() -> None:
     }
     data["dv_price_percent"] = (100 * (data["dv_cluster_mean_mps"] / data["dv_lone_mean_mps"] - 1)
                                 if data["dv_lone_mean_mps"] > 0 else float("nan"))  # a run too short to burn
-    (args.out / f"cluster_year_{label}.json").write_text(json.dumps(data, indent=1))
+    (args.out / f"{name}.json").write_text(json.dumps(data, indent=1))
     m = data["min_separation_km"]
     lines = [f"# collocation-4 for {args.days:g} days under {args.controller.upper()}, {args.clusters} clusters"
              + (", ranging" if ranging else ""), "",
@@ -203,7 +215,7 @@ def main() -> None:
     if args.clusters < 64:
         lines += ["", f"{args.clusters} clusters, not the study's 64: the run's time on 2 shared CPU cores. The "
                   f"full study: `{data['command'].replace(f'--clusters {args.clusters}', '--clusters 64')}`."]
-    (args.out / f"cluster_year_{label}.md").write_text("\n".join(lines) + "\n")
+    (args.out / f"{name}.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
 

@@ -1,7 +1,7 @@
 """The coordinated MPC against independent keeping: the least separation and the ΔV of a two-satellite
 cluster whose satellites the MPC keeps each on its own, or in one program that keeps them ``d_min`` apart.
 
-    python studies/collocation/coordinated.py [--days 30] [--out studies/collocation/results]
+    python studies/collocation/coordinated.py [--days 30] [--name coordinated] [--out studies/collocation/results]
 
 ``collocation-2`` (two of the ``geo`` satellites at 19.2 deg E) under the MPC with its default windows (e_max
 = 2e-4, di_max = 3.3e-4 about each satellite's targets) and Li's nominal errors (H_rv = H_att = 1), in two
@@ -9,8 +9,9 @@ cases: targets too close (parallel e/i separation of 2e-5, a·δe = 0.84 km; d_m
 separation (2e-4, 8.4 km; d_min = 8 km, what the windows would let the satellites give away).  Per case and
 keeping: the least true separation over the run and from the second cycle on (the first cycle's separation
 is the start's, which no plan changes), the least separation the coordinated program predicted (its
-linearised relative motion), each satellite's ΔV, status and unsolved cycles.  Writes ``coordinated.md`` and
-``.json`` into ``--out``.
+linearised relative motion), each satellite's ΔV, status and unsolved cycles.  Writes ``NAME.md`` and
+``NAME.json`` into ``--out`` (``--name``, by default ``coordinated``; the year's: ``--days 365.25 --name
+coordinated_year``).
 """
 
 from __future__ import annotations
@@ -58,17 +59,19 @@ def flown(separation: float, d_min_km: float | None, days: float) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--days", type=float, default=30.0)
+    parser.add_argument("--name", default="coordinated", help="the results files' name")
     parser.add_argument("--out", type=Path, default=HERE / "results")
     args = parser.parse_args()
+    named = "" if args.name == "coordinated" else f" --name {args.name}"
     data = {"days": args.days, "geojax_version": geojax.__version__,
-            "command": f"python studies/collocation/coordinated.py --days {args.days:g}", "cases": {}}
+            "command": f"python studies/collocation/coordinated.py --days {args.days:g}{named}", "cases": {}}
     for name, (separation, d_min) in CASES.items():
         data["cases"][name] = {"separation": separation, "d_min_km": d_min,
                                "independent": flown(separation, None, args.days),
                                "coordinated": flown(separation, d_min, args.days)}
     wall_s = sum(case[k]["wall_s"] for case in data["cases"].values() for k in ("independent", "coordinated"))
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "coordinated.json").write_text(json.dumps(data, indent=1))
+    (args.out / f"{args.name}.json").write_text(json.dumps(data, indent=1))
     lines = [f"# The coordinated MPC against independent keeping, collocation-2, {args.days:g} days", "",
              f"`{data['command']}` ({wall_s / 60:.0f} min, geojax {geojax.__version__}); the MPC's default windows "
              "(e_max = 2e-4, di_max = 3.3e-4), Li's nominal errors (H_rv = H_att = 1), seed 2026.", "",
@@ -86,7 +89,7 @@ def main() -> None:
     lines += ["", "The predicted least is the coordinated program's, over the day after each next boundary with "
               "the first cycle's burns, in the linearised relative motion (`control.mpc_cluster`); the true "
               "separation is the cluster loop's closest approach between the true states (`loop.cluster`)."]
-    (args.out / "coordinated.md").write_text("\n".join(lines) + "\n")
+    (args.out / f"{args.name}.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
 

@@ -20,7 +20,6 @@ import time
 from pathlib import Path
 
 import jax.numpy as jnp
-import numpy as np
 
 import geojax
 from geojax import scenario
