@@ -298,6 +298,8 @@ def _validate(raw: dict, controller=None) -> dict:
         spec.validate(config)
     _check_honoured(config, spec)
     parts.validate(config)
+    if spec.needs is not None:
+        parts.check_needs(config, spec.needs(config))
     t = config["thrusters"]
     arm_limits_deg(t["beta_max_deg"], t["beta_min_deg"], t["alpha_max_deg"], t["alpha_min_deg"])
     _check_propellant(config, spec)

@@ -157,3 +157,52 @@ def test_the_planner_flies_its_whole_burns_around_long_passes(kind):
             assert np.any(burn_s > 0) and not np.any(meets)
     assert np.min(ratios[False]) < 0.5
     np.testing.assert_allclose(ratios[True], 1.0, atol=1e-3)
+
+
+PASSES_PART = '''
+import jax.numpy as jnp
+import geojax
+from geojax.navigation.schedule import Schedule
+from geojax.states.base import STATION_PASSES
+
+# an operations team's pass plan: 4 h twice a day from 17000 s (over the QFFC's burns of li2022-qffc, seed 0)
+PLAN = Schedule(jnp.array([43082.0]), jnp.array([14400.0]), jnp.array([17000.0]), jnp.zeros((1, 0, 2)))
+
+
+def tell(params, state, told):
+    return told._replace(states={**told.states, STATION_PASSES: PLAN})
+
+
+MODEL = geojax.StateModel("ops_passes", lambda params, r, v, env, fm: jnp.zeros(()),
+                          lambda params, state, ctx: (state, ()), lambda params, start, end, steps: (),
+                          lambda params, cycles, n_steps, run_s: ({}, jnp.asarray(False)), estimate=tell)
+PART = geojax.Part("ops_passes", model=MODEL, tells=lambda table: (STATION_PASSES,))
+'''
+
+
+def test_a_part_of_ones_own_that_tells_the_passes_serves_the_planner(tmp_path, monkeypatch):
+    """The planner names no part: a part of one's own (no filter) that tells ``station_passes`` (an operator's pass
+    plan) lets ``controller.around_passes`` load and plan, and no burn's window meets a pass, checked against the
+    plan by ``overlaps_pass`` (without the planner every burn of these 3 days meets one); the scenario without the
+    part is refused, naming what would tell the passes."""
+    import geojax
+    from geojax.runner import rollout
+
+    (tmp_path / "ops_passes.py").write_text(PASSES_PART)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    text = scenario.read_text("li2022-qffc").replace("[controller]", "[controller]\naround_passes = true", 1)
+    (tmp_path / "told.toml").write_text('states = ["ops_passes:PART"]\n' + text)
+    import ops_passes
+
+    def meets(sc):
+        cycles = rollout.simulate(sc, 0).records.cycles
+        burn_s = np.asarray(cycles.controller["fired_s"])
+        start = np.arange(len(burn_s))[:, None] * SIDEREAL_DAY_S + np.asarray(cycles.controller["start_s"])
+        assert np.all(burn_s > 0)
+        return np.asarray(overlaps_pass(start[..., None], (start + burn_s)[..., None], ops_passes.PLAN))
+
+    assert not np.any(meets(geojax.load_scenario(str(tmp_path / "told.toml"), {"duration.days": 3})))
+    assert np.all(meets(geojax.load_scenario("li2022-qffc", {"duration.days": 3})))
+    (tmp_path / "untold.toml").write_text(text)
+    with pytest.raises(ValueError, match=r"which no part of this scenario tells: set navigation.model = \"ekf\""):
+        geojax.load_scenario(str(tmp_path / "untold.toml"))

@@ -18,6 +18,7 @@ from geojax.runner import setup
 from geojax.loop.metrics import STATUS_MEANINGS
 from geojax.runner.rollout import simulate
 from geojax.loop.simulate import simulate as closed_loop
+from geojax.states.base import WHEEL_MOMENTUM
 from geojax.physics import constants as c
 from geojax.physics.ephemeris import sun_position_eci_m
 from geojax.physics.frames import earth_rotation_angle_rad
@@ -429,14 +430,14 @@ def test_one_element_of_a_list_key_is_an_override_and_a_sweep_axis(tmp_path):
 
 
 def _told_plan(params, controller_state, estimate, context, key):
-    return estimate.states["wheels"], controller_state
+    return estimate.states[WHEEL_MOMENTUM], controller_state
 
 
 TOLD = Controller(stateless_init, _told_plan, coast, record=lambda plan: {"told_nms": plan})
 
 
 def test_the_controller_is_told_the_measured_wheel_momentum():
-    """``Estimate.states["wheels"]`` at a cycle start is the wheels' momentum there (the cycle record's start)
+    """``Estimate.states[WHEEL_MOMENTUM]`` (the quantity the wheels tell, ``states.base``) at a cycle start is the wheels' momentum there (the cycle record's start)
     plus the cycle's measurement error: exactly it at sigma 0; at 2 N m s per axis, errors of that spread (20
     cycles x 3 axes: the sample standard deviation within 25 %, 2.7 of its standard errors).  One batch."""
     from geojax.runner.rollout import simulate_batch

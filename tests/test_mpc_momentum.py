@@ -155,7 +155,8 @@ def test_bad_input_names_the_key(overrides, message):
 
 
 def test_without_wheels_the_controller_says_so():
-    with pytest.raises(ValueError, match=r"attitude\.wheels: the mpc_momentum controller"):
+    with pytest.raises(ValueError, match=r"controller.kind = 'mpc_momentum': plans the wheels' momentum, .*: set "
+                                         r"attitude\.wheels = true"):
         scenario.load("li2022-mpc", {"controller.kind": "mpc_momentum"})
 
 

@@ -47,8 +47,9 @@ class Estimate(NamedTuple):
     mean: jnp.ndarray  # [6] mean (lon rad, drift rad/s, e_x, e_y, i_x, i_y); zeros without a reference
     mass_kg: jnp.ndarray  # [] on-board mass (the propellant gauge is taken as exact)
     t_s: jnp.ndarray  # [] cycle start, s since the start of the run
-    # {name: what a further state of the loop tells the controller} (``StateModel.estimate``, ``geojax.states``):
-    # ``states["wheels"]`` the measured wheel momentum [3], N m s, body axes, where the loop carries the wheels
+    # {quantity: what a further state of the loop tells the controller} (``StateModel.estimate``, ``geojax.states``):
+    # ``states[states.base.WHEEL_MOMENTUM]`` the measured wheel momentum [3], N m s, body axes, where the loop
+    # carries the wheels (the quantities a part tells: ``states.base.QUANTITIES``)
     states: dict = {}
 
 
@@ -69,6 +70,9 @@ class Spec:
     bound_geometry: str = "arms"
     # Whether a single run keeps its per-step records; None: a feedback law (no reference) keeps them.
     keeps_steps: bool | None = None
+    # ``needs(config) -> {quantity: why}``: what it plans with that a part must tell (``states.base.QUANTITIES``,
+    # read from ``Estimate.states``), checked at load against the parts the scenario turns on; None: nothing
+    needs: Callable | None = None
 
 
 @dataclasses.dataclass(frozen=True)

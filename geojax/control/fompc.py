@@ -183,12 +183,7 @@ def shifted(fractions, horizon):
     return fractions[jnp.minimum(jnp.arange(n_max) + 1, jnp.clip(horizon, 1, n_max) - 1)]
 
 
-def validate(config: dict) -> None:
-    """``controller.around_passes`` as the QFFC's (``qffc.validate``)."""
-    qffc.validate(config)
-
-
-SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS)
+SPEC = Spec(FIELDS, None, THRUSTERS, REDUNDANT_THRUSTERS, needs=qffc.needs)  # around the passes as the QFFC's
 
 
 def make(tables: list[dict]) -> Controller:

@@ -75,7 +75,7 @@ from geojax.control.base import Controller, Sizing, Spec
 from geojax.control.effects import V_SYNC_MPS, cycle_coast_s, effect_matrix
 from geojax.control.momentum_frames import across_basis, body_to_rsw, rotate_to_start, rsw_basis
 from geojax.control.predictor import predict_next
-from geojax.states.momentum import NAME as WHEELS
+from geojax.states.base import DUMPING, WHEEL_MOMENTUM
 from geojax.params import NUMBER, Field, station_target
 from geojax.physics.elements import mee_to_cartesian, wrap_angle
 from geojax.physics.propulsion import arm_limits
@@ -123,7 +123,7 @@ class Momentum(NamedTuple):
     row_penalty: jnp.ndarray  # [R + F / 2 + 2] each boundary row's penalty (m/s per half-width)
 
 
-def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, leaves: dict,
+def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, dumping: dict, leaves: dict,
           shape: mpc.Shape) -> Momentum:
     """The momentum part of the program of the cycle whose orbit part is ``model``: ``lines`` [2, 3] the burns'
     nominal lines (unit, RSW at each burn), ``g0`` [3] the wheels' momentum (cycle-start RSW, N m s), ``d`` [3] the
@@ -135,7 +135,7 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, 
     effect_z = jnp.einsum("bsv,bkv->sbk", b, across).reshape(6, TILTS)
     # momentum impulse per m/s of tilt: -L m (u x e), turned to the cycle start's axes
     past = jnp.mod(model.l_rad - l_start_rad, 2 * jnp.pi)
-    impulse = -attitude["thrust_arm_m"] * mass_kg * jnp.cross(lines[:, None, :], across)  # [2, 2, 3]
+    impulse = -dumping["thrust_arm_m"] * mass_kg * jnp.cross(lines[:, None, :], across)  # [2, 2, 3]
     impulse = rotate_to_start(impulse, past[:, None]).reshape(TILTS, 3).T  # [3, 4]
     width = 2 * g + 2 * TILTS
     effect = jnp.zeros((9, width))
@@ -149,7 +149,7 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, 
     z_part, t_part = jnp.eye(TILTS), jnp.eye(TILTS)
     minus = jnp.concatenate([jnp.zeros((TILTS, 2 * g)), -z_part, t_part], 1)  # t - z >= 0
     plus = jnp.concatenate([jnp.zeros((TILTS, 2 * g)), z_part, t_part], 1)  # t + z >= 0
-    sin_max = jnp.sin(attitude["dump_angle_max_rad"])
+    sin_max = jnp.sin(dumping["dump_angle_max_rad"])
     cone = jnp.concatenate([-sin_max * burn_sum, jnp.zeros((2, TILTS)), jnp.kron(jnp.eye(2), jnp.ones((1, 2)))], 1)
     cycle_rows = jnp.concatenate([eye_w, caps, minus, plus, cone])
     inf = jnp.inf
@@ -157,7 +157,7 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, attitude: dict, 
     cycle_upper = jnp.concatenate([jnp.full(2 * g, inf), jnp.ones(2), jnp.full(2 * TILTS, inf), jnp.zeros(2)])
 
     # State rows: the orbit's (on the elements) and the momentum's (on g) at boundaries 1..n_max.
-    h_half = jnp.minimum(leaves["momentum_band_nms"], leaves["momentum_fraction"] * attitude["wheel_capacity_nms"])
+    h_half = jnp.minimum(leaves["momentum_band_nms"], leaves["momentum_fraction"] * dumping["wheel_capacity_nms"])
     angles = 2 * jnp.pi * jnp.arange(k) / shape.facets
     facet = jnp.stack([jnp.cos(angles), jnp.sin(angles), jnp.zeros(k)], -1) / (h_half * math.cos(math.pi / shape.facets))
     common = -jnp.diff(rotate_to_start(lines, past), axis=0)[0]  # the priced row: g along the common line
@@ -321,11 +321,11 @@ def disturbance(state: State, g_eci, gain):
 
 
 def plan(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves: dict, station: dict, lines, g0,
-         d, mass_kg, attitude: dict, shape: mpc.Shape):
+         d, mass_kg, dumping: dict, shape: mpc.Shape):
     """Solve the cycle's program: (the first cycle's ``BurnPair``, its tilts' z [2, 2] (m/s), the ``lp.Solution``,
     the ``mpc.Model``, the ``Momentum``)."""
     model = mpc.build(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves, station, shape)
-    momentum = build(model, lines, g0, d, l_start_rad, mass_kg, attitude, leaves, shape)
+    momentum = build(model, lines, g0, d, l_start_rad, mass_kg, dumping, leaves, shape)
     c, lower, upper, penalty = program(model, momentum, leaves, shape)
     solution = lp.solve(c, operator(model, momentum, shape), lower, upper, penalty, tolerance=leaves["tolerance"],
                         settings=lp.Settings(iterations=shape.iterations))
@@ -348,20 +348,13 @@ def make(tables: list[dict]) -> Controller:
     return controller(mpc.shape_of(tables))
 
 
-def validate(config: dict) -> None:
-    """``mpc.validate``, and the wheels with a tilt to plan: ``attitude.wheels = true``,
-    ``attitude.dump_angle_max_deg`` > 0."""
-    mpc.validate(config)
-    attitude = config["attitude"]
-    if not attitude["wheels"]:
-        raise ValueError("attitude.wheels: the mpc_momentum controller plans the wheels' momentum; set "
-                         "attitude.wheels = true (and attitude.dump_angle_max_deg > 0), or use controller.kind = 'mpc'")
-    if attitude["dump_angle_max_deg"] <= 0:
-        raise ValueError(f"attitude.dump_angle_max_deg: the mpc_momentum controller tilts the thrust lines within "
-                         f"it; must be > 0, got {attitude['dump_angle_max_deg']:g}")
+def needs(config: dict) -> dict:
+    """The wheels' momentum to plan and a thrust line that tilts to unload them, told by a part
+    (``states.base``: ``WHEEL_MOMENTUM``, ``DUMPING``)."""
+    return {WHEEL_MOMENTUM: "controller.kind = 'mpc_momentum': plans the wheels' momentum", DUMPING: "controller.kind = 'mpc_momentum': tilts the thrust lines to unload the wheels"}
 
 
-SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS, unread=UNREAD)
+SPEC = Spec(FIELDS, mpc.validate, THRUSTERS, REDUNDANT_THRUSTERS, unread=UNREAD, needs=needs)
 
 
 @functools.lru_cache(maxsize=None)
@@ -380,12 +373,12 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         accel = params.thrusters["thrust_n"] / mass
         r, v = mee_to_cartesian(estimate.fix_mee, context.force_model.mu_m3_s2)
         basis = rsw_basis(r, v)  # rows R0, S0, W0 in ECI
-        g_eci = basis.T @ body_to_rsw(estimate.states[WHEELS])
+        g_eci = basis.T @ body_to_rsw(estimate.states[WHEEL_MOMENTUM])
         d_eci = disturbance(state, g_eci, params.controller["disturbance_gain"])
         def solve(lines):
             return plan(estimate.mean, target, context.reference, estimate.fix_mee[5], limits, accel, context.cycle_s,
                         params.controller, params.station, lines, basis @ g_eci, basis @ d_eci, mass,
-                        params.states[WHEELS], shape)
+                        estimate.states[DUMPING], shape)
 
         def again(i, out):  # the first solve on last cycle's lines, each next on the lines the one before planned
             return solve(jnp.where(i == 0, state.lines_rsw, planned_lines(out[0], state.lines_rsw)))
@@ -402,7 +395,7 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         # rectangle's clip and the attitude error), s = (u x J) / (L m v), so that -L m v (u x s) is J less its
         # part along u (which no tilt reaches); 0 for a burn not fired.
         fired = flown.burn_s > 0
-        arm_mass = params.states[WHEELS]["thrust_arm_m"] * mass
+        arm_mass = estimate.states[DUMPING]["thrust_arm_m"] * mass
         impulse = -arm_mass * jnp.cross(momentum.lines, jnp.einsum("bk,bkv->bv", z, momentum.across))  # [2, 3] J
         u = flown.directions_rsw
         tilts = jnp.cross(u, impulse) / (arm_mass * jnp.where(fired, burns.v_mps, 1.0))[:, None]

@@ -18,8 +18,7 @@ from geojax.control import burns as burns_mod
 from geojax.control.base import Controller, Sizing, Spec, stateless_init
 from geojax.control.effects import R_SYNC_M, V_SYNC_MPS, cycle_coast_s, effect_columns, remaining_fraction
 from geojax.control.predictor import predict_next
-from geojax.navigation.schedule import station_schedules
-from geojax.states.navigation import NAME as NAVIGATION
+from geojax.states.base import STATION_PASSES
 from geojax.physics.elements import wrap_angle
 from geojax.params import LOG, NUMBER, Field, station_target
 from geojax.physics.propulsion import arm_limits
@@ -30,7 +29,7 @@ from geojax.control.qffc_solve import (ArmTrig, BurnPair, _log_at_least_one, _st
 # The solver's names (``qffc_solve``) are the QFFC's too: ``qffc.solve``, ``qffc.BurnPair`` ...
 __all__ = ["ArmTrig", "BurnPair", "CONTROLLER", "FIELDS", "SPEC", "_log_at_least_one", "arm_trig", "default_raise_index",
            "default_vdt_raises", "effect", "estimated_drift_rad_s", "full_correction_mps", "make", "model_cycle",
-           "model_inputs", "solve", "validate", "around_passes_plan", "around_passes_of"]
+           "model_inputs", "solve", "needs", "around_passes_plan", "around_passes_of"]
 
 # The [controller] keys of Li 2022's planners.  The QFFC reads vdt_estimate only; it accepts the FOMPC's keys
 # (and ignores them) so that one scenario and one sweep file run both controllers on the same grid.
@@ -163,17 +162,15 @@ def _plan(params, controller_state, estimate, context, key):
     return burns_mod.fly(params, burns, prediction, jnp.asarray(1.0), estimate, context, key), controller_state
 
 
-def validate(config: dict) -> None:
-    """``controller.around_passes`` needs passes to plan around: the filter (``navigation.model = "ekf"``) and at
-    least one station (``ValueError`` naming the key)."""
-    nav = config["navigation"]
-    if config["controller"]["around_passes"] and (nav["model"] != "ekf" or not nav["stations"]):
-        raise ValueError(f"controller.around_passes: plans the burns around the stations' passes, so it needs "
-                         f"navigation.model = \"ekf\" with [[navigation.stations]], got model {nav['model']!r} with "
-                         f"{len(nav['stations'])} station(s)")
+def needs(config: dict) -> dict:
+    """``controller.around_passes`` plans around the tracking stations' passes, which a part must tell
+    (``states.base.STATION_PASSES``)."""
+    if config["controller"]["around_passes"]:
+        return {STATION_PASSES: "controller.around_passes: plans the burns around the stations' passes"}
+    return {}
 
 
-SPEC = Spec(FIELDS, validate, THRUSTERS, REDUNDANT_THRUSTERS)
+SPEC = Spec(FIELDS, None, THRUSTERS, REDUNDANT_THRUSTERS, needs=needs)
 
 # Reads the reference at the cycle's start boundary and the two after it (``model_cycle``).
 # Widths and memory (``geojax.lanes``): 128 lanes per CPU core (simulated years/s over 30 days on one pinned core: 77 at
@@ -189,7 +186,7 @@ def around_passes_plan(params, estimate, context, inputs, plain: BurnPair, v_n_f
     correction)."""
     burn_s = jnp.where(plain.feasible, plain.v_mps * estimate.mass_kg / params.thrusters["thrust_n"], 0.0)
     shift, _ = around_passes.node_shift_rad(plain.l_rad[1], estimate.fix_mee[5], estimate.t_s, context.cycle_s,
-                                            burn_s, context.step_s, station_schedules(params.states[NAVIGATION]))
+                                            burn_s, context.step_s, estimate.states[STATION_PASSES])
     prediction, burns, _ = model_cycle(*inputs, v_n_fraction=v_n_fraction, node_shift_rad=shift)
     return prediction, burns
 

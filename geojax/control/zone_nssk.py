@@ -76,7 +76,7 @@ from geojax.control.effects import R_SYNC_M, V_SYNC_MPS
 from geojax.control.qffc import BurnPair
 from geojax.physics.constants import MU_MOON_M3_S2, MU_SUN_M3_S2, OMEGA_EARTH_RAD_S, SECONDS_PER_DAY, SIDEREAL_DAY_S
 from geojax.physics.elements import wrap_angle
-from geojax.states.momentum import NAME as WHEELS
+from geojax.states.base import DUMPING, WHEEL_MOMENTUM
 from geojax.params import NUMBER, REQUIRED, Field, degrees
 
 T_DUMP_S = 3207.0  # Ye 2022, Sec. 4: the least daily firing time the momentum dumping needs
@@ -304,8 +304,8 @@ def plan_cycle(params, estimate, context):
     delta = i_now + to_centre_s / cycle_s * drift - (target - 0.5 * drift)  # eq. (56)
 
     t_min = c["t_min_s"]
-    if "wheels" in estimate.states:  # the loop carries the wheels (static): eq. (40)'s t_dump from the momentum
-        asked = dump_time_s(params, estimate.states[WHEELS], thrust_n)
+    if WHEEL_MOMENTUM in estimate.states:  # a part tells the wheels (static): eq. (40)'s t_dump from the momentum
+        asked = dump_time_s(estimate.states[DUMPING], estimate.states[WHEEL_MOMENTUM], thrust_n)
         t_min = jnp.where(c["t_dump_from_momentum"] > 0, jnp.minimum(jnp.maximum(t_min, asked), c["t_max_s"]), t_min)
     i_min = burn_inclination_rad(t_min, mass, thrust_n)
     i_max = burn_inclination_rad(c["t_max_s"], mass, thrust_n)
@@ -324,15 +324,14 @@ def plan_cycle(params, estimate, context):
     return (w, i_now, delta, amount, drift, burn_ns, tilt), burns
 
 
-def dump_time_s(params, wheels_nms, thrust_n):
-    """Eq. (40)'s t_dump from the momentum to unload (where the loop carries the wheels and the thrust line may
-    tilt, ``geojax.states.momentum``): the firing time a tilt of at most delta_max about a nozzle L from the centre
+def dump_time_s(dumping: dict, wheels_nms, thrust_n):
+    """Eq. (40)'s t_dump from the momentum to unload (``wheels_nms``, and ``dumping``: how the thrust line may
+    tilt, as a part tells them, ``states.base.DUMPING``): the firing time a tilt of at most delta_max about a nozzle L from the centre
     of mass needs to empty the measured momentum's part across the north-pointing burn, |h_xz| / (L F sin
     delta_max) (body x and z: the pitch wheel's axis y is the burn's own line, which no tilt reaches).  Its norm
     is kept by the body's turn about the pitch axis until the burn; what the torques add meanwhile is the next
     day's.  0 where no tilt is allowed."""
-    a = params.states[WHEELS]
-    capacity_nm = a["thrust_arm_m"] * thrust_n * jnp.sin(a["dump_angle_max_rad"])
+    capacity_nm = dumping["thrust_arm_m"] * thrust_n * jnp.sin(dumping["dump_angle_max_rad"])
     across = jnp.hypot(wheels_nms[0], wheels_nms[2])
     return jnp.where(capacity_nm > 0, across / jnp.where(capacity_nm > 0, capacity_nm, 1.0), 0.0)
 

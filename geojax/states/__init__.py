@@ -9,7 +9,7 @@ import importlib
 
 from geojax.params import table_leaves
 from geojax.states import faults, momentum, navigation, wear
-from geojax.states.base import Part, StateModel, part_of
+from geojax.states.base import QUANTITIES, Part, StateModel, part_of
 
 REGISTRY: tuple[Part, ...] = (
     momentum.PART,  # the reaction wheels' momentum ([attitude] wheels = true)
@@ -79,6 +79,26 @@ def selected(config: dict, extra: tuple = ()) -> tuple[tuple[Part, StateModel], 
         if model is not None:
             out.append((p, model))
     return tuple(out)
+
+
+def told(config: dict, extra: tuple = ()) -> set[str]:
+    """The quantities (``states.base.QUANTITIES``) the parts a validated scenario turns on tell the controller."""
+    out = set()
+    for p, _ in selected(config, extra):
+        if p.tells is not None:
+            out.update(p.tells(config.get(p.table, {}) if p.table is not None else {}))
+    return out
+
+
+def check_needs(config: dict, needs: dict) -> None:
+    """``ValueError`` where the controller plans with a quantity (``needs``: {quantity: why}, its ``Spec.needs``)
+    that no part of the scenario tells, saying what turns on a part that does."""
+    have = told(config)
+    for quantity, why in needs.items():
+        if quantity not in have:
+            how = [p.tells_how[quantity] for p in REGISTRY if quantity in p.tells_how]
+            raise ValueError(f"{why}, so it needs {QUANTITIES.get(quantity, quantity)} ({quantity!r}), which no part "
+                             f"of this scenario tells" + (f": set {' or '.join(how)}" if how else ""))
 
 
 def of_config(config: dict, extra: tuple = ()) -> tuple[StateModel, ...]:

@@ -58,10 +58,17 @@ class CycleStart(NamedTuple):
 
 # The streams the loop and the controllers draw from the cycle's key: rows of normal(key_k), fold_in(key_k, 1)
 # (the FOMPC's search) and fold_in(key_k, physics.execution.MAGNITUDE_KEY).  A part's stream is never one of them.
-# ``Estimate.states`` key of the thrusters' levels as told at a cycle start ([4]: each thruster's delivered fraction
-# of its thrust, 0 out), published by the part that knows them (``states.faults``) and read by every law that
-# allocates among thrusters; a quantity, not a part, so a controller names no part to read it.
-THRUSTER_LEVELS = "thruster_levels"
+# What a part tells the controller at a cycle start, each under its ``Estimate.states`` key: a quantity, not a part,
+# so that a controller names no part to read it and any part that knows the quantity serves it.  A part declares
+# which it tells (``Part.tells``); a controller which it plans with (``control.base.Spec.needs``), checked at load.
+THRUSTER_LEVELS = "thruster_levels"  # [4] each thruster's delivered fraction of its thrust, 0 out (states.faults)
+WHEEL_MOMENTUM = "wheel_momentum_nms"  # [3] the wheels' measured momentum, N m s, body axes (states.momentum)
+# {"thrust_arm_m", "dump_angle_max_rad", "wheel_capacity_nms"}: how far a burn's line may tilt about a nozzle how
+# far from the centre of mass, to unload wheels of what capacity (states.momentum)
+DUMPING = "dumping"
+STATION_PASSES = "station_passes"  # navigation.schedule.Schedule [n_stations]: the tracking passes (states.navigation)
+QUANTITIES = {THRUSTER_LEVELS: "each thruster's level", WHEEL_MOMENTUM: "the wheels' measured momentum",
+              DUMPING: "a thrust line that tilts to unload the wheels", STATION_PASSES: "the tracking stations' passes"}
 
 RESERVED_STREAMS = frozenset({0, 1, 2})
 # The navigation filter's stream: the value it drew from when it was the only part (the first of the tuple,
@@ -188,6 +195,10 @@ class Part(NamedTuple):
     # (run, fired_s, directions_rsw, thrusters) -> ``FlownBurns``: the planner's burns [cycles, burns] as this part
     # let them fly (host side, numpy), for the burns file and the CCSDS maneuvers (``export.trajectory.run_burns``)
     flown_burns: Callable | None = None
+    # validated table -> the quantities (``QUANTITIES``) its ``estimate`` hook tells the controller under it, and
+    # {quantity: what a scenario sets for it to tell it}, for the error where a controller needs one none tells
+    tells: Callable | None = None
+    tells_how: dict = {}
     # the model where it does not depend on the table (a user's own), or the one whose metrics and columns serve
     # every table (a registered part's)
     model: StateModel | None = None

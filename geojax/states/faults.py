@@ -329,4 +329,5 @@ def flown_burns(run, fired_s, directions_rsw, thrusters) -> FlownBurns:
 
 
 PART = Part(NAME, table=NAME, fields=FIELDS, select=lambda table: MODEL if table["enabled"] else None,
-            leaves=leaves, validate=validate, descriptions=DESCRIPTIONS, model=MODEL, flown_burns=flown_burns)
+            leaves=leaves, validate=validate, descriptions=DESCRIPTIONS, model=MODEL, flown_burns=flown_burns,
+            tells=lambda table: (THRUSTER_LEVELS,), tells_how={THRUSTER_LEVELS: "faults.enabled = true"})

@@ -19,7 +19,7 @@ from geojax.physics.attitude import (array_frame, body_rate_rad_s, dumping_fract
 from geojax.physics.constants import SECONDS_PER_DAY
 from geojax.physics.dynamics import Thrust
 from geojax.params import LOG, NUMBER, Field, degrees
-from geojax.states.base import Constraint, Part, StateModel, StepContext, ThrustContext
+from geojax.states.base import DUMPING, WHEEL_MOMENTUM, Constraint, Part, StateModel, StepContext, ThrustContext
 
 NAME = "wheels"
 # (Ixx, Iyy, Izz, Ixy, Ixz, Iyz), kg m^2: an estimate for Li 2022's class (docs/momentum.md, "The defaults").
@@ -244,9 +244,18 @@ def remainder_nms(h, u_hat, u_other, bound_nms):
 
 
 def estimate(params, state: Wheels, told):
-    """What the controller is told at a cycle start: ``told.states["wheels"]``, the measured wheel momentum [3]
-    (N m s, body axes: h_w plus this cycle's error, as the dumping law reads it)."""
-    return told._replace(states={**told.states, NAME: state.h_body_nms + state.error_nms})
+    """What the controller is told at a cycle start: ``told.states[WHEEL_MOMENTUM]``, the measured wheel momentum
+    [3] (N m s, body axes: h_w plus this cycle's error, as the dumping law reads it), and ``told.states[DUMPING]``,
+    how the thrust line may tilt to unload them (``states.base``)."""
+    a = params.states[NAME]
+    dumping = {key: a[key] for key in ("thrust_arm_m", "dump_angle_max_rad", "wheel_capacity_nms")}
+    return told._replace(states={**told.states, WHEEL_MOMENTUM: state.h_body_nms + state.error_nms,
+                                 DUMPING: dumping})
+
+
+def tells(table: dict) -> tuple[str, ...]:
+    """The wheels' momentum always, and a tilt to unload them where ``dump_angle_max_deg`` allows one."""
+    return (WHEEL_MOMENTUM, DUMPING) if table["dump_angle_max_deg"] > 0 else (WHEEL_MOMENTUM,)
 
 
 def com_shift_body_m(params, mass_kg):
@@ -404,4 +413,6 @@ def validate(config: dict) -> None:
 PART = Part(NAME, table="attitude", fields=FIELDS, select=lambda table: MODEL if table["wheels"] else None,
             switch="wheels",
             validate=validate, statuses=(SATURATED,), descriptions=DESCRIPTIONS, constraints=(Constraint("wheels", within_capacity, SATURATED),),
-            figures="geojax.plots.parts:wheel_figures", model=MODEL)
+            figures="geojax.plots.parts:wheel_figures", model=MODEL, tells=tells,
+            tells_how={WHEEL_MOMENTUM: "attitude.wheels = true",
+                       DUMPING: "attitude.wheels = true with attitude.dump_angle_max_deg > 0"})

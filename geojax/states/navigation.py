@@ -27,7 +27,7 @@ from geojax.physics.dynamics import Thrust
 from geojax.physics.frames import rsw_basis
 from geojax.physics.fusion import skipped_where_idle
 from geojax.reductions import mean_over_cycles, percentile_over_cycles, sum_in_order, sum_over_cycles
-from geojax.states.base import NAVIGATION_STREAM, Part, StateModel
+from geojax.states.base import NAVIGATION_STREAM, STATION_PASSES, Part, StateModel
 
 NAME = "navigation"
 # ``fold_in`` constants of the model's draws from its cycle key (the step's draws fold the step index into
@@ -38,7 +38,7 @@ INITIAL_KEY, BIAS_KEY, MEASUREMENT_KEY = 0, 1, 2
 def init(layout: Layout, params, r_eci_m, v_eci_mps, env, fm) -> Navigation:
     """The filter at the run's start: the true elements (``cycle`` adds the initial error at cycle 0) and the
     initial covariance diag(sigma_r^2 I, sigma_v^2 I); no burn."""
-    nav, mu = params.states[NAME], fm.mu_m3_s2
+    nav = params.states[NAME]
     n_b = n_biases(layout)
     p = jnp.zeros((N_STATE + n_b, N_STATE + n_b)).at[:6, :6].set(initial_cartesian(nav))
     if n_b:  # the estimated biases' prior: the sigmas they are drawn with, uncorrelated
@@ -55,7 +55,7 @@ def cycle(layout: Layout, params, state: Navigation, start) -> Navigation:
     """At a cycle start: the cycle's key; at cycle 0 the initial estimate error (Gaussian, the initial
     covariance) and the sample's biases; the estimation error, 1-sigma and NEES at this decision time; the
     cycle's sums reset."""
-    nav, mu = params.states[NAME], params.forces.mu_m3_s2
+    nav = params.states[NAME]
     first = start.index == 0
     truth = jnp.concatenate([start.r_eci_m, start.v_eci_mps])
     drawn = truth + jnp.sqrt(jnp.diag(initial_cartesian(nav))) * jax.random.normal(
@@ -151,7 +151,9 @@ def estimate(params, state: Navigation, told):
     with the truth's, as the Gaussian fix's is) and the covariance [6, 6] of its ECI (r, v) in
     ``states["navigation"]``."""
     fix = elements_of(state.x, told.fix_mee, params.forces.mu_m3_s2)
-    return told._replace(fix_mee=fix, states={**told.states, NAME: state.p[:6, :6]})
+    nav = params.states[NAME]
+    return told._replace(fix_mee=fix, states={**told.states, NAME: state.p[:6, :6],
+                                              STATION_PASSES: station_schedules(nav)})
 
 
 def summary(params, start: Navigation, end: Navigation, steps) -> NavigationCycle:
@@ -233,4 +235,6 @@ DESCRIPTIONS = {
 PART = Part(NAME, table="navigation", fields=KEYS,
             select=lambda table: model(layout_of(table)) if table["model"] == "ekf" else None,
             leaves=leaves_of, validate=check_with, descriptions=DESCRIPTIONS, figures="geojax.plots.parts:navigation_figures",
-            model=MODEL)  # its metrics and columns, which do not depend on the layout
+            model=MODEL,  # its metrics and columns, which do not depend on the layout
+            tells=lambda table: (STATION_PASSES,) if table["stations"] else (),
+            tells_how={STATION_PASSES: 'navigation.model = "ekf" with [[navigation.stations]]'})
