@@ -351,7 +351,9 @@ def make(tables: list[dict]) -> Controller:
 def needs(config: dict) -> dict:
     """The wheels' momentum to plan and a thrust line that tilts to unload them, told by a part
     (``states.base``: ``WHEEL_MOMENTUM``, ``DUMPING``)."""
-    return {WHEEL_MOMENTUM: "controller.kind = 'mpc_momentum': plans the wheels' momentum", DUMPING: "controller.kind = 'mpc_momentum': tilts the thrust lines to unload the wheels"}
+    kind = "controller.kind = 'mpc_momentum'"
+    return {WHEEL_MOMENTUM: f"{kind}: plans the wheels' momentum",
+            DUMPING: f"{kind}: tilts the thrust lines to unload the wheels"}
 
 
 SPEC = Spec(FIELDS, mpc.validate, THRUSTERS, REDUNDANT_THRUSTERS, unread=UNREAD, needs=needs)

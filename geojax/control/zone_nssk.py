@@ -326,11 +326,11 @@ def plan_cycle(params, estimate, context):
 
 def dump_time_s(dumping: dict, wheels_nms, thrust_n):
     """Eq. (40)'s t_dump from the momentum to unload (``wheels_nms``, and ``dumping``: how the thrust line may
-    tilt, as a part tells them, ``states.base.DUMPING``): the firing time a tilt of at most delta_max about a nozzle L from the centre
-    of mass needs to empty the measured momentum's part across the north-pointing burn, |h_xz| / (L F sin
-    delta_max) (body x and z: the pitch wheel's axis y is the burn's own line, which no tilt reaches).  Its norm
-    is kept by the body's turn about the pitch axis until the burn; what the torques add meanwhile is the next
-    day's.  0 where no tilt is allowed."""
+    tilt, as a part tells them, ``states.base.DUMPING``): the firing time a tilt of at most delta_max about a
+    nozzle L from the centre of mass needs to empty the measured momentum's part across the north-pointing burn,
+    |h_xz| / (L F sin delta_max) (body x and z: the pitch wheel's axis y is the burn's own line, which no tilt
+    reaches).  Its norm is kept by the body's turn about the pitch axis until the burn; what the torques add
+    meanwhile is the next day's.  0 where no tilt is allowed."""
     capacity_nm = dumping["thrust_arm_m"] * thrust_n * jnp.sin(dumping["dump_angle_max_rad"])
     across = jnp.hypot(wheels_nms[0], wheels_nms[2])
     return jnp.where(capacity_nm > 0, across / jnp.where(capacity_nm > 0, capacity_nm, 1.0), 0.0)
