@@ -42,7 +42,7 @@ STUDIES = {
     "compare": [("compare/windows.py", []), ("compare/table.py", ["--stage", "all"])],
     "momentum": [("momentum/ye_accumulation.py", []), ("momentum/li_dumping.py", []),
                  ("momentum/capacity_map.py", []), ("momentum/mpc.py", []), ("momentum/mpc_capacity.py", []), ("momentum/mpc_line_price.py", []),
-                 ("momentum/mpc_equinox.py", []),
+                 ("momentum/mpc_line_solves.py", []), ("momentum/mpc_equinox.py", []),
                  ("momentum/tune_dump_gain.py", []),
                  ("momentum/ma_kong_transfer.py", ["--capacities", "50", "100"]), ("momentum/arm_mounts.py", [])],
     "navigation": [("navigation/consistency.py", []), ("navigation/tracking_cost.py", []),
