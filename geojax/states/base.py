@@ -63,8 +63,8 @@ class CycleStart(NamedTuple):
 # which it tells (``Part.tells``); a controller which it plans with (``control.base.Spec.needs``), checked at load.
 THRUSTER_LEVELS = "thruster_levels"  # [4] each thruster's delivered fraction of its thrust, 0 out (states.faults)
 WHEEL_MOMENTUM = "wheel_momentum_nms"  # [3] the wheels' measured momentum, N m s, body axes (states.momentum)
-# {"thrust_arm_m", "dump_angle_max_rad", "wheel_capacity_nms"}: how far a burn's line may tilt about a nozzle how
-# far from the centre of mass, to unload wheels of what capacity (states.momentum)
+# {"thrust_arm_m", "dump_angle_max_rad", "wheel_capacity_nms"}: the nozzle's distance from the centre of mass, how
+# far a burn's line may tilt about it, and the wheels' capacity it unloads (states.momentum)
 DUMPING = "dumping"
 STATION_PASSES = "station_passes"  # navigation.schedule.Schedule [n_stations]: the tracking passes (states.navigation)
 QUANTITIES = {THRUSTER_LEVELS: "each thruster's level", WHEEL_MOMENTUM: "the wheels' measured momentum",
