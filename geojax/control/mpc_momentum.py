@@ -8,8 +8,8 @@ program on ``control.mpc``'s minimum-fuel LP (Gazzino 2016's Problem 3 on Li 202
   directions) and, per burn b, a tilt z_jb [2] (m/s): the Delta-V that tilting the burn's line of action about
   its nozzle (``states.momentum``) puts across the line, in a basis (e_1, e_2) perpendicular to the burn's nominal
   line u_b (the middle of its arm's rectangle).  A tilt by sin(delta) = |z| / v of a burn of Delta-V v:
-  |z_jb|_1 <= sin(delta_max) sum_g w_jbg (the L1 ball inside the cone: a linear program, conservative by at most
-  1 / sqrt 2 along the diagonals), with t_jb >= |z_jb| per component (t as decisions, the L1 norm's epigraph).
+  |z_jb|_1 <= sin(delta_max) sum_g w_jbg (u_b . a_g) (the L1 ball inside the cone on the Delta-V along the line,
+  at most v: linear, within the loop's clip), t_jb >= |z_jb| per component (the L1 norm's epigraph).
 * The torque, linearised: a burn flown with the tilt z puts the impulse -L m (u_b x z) into the body (L the nozzle's
   distance from the centre of mass, ``attitude.thrust_arm_m``; m the mass: F T = m v), the external torque the
   wheels then hold; its product with v (the tilt angle times the Delta-V) is exactly z, so the impulse is linear
@@ -24,39 +24,27 @@ program on ``control.mpc``'s minimum-fuel LP (Gazzino 2016's Problem 3 on Li 202
 * Rows on g at every boundary 1..N: the body turns about the orbit normal once per cycle, so its x (S) and z
   (-R) wheels see the in-plane part of g at every angle within the cycle: |g_RS| <= h_max as an inscribed polygon
   of ``facets`` sides, and |g_W| <= h_max (the y wheel, -W); h_max = ``momentum_band_nms``, at most
-  ``momentum_fraction`` of the capacity (the rest is the margin for the momentum taken up between the boundaries;
-  not a share of a larger wheel: the program holds momentum up to h_max for nothing, and parks it there, so a
-  larger wheel flies the same plan).  The same rows just before each cycle's second burn (g_j + f d + the first
-  burn's impulse: rows on a cycle's start state and its decisions together, ``mpc.riccati``'s stage terms);
-  without them a plan peaked at 131.7 N m s in a year of li2022-momentum-mpc.  Soft, with the orbit rows' penalty.
+  ``momentum_fraction`` of the capacity (the rest the margin for what is taken up between the boundaries; not a
+  share: a larger wheel flies the same plan).  The same rows just before each cycle's second burn (g_j + f d + the first
+  burn's impulse: rows on a cycle's start state and its decisions together, ``mpc.riccati``'s stage terms).
+  Soft, with the orbit rows' penalty.
 * A price on g along the burns' common line l (their unit difference, start axes), ``momentum_line_price`` m/s
   per N m s at every boundary (a soft row, lower = upper = 0): no tilt reaches g . l but through the small angle
-  between the lines; free within the band, the program parked it there before the equinoxes, when the SRP torque
-  lies along it, and ran away (docs/momentum.md); priced, it empties it while the angle lets it, as the law does.
-* The orbit sees the tilts: e_1, e_2 change the mean elements as any Delta-V does (``effects.effect_matrix``),
-  so the plan makes up the tilt's Delta-V across the line.  The tilts cost ``tilt_cost`` per m/s of |z|_1 (a
-  small price that makes a tilt the program does not need zero, where the interior point would otherwise return
-  the centre of a face of tilts that cost nothing).
+  between the lines, so the program empties it while the angle lets it, as the law does (docs/momentum.md).
+* The orbit sees the tilts' Delta-V as any other (``effects.effect_matrix``); they cost ``tilt_cost`` per m/s of
+  |z|_1 (else the interior point returns the centre of a face of tilts that cost nothing).
 * d is estimated from the wheels as the controller measures them (``Estimate.states["wheels"]``): the change of
   g over the cycle just flown less the impulse the plan commanded in it, smoothed by ``disturbance_gain`` per
   cycle (an exponential filter: the SRP torque turns with the Sun, 1 deg a day); 0 before the second cycle.
-
 * The lines: the torque is bilinear in a burn's line and its tilt, and the program takes the lines as given; it
-  solves ``line_solves`` times (2), first on last cycle's planned lines, then on the lines the solve before planned.
-  Why (docs/momentum.md, measured on a 3000 kg satellite at 0.3 m with 50 N m s wheels, a year): ``l . g`` is
-  reached only through the angle between the two lines, 3.5-5 deg on average, which moved by a median 0.9-1.4 deg
-  a cycle, so last cycle's lines misjudged that reach by tens of percent (around the autumn equinox, where the
-  SRP torque lies along l, the lines moved a median 9 deg a cycle); with one solve, a 25 N m s band and a price of
-  1e-4 the wheels saturated at cycle 262 (peak 115.6 N m s).  Two solves alone: 80.1; with a band of 35 N m s
-  (0.7 of 50; the dumping law swings up to 0.75 between the burns) alone 92.4, with a price of 1e-3 alone 72.8;
-  the three together held it (43.0).
+  solves up to ``line_solves`` times (2), first on last cycle's planned lines, then on the lines the solve before
+  planned, stopping early once a solve plans the lines it was solved on to within ``line_tolerance_deg`` (0: never),
+  and flies the solve whose planned lines are closest to the lines it assumed (the most self-consistent torque).
+  The iteration need not settle, so the last solve flown as it came decided at the edge whether the wheels
+  saturated (docs/momentum.md, ``studies/momentum/mpc_line_solves.py``).
 
-The first cycle's burns are flown as the MPC's, each with its planned tilt (``Thrust.tilt_rsw``, flown across the
-line actually flown, within ``attitude.dump_angle_max_deg``).  The solver: ``control.lp``'s interior point on a
-normal matrix factored by ``mpc.riccati`` over the state (elements, g) [9] and a cycle's decisions (w, z, t).
-
-Needs the wheels (``attitude.wheels = true``) and a tilt (``attitude.dump_angle_max_deg`` > 0, a thrust arm);
-the dumping law's own keys (its gain and transient fraction) are not read: the plan replaces the law.
+The first cycle's burns are flown as the MPC's, each with its planned tilt (``Thrust.tilt_rsw``) across the line
+flown.  The solver: ``control.lp``'s interior point, its normal matrix factored by ``mpc.riccati``.
 """
 
 from __future__ import annotations
@@ -96,8 +84,11 @@ FIELDS = {
     # The price of a tilt per m/s of |z|_1, against 1 per m/s of burn: at 1 the program tilts for the wheels alone
     # (a burn in the tilt's direction costs no more).
     "tilt_cost": Field(NUMBER, 1.0, lower=0.0, lower_inclusive=True, upper=100.0, si="tilt_cost"),
-    # The program's solves per cycle, each on the lines the one before planned (the first on last cycle's lines).
-    "line_solves": Field(int, 2, lower=1, upper=9, lower_inclusive=True, si="line_solves"),
+    # Up to ``line_solves`` solves a cycle, each on the lines the one before planned, fewer once a solve's lines
+    # move less than ``line_tolerance_deg`` (0: never); the solve whose lines moved least is flown (module docstring).
+    "line_solves": Field(int, 2, lower=1, upper=13, lower_inclusive=True, si="line_solves"),
+    "line_tolerance_deg": Field(NUMBER, 0.0, lower=0.0, lower_inclusive=True, upper=10.0, si="line_tolerance_rad",
+                                to_si=math.pi / 180.0),
     # The gain per cycle of the external momentum's filter (1: the last cycle's; 0: none; stable below 2).
     "disturbance_gain": Field(NUMBER, 0.5, lower=0.0, lower_inclusive=True, upper=2.0, si="disturbance_gain"),
 }
@@ -150,7 +141,9 @@ def build(model: mpc.Model, lines, g0, d, l_start_rad, mass_kg, dumping: dict, l
     minus = jnp.concatenate([jnp.zeros((TILTS, 2 * g)), -z_part, t_part], 1)  # t - z >= 0
     plus = jnp.concatenate([jnp.zeros((TILTS, 2 * g)), z_part, t_part], 1)  # t + z >= 0
     sin_max = jnp.sin(dumping["dump_angle_max_rad"])
-    cone = jnp.concatenate([-sin_max * burn_sum, jnp.zeros((2, TILTS)), jnp.kron(jnp.eye(2), jnp.ones((1, 2)))], 1)
+    along = jnp.maximum(jnp.einsum("bv,bgv->bg", lines, model.directions), 0.0).reshape(1, 2 * g)  # u_b . a_g
+    cone = jnp.concatenate([-sin_max * burn_sum * along, jnp.zeros((2, TILTS)),
+                            jnp.kron(jnp.eye(2), jnp.ones((1, 2)))], 1)
     cycle_rows = jnp.concatenate([eye_w, caps, minus, plus, cone])
     inf = jnp.inf
     cycle_lower = jnp.concatenate([jnp.zeros(2 * g), jnp.full(2, -inf), jnp.zeros(2 * TILTS), jnp.full(2, -inf)])
@@ -311,6 +304,8 @@ class Plan(NamedTuple):
     certified: jnp.ndarray
     momentum_violation: jnp.ndarray  # [] the largest momentum row's violation, in half-widths
     wheels_rsw_nms: jnp.ndarray  # [2, 3] g at the cycle's start as measured, and expected at its end (start RSW)
+    line_solves: jnp.ndarray  # [] the program's solves this cycle
+    line_change_rad: jnp.ndarray  # [] the flown solve's largest line change (chord of unit vectors, ~ the angle)
 
 
 def disturbance(state: State, g_eci, gain):
@@ -322,8 +317,8 @@ def disturbance(state: State, g_eci, gain):
 
 def plan(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves: dict, station: dict, lines, g0,
          d, mass_kg, dumping: dict, shape: mpc.Shape):
-    """Solve the cycle's program: (the first cycle's ``BurnPair``, its tilts' z [2, 2] (m/s), the ``lp.Solution``,
-    the ``mpc.Model``, the ``Momentum``)."""
+    """The cycle's program solved: (the first cycle's ``BurnPair``, tilts z [2, 2] m/s, ``lp.Solution``, the
+    ``mpc.Model``, the ``Momentum``)."""
     model = mpc.build(x0, target, ref_mean, l_start_rad, limits, accel_mps2, cycle_s, leaves, station, shape)
     momentum = build(model, lines, g0, d, l_start_rad, mass_kg, dumping, leaves, shape)
     c, lower, upper, penalty = program(model, momentum, leaves, shape)
@@ -341,6 +336,12 @@ def planned_lines(burns, lines):
     """[2, 3] each burn's planned direction (unit, RSW at the burn); ``lines`` for a burn not planned."""
     fired = (burns.v_mps > 0)[:, None]
     return jnp.where(fired, burns.dv_rsw_mps / jnp.where(fired, burns.v_mps[:, None], 1.0), lines)
+
+
+def line_change_squared(a, b):
+    """The largest squared chord between two sets of unit lines [2, 3] (the sums written out: width-independent)."""
+    d = a - b
+    return jnp.max(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
 
 
 def make(tables: list[dict]) -> Controller:
@@ -382,20 +383,29 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
                         params.controller, params.station, lines, basis @ g_eci, basis @ d_eci, mass,
                         estimate.states[DUMPING], shape)
 
-        def again(i, out):  # the first solve on last cycle's lines, each next on the lines the one before planned
-            return solve(jnp.where(i == 0, state.lines_rsw, planned_lines(out[0], state.lines_rsw)))
+        def again(carry):  # a solve on the lines the one before planned (the first on last cycle's lines); kept
+            i, lines, last, best, kept = carry  # if its lines moved least so far
+            out = solve(lines)
+            planned = planned_lines(out[0], state.lines_rsw)
+            change = line_change_squared(planned, lines)
+            better = change < best
+            kept = jax.tree_util.tree_map(lambda new, old: jnp.where(better, new, old), (out, planned), kept)
+            return i + 1, planned, change, jnp.where(better, change, best), kept
+
+        def more(carry):
+            (i, _, last, _, _), tolerance = carry, params.controller["line_tolerance_rad"]
+            return (i < params.controller["line_solves"]) & (last > tolerance * tolerance)
 
         blank = jax.tree_util.tree_map(lambda a: jnp.zeros(a.shape, a.dtype), jax.eval_shape(solve, state.lines_rsw))
-        burns, z, solution, model, momentum = jax.lax.fori_loop(
-            0, jnp.asarray(params.controller["line_solves"]).astype(int), again, blank)
+        solves, _, _, change_squared, ((burns, z, solution, model, momentum), lines) = jax.lax.while_loop(
+            more, again, (jnp.asarray(0), state.lines_rsw, jnp.inf, jnp.inf, (blank, state.lines_rsw)))
         prediction = predict_next(estimate.mean, context.reference[0], context.reference[1], context.cycle_s)
         prediction = prediction.at[0].set(wrap_angle(prediction[0]))
         full = 2 * V_SYNC_MPS * jnp.hypot(target[4] - prediction[4], target[5] - prediction[5])
         ns_fraction = jnp.sum(jnp.abs(burns.dv_rsw_mps[:, 2])) / jnp.maximum(full, 1e-12)
         flown = burns_mod.fly(params, burns, prediction, ns_fraction, estimate, context, key)
-        # Each burn's tilt: the planned impulse J = -L m (u x z) about the line u flown (its direction after the
-        # rectangle's clip and the attitude error), s = (u x J) / (L m v), so that -L m v (u x s) is J less its
-        # part along u (which no tilt reaches); 0 for a burn not fired.
+        # Each burn's tilt about the line u flown (after the clip and the attitude error): s = (u x J) / (L m v) for
+        # the planned J = -L m (u x z), so -L m v (u x s) is J less its part along u; 0 for a burn not fired.
         fired = flown.burn_s > 0
         arm_mass = estimate.states[DUMPING]["thrust_arm_m"] * mass
         impulse = -arm_mass * jnp.cross(momentum.lines, jnp.einsum("bk,bkv->bv", z, momentum.across))  # [2, 3] J
@@ -405,7 +415,6 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         flown_impulse = jnp.where(fired[:, None], impulse - jnp.sum(u * impulse, -1, keepdims=True) * u, 0.0)
         past = jnp.mod(model.l_rad - estimate.fix_mee[5], 2 * jnp.pi)
         impulse_eci = basis.T @ jnp.sum(rotate_to_start(flown_impulse, past), 0)
-        lines = planned_lines(burns, state.lines_rsw)
 
         def excess_of(values, lower, upper):  # each row's violation, in half-widths
             return jnp.maximum(lower - values, 0.0) + jnp.maximum(values - upper, 0.0)
@@ -418,12 +427,11 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         momentum_violation = jnp.maximum(jnp.max(excess[:, r_orbit:-1]), jnp.max(excess_of(
             between, momentum.mid_lower.reshape(-1), momentum.mid_upper.reshape(-1))))
         solved = (violation <= mpc.SOLVED_VIOLATION) & jnp.all(jnp.isfinite(solution.x))
-        # the end the plan expects of what is flown (a burn shorter than ``thrusters.min_burn_s`` is not, nor its
-        # tilt: no linear program can say so)
+        # the end the plan expects of what is flown (a burn under ``thrusters.min_burn_s`` is not: no LP says so)
         g_start = basis @ g_eci
         g_end = g_start + basis @ (d_eci + impulse_eci)
         plan_ = Plan(flown, tilts, solved, solution.objective, violation, solution.iterations, solution.converged,
-                     momentum_violation, jnp.stack([g_start, g_end]))
+                     momentum_violation, jnp.stack([g_start, g_end]), solves, jnp.sqrt(change_squared))
         return plan_, State(g_eci, impulse_eci, d_eci, state.cycles_seen + 1, lines)
 
     def thrust(params, plan_: Plan, t, state, environment):
@@ -433,10 +441,10 @@ def controller(shape: mpc.Shape = mpc.Shape()) -> Controller:
         return {**burns_mod.record(plan_.flown), "solved": plan_.solved, "planned_fuel_mps": plan_.fuel_mps,
                 "violation": plan_.violation, "iterations": plan_.iterations, "certified": plan_.certified,
                 "momentum_violation": plan_.momentum_violation, "wheels_rsw_nms": plan_.wheels_rsw_nms,
-                "tilts_rsw": plan_.tilts_rsw}
+                "tilts_rsw": plan_.tilts_rsw, "line_solves": plan_.line_solves,
+                "line_change_rad": plan_.line_change_rad}
 
-    # Widths and memory as the MPC's (``mpc.controller``: 8 lanes per CPU core, its interior point's matrices
-    # dominating); the lane's bytes scaled from the MPC's measured 1.73 MB by the decisions per cycle (20 against
-    # 12), an estimate, not measured: the GPU's batch sizing is its only reader.
+    # Widths as the MPC's (8 lanes per CPU core); the lane's bytes the MPC's measured 1.73 MB scaled by the
+    # decisions per cycle (20 against 12): an estimate, read by the GPU's batch sizing alone.
     return Controller(init, plan_cycle, thrust, SPEC, reference_cycles=shape.n_max + 1, record=record, metrics=burn_metrics.metrics,
                       sizing=Sizing(lanes_cpu=8, working_bytes=2_500_000, one_sample_opt_level=1))
