@@ -6,8 +6,8 @@ For each scenario (li2022-qffc with Li's nominal errors, H_rv = H_att = 1: the G
 the navigation filter), a fresh process per tree runs ``geojax.simulate_batch`` of ``--batch`` samples (their
 own seeds) three times on the compiled programs and reports the best ``run_s`` (the compiled closed loop and its
 metrics alone: no set-up, no compilation); the trees alternate, ``--rounds`` times, and the best of each is kept,
-so both see the same machine.  The earlier tree runs with the ``XLA_FLAGS`` it would have had (without the flag
-this tree's ``import geojax`` adds: ``geojax.arithmetic``).  The earlier tree is ``git archive`` of ``--commit``'s ``geojax/`` (the public API,
+so both see the same machine.  The earlier tree runs with the ``XLA_FLAGS`` it would have had (without the flags
+this tree's ``import geojax`` adds: ``geojax.arithmetic``, ``geojax.small_loops``).  The earlier tree is ``git archive`` of ``--commit``'s ``geojax/`` (the public API,
 ``simulate_batch``, is the same in both).  Both trees' mean ΔV is printed beside, so a change of numbers shows.
 Results: ``benchmarks/results/NAME.json`` and ``.md`` (default ``against_commit``).
 """
@@ -46,11 +46,13 @@ def baseline_tree(commit: str, folder: Path) -> Path:
 
 
 def as_before_arithmetic(env) -> dict:
-    """``env`` without the flag this process's ``import geojax`` added (``geojax.arithmetic``): an earlier tree's
-    child runs with XLA's defaults, as it did then, unless the user's own ``XLA_FLAGS`` gave the flag."""
+    """``env`` without the flags this process's ``import geojax`` added (``geojax.arithmetic``,
+    ``geojax.small_loops``): an earlier tree's child runs with XLA's defaults, as it did then, unless the user's
+    own ``XLA_FLAGS`` gave the flag."""
     from geojax.arithmetic import SEPARATE_ROUNDINGS
+    from geojax.small_loops import with_small_loops
 
-    added = {SEPARATE_ROUNDINGS} - set(USER_FLAGS)
+    added = {SEPARATE_ROUNDINGS, with_small_loops("")} - set(USER_FLAGS)
     flags = [f for f in env.get("XLA_FLAGS", "").split() if f not in added]
     return {**env, "XLA_FLAGS": " ".join(flags)}
 

@@ -25,7 +25,10 @@ import jax
 
 from geojax.arithmetic import use_separate_roundings as _use_separate_roundings  # noqa: E402
 
+from geojax.small_loops import use_small_loops as _use_small_loops  # noqa: E402
+
 _use_separate_roundings()  # no fused multiply-adds: the same last bit at every width (geojax.arithmetic)
+_use_small_loops()  # a small loop compiled as one function, not launched kernel by kernel (geojax.small_loops)
 jax.config.update("jax_enable_x64", True)
 
 from geojax.compilation import use_default as _use_compilation_cache  # noqa: E402
