@@ -1,16 +1,14 @@
 """Small loops compiled whole: XLA:CPU asked to emit a while loop whose iteration touches under 256 MiB as one function.
 
-XLA's CPU runtime runs a loop's body kernel by kernel (its thunks), about 0.19 µs of launching per kernel; the
-closed loop's integration step is ~100 small kernels, so at the CPU's widths most of a step was launching
-(``benchmarks/results/dispatch.md``: 19.4 µs per step whatever the width, plus 0.555 µs per lane).  XLA hoists a
-loop into one compiled function when the bytes one iteration accesses are under
-``xla_cpu_small_while_loop_byte_threshold`` (default 1 KiB, read from ``--xla_backend_extra_options``); geojax
-raises it to ``SMALL_LOOP_BYTES``, which covers the step loops of the widths geojax compiles on a CPU (the QFFC's
-at 1,024 lanes is about 30 MB).  Loops holding a custom call (a linear solve, a host callback) stay as they are.
-The kernels are the same, so every number is the same bit for bit (``tests/test_small_loops.py``); the speed
-in one run: ``benchmarks/results/small_loops.md``.  A user's own threshold in ``XLA_FLAGS`` wins, and
-``GEOJAX_XLA_LOOPS=1`` leaves XLA's default.  Like every XLA flag it must be set before JAX starts a backend
-(``import geojax`` does it first thing).
+XLA's CPU runtime runs a loop's body kernel by kernel, and the closed loop's integration step is about a hundred
+small kernels, so at a CPU's widths launching them was half of every step.  XLA hoists a loop into one compiled
+function when the bytes one iteration accesses are under ``xla_cpu_small_while_loop_byte_threshold`` (default
+1 KiB, one of ``--xla_backend_extra_options``); geojax raises it to ``SMALL_LOOP_BYTES``, which covers the step
+loops at the widths geojax compiles on a CPU (the QFFC's up to 1,024 lanes).  A loop holding a custom call (a
+linear solve, a host callback, a YNNPACK dot) stays as it was.  The kernels are the same, so every number is the
+same bit for bit; the speed, measured in one run, is in docs/speed.md.  A user's own threshold in ``XLA_FLAGS``
+wins, and ``GEOJAX_XLA_LOOPS=1`` leaves XLA's default.  Like every XLA flag it must be set before JAX starts a
+backend: ``import geojax`` does it first thing.
 """
 
 from __future__ import annotations
